@@ -1,0 +1,92 @@
+"""The dependency rules of DESIGN.md, checked by reading every module's imports."""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "usar_arm"
+
+# Layer of each module (the first path component below usar_arm, or the module itself).
+ALLOWED: dict[str, set[str]] = {
+    "errors": set(),
+    "spatial": set(),
+    "model": {"spatial"},
+    "usarsim": {"errors"},
+    "sim": {"usarsim", "model", "spatial", "errors"},
+    "discover": {"usarsim", "model", "spatial", "errors"},
+    "urdf": {"model", "spatial", "errors"},
+    "planning": {"urdf", "model", "spatial", "errors"},
+    "control": {"usarsim", "planning", "model", "spatial", "errors"},
+    "export": {"control", "planning", "urdf", "model", "spatial", "errors"},
+}
+FACADES = {"cli", "arm", "pipeline", "__init__", "__main__"}  # may import everything
+THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
+HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1}
+
+
+def _modules() -> list[tuple[str, Path]]:
+    out = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE).with_suffix("")
+        out.append((".".join(rel.parts), path))
+    return out
+
+
+def _imports(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text())
+    names = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.append(node.module)
+    return names
+
+
+def _layer(module: str) -> str:
+    return module.split(".")[0]
+
+
+@pytest.mark.parametrize(("module", "path"), _modules(), ids=lambda v: str(v))
+def test_internal_imports_follow_the_dependency_arrows(module: str, path: Path) -> None:
+    layer = _layer(module)
+    if layer in FACADES:
+        return
+    assert layer in ALLOWED, f"{module}: layer '{layer}' has no dependency rule in this test"
+    for name in _imports(path):
+        if not name.startswith("usar_arm."):
+            continue
+        target = _layer(name.removeprefix("usar_arm."))
+        if target == layer:
+            continue
+        assert target in ALLOWED[layer], \
+            f"{module} imports {name}: {layer} may not depend on {target}"
+
+
+@pytest.mark.parametrize("module", ["errors", "spatial", "model"])
+def test_the_core_modules_use_numpy_only(module: str) -> None:
+    third = {n.split(".")[0] for n in _imports(PACKAGE / f"{module}.py")
+             if not n.startswith("usar_arm")}
+    stdlib = {"__future__", "collections", "dataclasses", "enum", "typing", "math"}
+    assert third - stdlib <= THIRD_PARTY_LIMITS | {"numpy"}
+
+
+def test_each_heavy_library_is_imported_by_exactly_one_module() -> None:
+    users: dict[str, list[str]] = defaultdict(list)
+    for module, path in _modules():
+        for name in _imports(path):
+            root = name.split(".")[0]
+            if root in HEAVY:
+                users[root].append(module)
+    for lib in HEAVY:
+        assert len(set(users[lib])) <= 1, f"{lib} is imported by {sorted(set(users[lib]))}"
+
+
+def test_discovery_never_imports_the_simulator() -> None:
+    for module, path in _modules():
+        if _layer(module) == "discover":
+            assert not any(n.startswith("usar_arm.sim") for n in _imports(path))

@@ -1,0 +1,147 @@
+"""The wire client: framing, timeouts on every wait, and failures named clearly."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+import pytest
+
+from tests.usarsim.fake_server import FakeServer, read_line
+from usar_arm.errors import (
+    ConnectionFailedError,
+    ConnectionLostError,
+    ResponseTimeoutError,
+    UnknownComponentError,
+)
+from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.client import Received, UsarClient
+
+NFO = b"NFO {Gametype BotDeathMatch} {Level test} {TimeLimit 0}\r\n"
+
+
+def test_lines_are_framed_across_partial_reads_and_mixed_terminators() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO[:10])
+        time.sleep(0.05)
+        conn.sendall(NFO[10:])
+        # Several lines in one write, every terminator kind, and a line split mid-block.
+        conn.sendall(b"STA {Time 0.1} {Battery 99999} {Type StaticPlatform}\n"
+                     b"ASTA {Time 0.1} {Name Arm} {Link 1} {Value 0.5}\r"
+                     b"SEN {Time 0.1} {Type GroundTruth} {Name GT} {Location 1,2,3} {Orient")
+        time.sleep(0.05)
+        conn.sendall(b"ation 0,0,0}\r\n\r\nASTA {Time 0.2} {Name Arm} {Link 1} {Value 0.6}\r\n")
+        time.sleep(1.0)
+
+    seen: list[Received] = []
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client:
+        client.subscribe(seen.append)
+        asta = client.wait_asta("Arm", after_time=0.15)
+        assert asta.values == ((1, 0.6),)
+        sen = client.latest_sen("GT")
+        assert sen is not None and sen.location == (1.0, 2.0, 3.0)
+        assert client.game_info == m.GameInfo("BotDeathMatch", "test", 0.0)
+    kinds = [type(r.message).__name__ for r in seen]
+    assert kinds.count("Asta") >= 1 and "Sen" in kinds
+
+
+def test_a_getconf_that_matches_nothing_fails_after_the_timeout_naming_known_components() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        conn.sendall(b"ASTA {Time 0.1} {Name KR60Arm} {Link 1} {Value 0}\r\n"
+                     b"SEN {Time 0.1} {Type GroundTruth} {Name GroundTruth} {Location 0,0,0}\r\n")
+        read_line(conn)  # the GETCONF: UDK answers nothing
+        time.sleep(3)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=0.5) as client:
+        client.wait_asta("KR60Arm")
+        client.wait_sen("GroundTruth")
+        start = time.monotonic()
+        with pytest.raises(UnknownComponentError) as info:
+            client.get_conf("Actuator", "KR61Arm")
+        assert time.monotonic() - start < 1.5
+    text = str(info.value)
+    assert "GETCONF {Type Actuator} {Name KR61Arm}" in text
+    assert "Actuator KR60Arm" in text and "GroundTruth GroundTruth" in text
+
+
+def test_a_server_closing_mid_reply_is_reported_promptly() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        read_line(conn)
+        conn.sendall(b"GEO {Type Actuator} {Name KR60Arm} {Location 0,0,0} {Link 1} {Par")
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=5.0) as client:
+        start = time.monotonic()
+        with pytest.raises(ConnectionLostError) as info:
+            client.get_geo("Actuator", "KR60Arm")
+        assert time.monotonic() - start < 2.0
+    assert "unterminated" in str(info.value)
+
+
+def test_connection_refused_names_the_address_and_how_to_start_a_simulator() -> None:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(ConnectionFailedError) as info:
+        UsarClient(port=port, connect_timeout=1.0).connect()
+    assert f"127.0.0.1:{port}" in str(info.value) and "usar-arm sim" in str(info.value)
+
+
+def test_a_server_that_never_greets_times_out() -> None:
+    with FakeServer(lambda conn: time.sleep(3)) as srv:
+        start = time.monotonic()
+        with pytest.raises(ResponseTimeoutError) as info:
+            UsarClient(port=srv.port, connect_timeout=0.5).connect()
+        assert time.monotonic() - start < 1.5
+    assert "NFO" in str(info.value)
+
+
+def test_a_late_reply_is_not_mistaken_for_the_answer_to_the_next_request() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        read_line(conn)  # first GETCONF: answered too late
+        time.sleep(0.8)
+        conn.sendall(b"CONF {Type Actuator} {Name Old} {Link 1} {JointType Revolute}\r\n")
+        read_line(conn)  # second GETCONF
+        conn.sendall(b"CONF {Type Actuator} {Name New} {Link 1} {JointType Prismatic}\r\n")
+        time.sleep(1)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=0.4) as client:
+        with pytest.raises(UnknownComponentError):
+            client.get_conf("Actuator", "Old")
+        time.sleep(0.6)
+        conf = client.get_conf("Actuator", "New", timeout=2.0)
+    assert isinstance(conf, m.Conf) and conf.items[0].name == "New"
+
+
+def test_malformed_and_oversized_server_lines_are_skipped() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        conn.sendall(b"ASTA {Time 0.1 {Name broken}\r\n")
+        conn.sendall(b"X" * 70000 + b"\r\n")
+        conn.sendall(b"ASTA {Time 0.3} {Name Arm} {Link 1} {Value 1.5}\r\n")
+        time.sleep(1)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client:
+        assert client.wait_asta("Arm").values == ((1, 1.5),)
+
+
+def test_act_sends_zero_based_links_in_one_line() -> None:
+    got: list[str] = []
+    done = threading.Event()
+
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        got.append(read_line(conn))
+        got.append(read_line(conn))
+        done.set()
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port) as client:
+        client.act("KR60Arm", [0.1, -0.25, 3.0])
+        client.act("KR60Arm", {4: 0.5})
+        assert done.wait(3)
+    assert got[0] == ("ACT {Name KR60Arm} {Link 0} {Value 0.1} {Link 1} {Value -0.25} "
+                      "{Link 2} {Value 3.0}")
+    assert got[1] == "ACT {Name KR60Arm} {Link 4} {Value 0.5}"

@@ -1,0 +1,44 @@
+"""Entry point: builds the parser from the subcommand modules and maps errors to exit codes."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from usar_arm import __version__
+from usar_arm.cli import demo_cmd, sim_cmd
+from usar_arm.cli.common import EXIT_CODES_HELP, report_error
+
+COMMANDS = [demo_cmd, sim_cmd]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="usar-arm",
+        description="Learn a USARSim robot arm over its TCP protocol, describe it (URDF, SRDF, "
+                    "MoveIt 2 config), plan and execute collision-free, jerk-limited motions.",
+        epilog=EXIT_CODES_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"usar-arm {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for module in COMMANDS:
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "handler", None):
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        return int(args.handler(args))
+    except BaseException as exc:
+        if isinstance(exc, SystemExit):
+            raise
+        return report_error(exc)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,56 @@
+"""``usar-arm sim``: run the embedded USARSim-compatible simulator in the foreground."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+
+from usar_arm.cli.common import add_verbosity, setup_logging, verbosity
+from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE
+from usar_arm.sim.server import SimOptions, SimServer
+
+log = logging.getLogger("usar_arm.sim")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "sim", help="run the embedded USARSim-compatible simulator (MuJoCo physics)",
+        description="Serve the USARSim UDK protocol on TCP (one robot per connection, up to 64) "
+                    "with MuJoCo physics, until Ctrl-C or SIGTERM. Robot classes: USARBot.KR60, "
+                    "USARBot.Fanuc_M16iB20.")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=3000, help="TCP port (default 3000, as UDK)")
+    p.add_argument("--speed", type=float, default=1.0,
+                   help="simulated seconds per wall-clock second (default 1.0)")
+    p.add_argument("--no-gravity", action="store_true", help="switch gravity off")
+    p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
+                   help="udk: UDK's number formats (GEO locations truncated to mm, orientations "
+                        "to 0.01 rad); full: every number round-trips a float64 (extension)")
+    add_verbosity(p)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args), default=logging.INFO)
+    try:
+        options = SimOptions(host=args.host, port=args.port, speed=args.speed,
+                             gravity=not args.no_gravity, wire_precision=args.wire_precision)
+    except ValueError as exc:
+        log.error("%s", exc)
+        return EXIT_INVALID_INPUT
+    server = SimServer(options)
+
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, server.stop_from_loop)
+        await server.serve()
+
+    try:
+        asyncio.run(main())
+    except OSError as exc:
+        log.error("cannot listen on %s:%d: %s", args.host, args.port, exc.strerror or exc)
+        return EXIT_UNAVAILABLE
+    return EXIT_OK

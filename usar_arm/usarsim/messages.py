@@ -1,0 +1,289 @@
+"""One frozen dataclass per USARSim line type this project sends or receives.
+
+Field names follow the protocol keys (``max_torque`` for ``{MaxTorque ..}``). Units are the wire's:
+metres and radians in the USARSim z-down frame, seconds of simulated time. Keys a dataclass does
+not model are kept, in order, in its ``extra`` tuple so nothing a server says is dropped; a line
+with an unknown command word becomes :class:`Unknown`.
+
+Text <-> message conversion lives in :mod:`usar_arm.usarsim.codec`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+Vector3 = tuple[float, float, float]
+Block = tuple[str, str]
+"""A ``{Key value}`` block: key and value text (value is ``""`` for a bare ``{On}``)."""
+
+
+# ----------------------------------------------------------------------- server -> client: NFO
+
+
+@dataclass(frozen=True)
+class GameInfo:
+    """``NFO {Gametype g} {Level m} {TimeLimit t}``, sent on connect."""
+
+    gametype: str
+    level: str
+    time_limit: float | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class StartPose:
+    """A named spawn pose: location (m) and roll, pitch, yaw (rad), z-down frame."""
+
+    name: str
+    location: Vector3
+    rotation: Vector3
+
+
+@dataclass(frozen=True)
+class StartPoses:
+    """``NFO {StartPoses N} {Name1 x,y,z r,p,y Name2 ...}``, the reply to GETSTARTPOSES."""
+
+    poses: tuple[StartPose, ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The start names, in the server's order."""
+        return tuple(p.name for p in self.poses)
+
+
+# ----------------------------------------------------------------------- client -> server
+
+
+@dataclass(frozen=True)
+class GetStartPoses:
+    """``GETSTARTPOSES``."""
+
+
+@dataclass(frozen=True)
+class Init:
+    """``INIT {ClassName pkg.Class} {Name n} ({Start tag} | {Location x,y,z} {Rotation r,p,y})``.
+
+    The server sends no reply; the robot appears asynchronously.
+    """
+
+    class_name: str
+    name: str | None = None
+    start: str | None = None
+    location: Vector3 | None = None
+    rotation: Vector3 | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class GetConf:
+    """``GETCONF {Type T} [{Name n}]``. No reply at all when nothing matches."""
+
+    type: str
+    name: str | None = None
+
+
+@dataclass(frozen=True)
+class GetGeo:
+    """``GETGEO {Type T} [{Name n}]``. No reply at all when nothing matches."""
+
+    type: str
+    name: str | None = None
+
+
+@dataclass(frozen=True)
+class Act:
+    """``ACT {Name actuator} {Link i} {Value v} ...``: joint targets, **0-based** link indices.
+
+    Values are radians (revolute) or metres (prismatic). Only ``Link`` blocks immediately
+    followed by a ``Value`` block count, and both keys are case-sensitive, as in UDK.
+    """
+
+    name: str
+    targets: tuple[tuple[int, float], ...]
+    gripper: int | None = None
+    sequence: int | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Set:
+    """``SET {Type T} {Name n} {Opcode op} [{Params p}]``."""
+
+    type: str
+    name: str
+    opcode: str
+    params: str | None = None
+
+
+@dataclass(frozen=True)
+class Drive:
+    """``DRIVE {Left l} {Right r} ...`` (ground vehicles; the arm tools never send it)."""
+
+    left: float | None = None
+    right: float | None = None
+    normalized: bool | None = None
+    light: bool | None = None
+    extra: tuple[Block, ...] = ()
+
+
+# ----------------------------------------------------------------------- CONF / GEO replies
+
+
+@dataclass(frozen=True)
+class LinkConf:
+    """One ``{Link i} {JointType ..} {MaxTorque ..} {MinValue ..} {MaxValue ..}`` group.
+
+    ``link`` is 1-based. ``max_speed`` is only sent by UT-era servers.
+    """
+
+    link: int
+    joint_type: str
+    max_torque: float | None = None
+    min_value: float | None = None
+    max_value: float | None = None
+    max_speed: float | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class ConfItem:
+    """One component in a CONF reply: its name, scalar fields, and per-link groups."""
+
+    name: str
+    fields: tuple[Block, ...] = ()
+    links: tuple[LinkConf, ...] = ()
+
+    def get(self, key: str) -> str | None:
+        """The value of a field, matching the key case-insensitively."""
+        for k, v in self.fields:
+            if k.lower() == key.lower():
+                return v
+        return None
+
+
+@dataclass(frozen=True)
+class Conf:
+    """``CONF {Type T} {Name a} ... {Name b} ...``: the reply to ``GETCONF {Type T}``."""
+
+    type: str
+    items: tuple[ConfItem, ...]
+
+
+@dataclass(frozen=True)
+class PlatformConf:
+    """``CONF {Name KR60} {Type StaticPlatform} {SteeringType None} {Mass 0}``.
+
+    The reply to ``GETCONF {Type Robot}``; note that Name comes before Type here.
+    """
+
+    name: str
+    type: str
+    fields: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class LinkGeo:
+    """One ``{Link i} {Parent p} {Location x,y,z} {Orientation r,p,y}`` group of an actuator GEO.
+
+    ``parent`` is the 1-based link whose child part carries this joint (0: the actuator base).
+    ``location`` is the offset from the parent joint in the **actuator base frame**;
+    ``orientation`` is the rotation relative to the parent joint's frame.
+    """
+
+    link: int
+    parent: int
+    location: Vector3
+    orientation: Vector3
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class GeoItem:
+    """One component in a GEO reply.
+
+    For an actuator: its mount pose relative to the platform (or to ``mount_link`` of another
+    actuator), its links, and the ``tip`` offset. For a sensor: its mount pose.
+    """
+
+    name: str
+    location: Vector3 | None = None
+    orientation: Vector3 | None = None
+    mount: str | None = None
+    mount_link: int | None = None
+    links: tuple[LinkGeo, ...] = ()
+    tip: Vector3 | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Geo:
+    """``GEO {Type T} {Name a} ...``: the reply to ``GETGEO {Type T}``."""
+
+    type: str
+    items: tuple[GeoItem, ...]
+
+
+# ----------------------------------------------------------------------- streams
+
+
+@dataclass(frozen=True)
+class Asta:
+    """``ASTA {Time t} {Name arm} {Link 1} {Value q1} ...``: joint values, **1-based** links."""
+
+    time: float
+    name: str
+    values: tuple[tuple[int, float], ...]
+    extra: tuple[Block, ...] = ()
+
+    def positions(self) -> tuple[float, ...]:
+        """The joint values ordered by link index."""
+        return tuple(v for _, v in sorted(self.values))
+
+
+@dataclass(frozen=True)
+class Sta:
+    """``STA {Time t} {Battery b} {Type StaticPlatform} ...``: platform status."""
+
+    time: float
+    battery: int | None = None
+    type: str | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Sen:
+    """``SEN [{Time t}] {Type T} {Name n} ...``; GroundTruth adds Location and Orientation."""
+
+    type: str
+    name: str
+    time: float | None = None
+    location: Vector3 | None = None
+    orientation: Vector3 | None = None
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Eff:
+    """``EFF {Time t} {Type T} {Name n} {On}|{Off}|{Status ..}``: effector status."""
+
+    type: str
+    name: str
+    time: float | None = None
+    extra: tuple[Block, ...] = ()
+
+
+# ----------------------------------------------------------------------- anything else
+
+
+@dataclass(frozen=True)
+class Unknown:
+    """A line whose command word this project does not model, kept whole."""
+
+    head: str
+    blocks: tuple[Block, ...] = field(default_factory=tuple)
+
+
+Message = (
+    GameInfo | StartPoses | GetStartPoses | Init | GetConf | GetGeo | Act | Set | Drive | Conf
+    | PlatformConf | Geo | Asta | Sta | Sen | Eff | Unknown
+)

@@ -1,0 +1,118 @@
+"""How numbers are written on the USARSim wire.
+
+UDK prints numbers in three ways (usarsim-protocol.md section 2):
+
+* ``UnitsConverter.FloatString(v, p)``: exactly ``p`` decimals, the fraction **truncated**, computed
+  in 32-bit floats. Actuator GEO locations and GroundTruth poses use ``p = 3``.
+* raw floats concatenated into strings (Time, ASTA Value, CONF MaxTorque/MinValue/MaxValue): we
+  print these with 4 decimals, rounded, as the reference advises.
+* raw vectors (link GEO orientations, ``Tip``): 2 decimals, rounded.
+
+``NumberStyle`` bundles one choice for each kind. ``UDK`` reproduces the engine, ``FULL``
+prints every number with enough digits to round-trip a float64 (an extension for users who want the
+learnt model to equal the simulator's exactly).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+Vector3 = tuple[float, float, float]
+
+
+def udk_float_string(value: float, precision: int) -> str:
+    """UnrealScript ``UnitsConverter.FloatString(value, precision)``, in float32 arithmetic.
+
+    >>> udk_float_string(-1.0049, 3)
+    '-1.004'
+    """
+    f32 = np.float32
+    v = f32(value)
+    sign = ""
+    if v < 0:
+        sign = "-"
+        v = f32(v * f32(-1.0))
+    int_part = int(v)
+    frac = f32(v - f32(int_part))
+    digits = int(f32(frac * f32(10.0**precision)))
+    return f"{sign}{int_part}.{str(digits).rjust(precision, '0')}"
+
+
+def round_decimals(value: float, decimals: int) -> str:
+    """A float printed with a fixed number of decimals, rounded (printf ``%.Nf``)."""
+    text = f"{value:.{decimals}f}"
+    if text.startswith("-") and float(text) == 0.0:
+        text = text[1:]  # no "-0.00"
+    return text
+
+
+def full_float(value: float) -> str:
+    """The shortest positional decimal that reads back as exactly ``value`` (float64)."""
+    text = np.format_float_positional(np.float64(value), unique=True, trim="0")
+    return text
+
+
+def join_vector(values: Sequence[float], fmt: Callable[[float], str]) -> str:
+    """``x,y,z`` with no spaces, each component printed by ``fmt``."""
+    return ",".join(fmt(float(v)) for v in values)
+
+
+@dataclass(frozen=True)
+class NumberStyle:
+    """How each kind of number is printed.
+
+    Attributes:
+        name: ``"udk"`` or ``"full"``.
+        scalar_decimals: decimals of raw scalars (Time, Value, MaxTorque...), or None for full.
+        fixed_precision: ``p`` of FloatString fields (GEO locations, GroundTruth), or None for full.
+        vector_decimals: decimals of raw vectors (link orientations, Tip), or None for full.
+    """
+
+    name: str
+    scalar_decimals: int | None
+    fixed_precision: int | None
+    vector_decimals: int | None
+
+    def scalar(self, value: float) -> str:
+        """A raw engine float (Time, ASTA Value, CONF limits)."""
+        if self.scalar_decimals is None:
+            return full_float(value)
+        return round_decimals(value, self.scalar_decimals)
+
+    def fixed(self, value: float) -> str:
+        """A FloatString(p) number (truncated in float32)."""
+        if self.fixed_precision is None:
+            return full_float(value)
+        return udk_float_string(value, self.fixed_precision)
+
+    def fixed_vector(self, values: Sequence[float]) -> str:
+        """A vector of FloatString(p) numbers."""
+        return join_vector(values, self.fixed)
+
+    def raw_vector(self, values: Sequence[float]) -> str:
+        """A vector concatenated raw into a string by the engine."""
+        if self.vector_decimals is None:
+            return join_vector(values, full_float)
+        decimals = self.vector_decimals
+        return join_vector(values, lambda v: round_decimals(v, decimals))
+
+    def quantize_fixed(self, value: float) -> float:
+        """The value a client reads back after ``fixed`` printing."""
+        return float(self.fixed(value))
+
+    def quantize_raw(self, value: float) -> float:
+        """The value a client reads back after ``raw_vector`` printing of one component."""
+        return float(self.raw_vector([value]))
+
+    def quantize_scalar(self, value: float) -> float:
+        """The value a client reads back after ``scalar`` printing."""
+        return float(self.scalar(value))
+
+
+UDK = NumberStyle("udk", scalar_decimals=4, fixed_precision=3, vector_decimals=2)
+FULL = NumberStyle("full", scalar_decimals=None, fixed_precision=None, vector_decimals=None)
+
+STYLES: dict[str, NumberStyle] = {"udk": UDK, "full": FULL}
