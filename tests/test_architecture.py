@@ -11,17 +11,20 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "usar_arm"
 
 # Layer of each module (the first path component below usar_arm, or the module itself).
+UTILITIES = {"errors", "spatial", "yamlio", "fileio"}
 ALLOWED: dict[str, set[str]] = {
     "errors": set(),
     "spatial": set(),
+    "yamlio": {"errors"},
+    "fileio": set(),
     "model": {"spatial"},
     "usarsim": {"errors"},
-    "sim": {"usarsim", "model", "spatial", "errors"},
-    "discover": {"usarsim", "model", "spatial", "errors"},
-    "urdf": {"model", "spatial", "errors"},
-    "planning": {"urdf", "model", "spatial", "errors"},
-    "control": {"usarsim", "planning", "model", "spatial", "errors"},
-    "export": {"control", "planning", "urdf", "model", "spatial", "errors"},
+    "sim": {"usarsim", "model"} | UTILITIES,
+    "discover": {"usarsim", "model"} | UTILITIES,
+    "urdf": {"model"} | UTILITIES,
+    "planning": {"urdf", "model"} | UTILITIES,
+    "control": {"usarsim", "planning", "model"} | UTILITIES,
+    "export": {"control", "planning", "urdf", "model"} | UTILITIES,
 }
 FACADES = {"cli", "arm", "pipeline", "__init__", "__main__"}  # may import everything
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only

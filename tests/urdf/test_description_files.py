@@ -1,0 +1,166 @@
+"""The generated description files: golden, valid, consistent, and named per the scheme."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+import yaml
+
+from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
+from usar_arm.pipeline import DescribeOptions, Description, describe, write_description
+from usar_arm.planning.acm import adjacent_pairs
+from usar_arm.urdf.moveit import moveit_files
+from usar_arm.urdf.validate import find_check_urdf, semantic_problems
+
+GOLDEN = Path(__file__).resolve().parents[2] / "robots" / "generated"
+
+
+@pytest.fixture(scope="module")
+def kr60() -> Description:
+    return describe(DescribeOptions())
+
+
+@pytest.mark.slow
+def test_regenerating_the_kr60_gives_byte_identical_files(kr60: Description,
+                                                          tmp_path: Path) -> None:
+    paths = write_description(kr60, tmp_path)
+    for path in paths.values():
+        golden = GOLDEN / path.name
+        assert golden.exists(), f"{golden} is not checked in"
+        assert path.read_bytes() == golden.read_bytes(), f"{path.name} differs from the golden"
+
+
+def test_check_urdf_accepts_the_urdf(kr60: Description, tmp_path: Path) -> None:
+    f = tmp_path / "kr60.urdf"
+    f.write_text(kr60.urdf)
+    exe = find_check_urdf()
+    assert exe is not None
+    run = subprocess.run([exe, str(f)], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    assert "root Link: base_link" in run.stdout
+
+
+def test_rep199_frames_and_tree(kr60: Description) -> None:
+    chain = kr60.chain
+    assert chain.root == "base_link"
+    assert chain.frames == {"base_link": "base_link", "base": "base", "flange": "flange",
+                            "tool0": "tool0", "tip_sensor": "KR60ArmTipTruth"}
+    assert [j.name for j in chain.joints if j.type is JointType.FIXED] == [
+        "base_link-base", "joint_a6-flange", "flange-tool0", "KR60ArmTipTruth_mount"]
+    for frame in ("base", "flange", "tool0"):
+        assert chain.link(frame).geometry is None
+    assert all(chain.link(f"link_{k}").geometry is not None for k in range(1, 7))
+
+
+def test_link_cylinders_stay_out_of_their_neighbours(kr60: Description) -> None:
+    # At the zero pose no pair of links collides except across a joint (adjacent), and the
+    # collision matrix keeps real pairs enabled.
+    assert kr60.acm.checked_pairs, "some link pairs must stay checked"
+    reasons = {d.reason for d in kr60.acm.disabled}
+    assert reasons <= {"Adjacent", "Default", "Always", "Never"}
+    assert "Default" not in reasons and "Always" not in reasons
+
+
+def test_srdf_group_home_and_matrix(kr60: Description) -> None:
+    srdf = kr60.srdf
+    assert '<robot name="KR60">' in srdf
+    assert '<chain base_link="base_link" tip_link="tool0"/>' in srdf
+    assert 'parent_frame="world" child_link="base_link"' in srdf
+    assert "over 10000 random states, seed 0" in srdf
+    for a, b in adjacent_pairs(kr60.chain):
+        assert f'link1="{a}" link2="{b}" reason="Adjacent"' in srdf
+    assert len(re.findall(r"<joint name=\"joint_a\d\" value=\"0\"/>", srdf)) == 6
+
+
+def test_joint_limits_yaml_has_acceleration_and_jerk(kr60: Description) -> None:
+    doc = yaml.safe_load(kr60.joint_limits)
+    a2 = doc["joint_limits"]["joint_a2"]
+    assert a2["has_acceleration_limits"] and a2["max_acceleration"] == pytest.approx(1.2)
+    assert a2["has_jerk_limits"] and a2["max_jerk"] == pytest.approx(12.0)
+    assert "estimate" in kr60.joint_limits
+
+
+def test_moveit_package_is_complete_and_consistent(kr60: Description, tmp_path: Path) -> None:
+    files = moveit_files(kr60.chain, kr60.urdf, kr60.srdf, kr60.joint_limits,
+                         "KR60Arm_controller", kr60.home)
+    expected = {".setup_assistant", "package.xml", "CMakeLists.txt", "config/KR60.urdf",
+                "config/KR60.srdf", "config/KR60.urdf.xacro", "config/KR60.ros2_control.xacro",
+                "config/initial_positions.yaml", "config/kinematics.yaml",
+                "config/joint_limits.yaml", "config/pilz_cartesian_limits.yaml",
+                "config/ros2_controllers.yaml", "config/moveit_controllers.yaml"}
+    assert expected <= set(files)
+    assert {f for f in files if f.startswith("launch/")} >= {"launch/demo.launch.py",
+                                                           "launch/move_group.launch.py"}
+    joints = list(kr60.chain.joint_names)
+    ros2 = yaml.safe_load(files["config/ros2_controllers.yaml"])
+    moveit = yaml.safe_load(files["config/moveit_controllers.yaml"])
+    assert ros2["KR60Arm_controller"]["ros__parameters"]["joints"] == joints
+    assert moveit["moveit_simple_controller_manager"]["KR60Arm_controller"]["joints"] == joints
+    assert list(yaml.safe_load(files["config/initial_positions.yaml"])["initial_positions"]) \
+        == joints
+    assert set(yaml.safe_load(files["config/joint_limits.yaml"])["joint_limits"]) == set(joints)
+    sa = yaml.safe_load(files[".setup_assistant"])["moveit_setup_assistant_config"]
+    assert sa["URDF"]["package"] == "kr60_moveit_config"
+    for name in re.findall(r'link[12]?="([^"]+)"', files["config/KR60.srdf"]):
+        assert f'link name="{name}"' in kr60.urdf
+    control = files["config/KR60.ros2_control.xacro"]
+    assert re.findall(r'<joint name="([^"]+)">', control) == joints
+    for text in (v for k, v in files.items() if k.endswith(".launch.py")):
+        compile(text, "launch", "exec")
+
+
+def test_moveit_xacro_expands_without_ros(kr60: Description, tmp_path: Path) -> None:
+    xacro = pytest.importorskip("xacro")
+    del xacro
+    files = moveit_files(kr60.chain, kr60.urdf, kr60.srdf, kr60.joint_limits,
+                         "KR60Arm_controller", kr60.home)
+    for rel, text in files.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    import shutil
+    import sys
+    exe = shutil.which("xacro") or str(Path(sys.executable).parent / "xacro")
+    run = subprocess.run([exe, str(tmp_path / "config" / "KR60.urdf.xacro")],
+                         capture_output=True, text=True, check=False, cwd="/")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.count("<ros2_control") == 1 and 'joint name="joint_a6"' in run.stdout
+
+
+def _chain(**changes: object) -> KinematicChain:
+    lim = JointLimits(-1, 1, 1.0, 10)
+    cyl = Cylinder(0.05, 0.3, Origin())
+    links = [Link("base_link", cyl, (1, 0, 0, 1), "red"), Link("base"), Link("link_1", cyl,
+             (1, 0, 0, 1), "red"), Link("flange"), Link("tool0")]
+    joints = [Joint("j0", JointType.FIXED, "base_link", "base"),
+              Joint("j1", JointType.REVOLUTE, "base_link", "link_1", limits=lim),
+              Joint("j2", JointType.FIXED, "link_1", "flange"),
+              Joint("j3", JointType.FIXED, "flange", "tool0")]
+    frames = {"base_link": "base_link", "base": "base", "flange": "flange", "tool0": "tool0"}
+    base = {"links": links, "joints": joints, "frames": frames}
+    base.update(changes)
+    return KinematicChain("t", tuple(base["links"]), tuple(base["joints"]), base["frames"])
+
+
+def test_semantic_checks_catch_what_check_urdf_does_not() -> None:
+    assert semantic_problems(_chain()) == []
+    bad_limits = JointLimits(1, -1, 0.0, -5, acceleration=0.0)
+    c = _chain(joints=[Joint("j0", JointType.FIXED, "base_link", "base"),
+                       Joint("j1", JointType.REVOLUTE, "base_link", "link_1", axis=(0, 0, 2),
+                             limits=bad_limits),
+                       Joint("j1", JointType.FIXED, "link_1", "flange"),
+                       Joint("j3", JointType.FIXED, "flange", "tool0")])
+    problems = "\n".join(semantic_problems(c))
+    for words in ("must be below upper", "velocity limit 0.0", "effort -5", "acceleration limit",
+                  "unit length", "joint names must be unique: j1"):
+        assert words in problems
+    no_tool = _chain(frames={"base_link": "base_link", "base": "base", "flange": "flange"})
+    assert "frame 'tool0' is missing" in "\n".join(semantic_problems(no_tool))
+    grey = _chain(links=[Link("base_link", Cylinder(0.1, 0.1)), Link("base"),
+                         Link("link_1"), Link("flange", Cylinder(0.1, 0.1), (1, 1, 1, 1), "w"),
+                         Link("tool0")])
+    problems = "\n".join(semantic_problems(grey))
+    assert "link base_link: visible geometry needs a <material>" in problems
+    assert "'flange' (flange) must not carry geometry" in problems

@@ -1,0 +1,51 @@
+"""Arguments shared by every command that discovers a robot (urdf, moveit-config, ik, plan...)."""
+
+from __future__ import annotations
+
+import argparse
+
+from usar_arm.discover.naming import SCHEMES
+from usar_arm.pipeline import FRAMES, DescribeOptions
+
+
+def add_server_args(p: argparse.ArgumentParser) -> None:
+    """--robot, --host, --port, --start-position, --timeout, --wire-precision."""
+    p.add_argument("--robot", default="KR60",
+                   help="robot class to spawn, e.g. KR60 or Fanuc_M16iB20 (package USARBot. is "
+                        "added when missing; default KR60)")
+    p.add_argument("--host", default=None,
+                   help="USARSim server host; without it the embedded simulator is started "
+                        "in-process on a free loopback port")
+    p.add_argument("--port", type=int, default=3000, help="USARSim server port (default 3000)")
+    p.add_argument("--start-position", default=None, metavar="NAME",
+                   help="start pose (PlayerStart tag) to spawn at; default: the server's first")
+    p.add_argument("--timeout", type=float, default=5.0, metavar="S",
+                   help="seconds to wait for each server reply (default 5)")
+    p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
+                   help="number format of the embedded simulator (ignored with --host)")
+
+
+def add_description_args(p: argparse.ArgumentParser) -> None:
+    """--naming, --frame, --velocity-limits, --acm-samples, --seed."""
+    p.add_argument("--naming", choices=SCHEMES, default="ros-i",
+                   help="joint/link names: ros-i (joint_a1..), kuka-ros2 (joint_1..), "
+                        "legacy-2012 (KR60Arm_joint_1..); default ros-i")
+    p.add_argument("--frame", choices=FRAMES, default="z-up",
+                   help="z-up: REP-103 (default); z-down: USARSim's frame, as the 2012 node")
+    p.add_argument("--velocity-limits", default=None, metavar="FILE",
+                   help="YAML file with per-joint velocity/acceleration/jerk limits")
+    p.add_argument("--acm-samples", type=int, default=10_000, metavar="N",
+                   help="random states for the disabled-collision matrix (default 10000)")
+    p.add_argument("--acm-seed", type=int, default=0, metavar="SEED",
+                   help="seed of those states (default 0)")
+
+
+def options_from(args: argparse.Namespace) -> DescribeOptions:
+    """DescribeOptions from parsed arguments."""
+    return DescribeOptions(
+        robot=args.robot, host=args.host, port=args.port, start=args.start_position,
+        naming=getattr(args, "naming", "ros-i"), frame=getattr(args, "frame", "z-up"),
+        velocity_limits=getattr(args, "velocity_limits", None),
+        wire_precision=args.wire_precision,
+        acm_samples=getattr(args, "acm_samples", 10_000),
+        acm_seed=getattr(args, "acm_seed", 0), timeout=args.timeout)

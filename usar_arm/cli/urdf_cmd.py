@@ -1,0 +1,102 @@
+"""``usar-arm urdf`` and ``usar-arm moveit-config``: describe a robot learnt over the wire."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.describe_args import add_description_args, add_server_args, options_from
+from usar_arm.errors import EXIT_OK
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.pipeline import Description, describe, write_description
+from usar_arm.urdf.moveit import moveit_files, package_name
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits",
+        description="The successor of the 2012 usar_urdf node: spawn ROBOT on a USARSim server "
+                    "(the embedded simulator unless --host), read its actuator's CONF and GEO, "
+                    "and write <Robot>.urdf, <Robot>.srdf, <Robot>.joint_limits.yaml and "
+                    "<Robot>.discovery.json (the raw lines received and the chain built from "
+                    "them). Every file is validated first and written atomically.")
+    add_server_args(p)
+    add_description_args(p)
+    p.add_argument("--out-dir", default="robots/generated", metavar="DIR",
+                   help="where to write (default robots/generated)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_verbosity(p)
+    p.set_defaults(handler=run_urdf)
+
+    m = sub.add_parser(
+        "moveit-config", help="write a complete MoveIt 2 config package for a robot",
+        description="Discover ROBOT as `usar-arm urdf` does and write a MoveIt 2 config package "
+                    "(SRDF, kinematics.yaml, joint_limits.yaml with acceleration and jerk, "
+                    "pilz_cartesian_limits.yaml, ros2_controllers.yaml, moveit_controllers.yaml, "
+                    "ros2_control xacro, initial_positions.yaml, .setup_assistant, package.xml, "
+                    "CMakeLists.txt, launch wrappers) into DIR. Build it with colcon and run "
+                    "`ros2 launch <robot>_moveit_config demo.launch.py`.")
+    add_server_args(m)
+    add_description_args(m)
+    m.add_argument("--out", required=True, metavar="DIR", help="package folder to write")
+    m.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_verbosity(m)
+    m.set_defaults(handler=run_moveit)
+
+
+def _joint_rows(desc: Description) -> list[dict[str, object]]:
+    rows = []
+    for jt, src in zip(desc.chain.actuated_joints, desc.limit_sources, strict=True):
+        lim = jt.limits
+        assert lim is not None
+        rows.append({"name": jt.name, "type": jt.type.value, "lower": lim.lower,
+                     "upper": lim.upper, "velocity": lim.velocity,
+                     "acceleration": lim.acceleration, "jerk": lim.jerk, "effort": lim.effort,
+                     "parent": jt.parent, "child": jt.child, "velocity_source": src[0]})
+    return rows
+
+
+def _print_table(desc: Description) -> None:
+    out(f"{'joint':<20} {'type':<10} {'lower':>8} {'upper':>8} {'vel':>7} {'acc':>7} "
+        f"{'jerk':>7} {'effort':>7}  parent -> child")
+    for r in _joint_rows(desc):
+        out(f"{r['name']:<20} {r['type']:<10} {r['lower']:>8.4f} {r['upper']:>8.4f} "
+            f"{r['velocity']:>7.3f} {r['acceleration']:>7.3f} {r['jerk']:>7.2f} "
+            f"{r['effort']:>7.1f}  {r['parent']} -> {r['child']}")
+
+
+def run_urdf(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    options = options_from(args)
+    err(f"discovering {options.robot_class} on "
+        f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
+    desc = describe(options)
+    paths = write_description(desc, args.out_dir)
+    if args.json:
+        print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
+                    "joints": _joint_rows(desc), "warnings": list(desc.warnings)})
+        return EXIT_OK
+    _print_table(desc)
+    for kind, path in paths.items():
+        out(f"wrote {path}  ({kind})")
+    return EXIT_OK
+
+
+def run_moveit(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    desc = describe(options_from(args))
+    arm_name = desc.discovery["robot"]["actuator"]
+    files = moveit_files(desc.chain, desc.urdf, desc.srdf, desc.joint_limits,
+                         f"{arm_name}_controller", desc.home)
+    root = Path(args.out)
+    paths = write_tree_atomic(root, files)
+    if args.json:
+        print_json({"robot": desc.chain.name, "package": package_name(desc.chain.name),
+                    "folder": str(root), "files": sorted(str(p) for p in paths),
+                    "warnings": list(desc.warnings)})
+        return EXIT_OK
+    out(f"wrote MoveIt 2 package {package_name(desc.chain.name)} ({len(paths)} files) in {root}")
+    for p in sorted(paths):
+        out(f"  {p}")
+    return EXIT_OK

@@ -1,0 +1,160 @@
+"""Ask a USARSim server about a robot, the way NIST's RosSim did, and keep every line it said.
+
+1. ``GETSTARTPOSES`` (to check the start position, or take the first one);
+2. ``INIT`` the robot class and wait for its first status line;
+3. listen briefly to the status streams to learn the component names (ASTA: actuators, SEN:
+   sensors);
+4. ``GETCONF``/``GETGEO`` for the platform (``Type Robot``), then for each component, one request
+   at a time.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from usar_arm.discover.wire_arm import WireArm, arm_from_replies
+from usar_arm.errors import DescriptionError, UnknownStartError
+from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.client import UsarClient
+from usar_arm.usarsim.codec import format_message
+
+log = logging.getLogger("usar_arm.discover")
+
+LISTEN_S = 0.35
+"""How long to listen to the status streams after the spawn (s): more than one 10 Hz period."""
+
+
+@dataclass(frozen=True)
+class Exchange:
+    """One request and the raw reply line (no terminator)."""
+
+    request: str
+    reply: str
+
+
+@dataclass
+class DiscoveryRecord:
+    """Everything a discovery learnt, with the raw lines it was learnt from.
+
+    Attributes:
+        host, port: the server. robot_class: e.g. ``USARBot.KR60``. start: the start position.
+        exchanges: each request and the raw reply, in order.
+        components: ``Type Name`` of what the status streams announced.
+        arm: the arm built from the replies.
+    """
+
+    host: str
+    port: int
+    robot_class: str
+    start: str | None
+    exchanges: list[Exchange] = field(default_factory=list)
+    components: list[str] = field(default_factory=list)
+    arm: WireArm | None = None
+
+    def reply_lines(self) -> list[str]:
+        """The raw CONF/GEO lines, in order (the cache key of a description)."""
+        return [e.reply for e in self.exchanges if e.reply.startswith(("CONF", "GEO"))]
+
+
+def discover(client: UsarClient, robot_class: str, robot_name: str | None = None,
+             start: str | None = None, actuator: str | None = None,
+             timeout: float | None = None, known_classes: tuple[str, ...] = ()
+             ) -> DiscoveryRecord:
+    """Spawn ``robot_class`` on the connected server and learn its arm.
+
+    Args:
+        client: a connected client (its connection will own the robot).
+        robot_class: package-qualified class, e.g. ``USARBot.KR60`` (``KR60`` is qualified).
+        robot_name: the INIT Name (default: the class name without package).
+        start: a start position tag (default: the server's first).
+        actuator: which actuator to learn when the robot has several (default: the one with
+            the most links).
+        known_classes: robot classes to name in the error if nothing spawns.
+
+    Raises:
+        UnknownStartError, UnknownRobotError, UnknownComponentError, ConnectionLostError,
+        DescriptionError: each says what was wrong and what the server offers.
+    """
+    if "." not in robot_class:
+        robot_class = f"USARBot.{robot_class}"
+    record = DiscoveryRecord(client.host, client.port, robot_class, start)
+
+    def ask(msg: m.Message, accept_type: type, name: str | None = None) -> m.Message:
+        type_ = msg.type if isinstance(msg, (m.GetConf, m.GetGeo)) else ""
+        rec = client.request(msg, _matches(accept_type, type_, name), timeout)
+        record.exchanges.append(Exchange(format_message(msg).strip(), rec.line))
+        return rec.message
+
+    poses = ask(m.GetStartPoses(), m.StartPoses)
+    assert isinstance(poses, m.StartPoses)
+    if start is None:
+        start = poses.names[0] if poses.poses else None
+    elif not any(n.lower() == start.lower() for n in poses.names):
+        raise UnknownStartError(start, poses.names)
+    record.start = start
+    name = robot_name or robot_class.split(".")[-1]
+    log.info("spawning %s '%s' at %s", robot_class, name, start or "the origin")
+    first = client.spawn(robot_class, name, start=start,
+                         location=None if start else (0.0, 0.0, 0.0),
+                         rotation=None if start else (0.0, 0.0, 0.0),
+                         timeout=timeout, known_classes=known_classes)
+    record.exchanges.append(Exchange(f"INIT {{ClassName {robot_class}}} {{Name {name}}}"
+                                     + (f" {{Start {start}}}" if start else ""), first.line))
+    deadline = time.monotonic() + max(LISTEN_S, 0.0)
+    actuators: list[str] = []
+    while time.monotonic() < deadline or not actuators:
+        actuators = [c.split(" ", 1)[1] for c in client.known_components()
+                     if c.startswith("Actuator ")]
+        if time.monotonic() > deadline + (timeout or client.timeout):
+            break
+        time.sleep(0.02)
+    record.components = client.known_components()
+    if not actuators:
+        raise DescriptionError(f"{robot_class} reports no actuator (no ASTA line arrived); "
+                               f"components seen: {', '.join(record.components) or 'none'}")
+    platform = ask(m.GetConf("Robot"), m.PlatformConf)
+    assert isinstance(platform, m.PlatformConf)
+    ask(m.GetGeo("Robot"), m.Geo)
+    confs = {}
+    for act in actuators:
+        conf = ask(m.GetConf("Actuator", act), m.Conf, act)
+        assert isinstance(conf, m.Conf)
+        confs[act] = next(i for i in conf.items if i.name.lower() == act.lower())
+    if actuator is None:
+        actuator = max(actuators, key=lambda a: len(confs[a].links))
+        if len(actuators) > 1:
+            log.info("robot has actuators %s; learning %s (most links)", actuators, actuator)
+    elif actuator.lower() not in (a.lower() for a in actuators):
+        raise DescriptionError(f"no actuator '{actuator}' on {robot_class}; it has: "
+                               f"{', '.join(actuators)}")
+    actuator = next(a for a in actuators if a.lower() == actuator.lower())
+    geo = ask(m.GetGeo("Actuator", actuator), m.Geo, actuator)
+    geo_line = record.exchanges[-1].reply
+    assert isinstance(geo, m.Geo)
+    geo_item = next(i for i in geo.items if i.name.lower() == actuator.lower())
+    sensors: list[m.GeoItem] = []
+    for comp in record.components:
+        kind, _, sname = comp.partition(" ")
+        if kind == "GroundTruth":
+            sgeo = ask(m.GetGeo("GroundTruth", sname), m.Geo, sname)
+            assert isinstance(sgeo, m.Geo)
+            sensors += [i for i in sgeo.items if i.name.lower() == sname.lower()]
+    record.arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
+    return record
+
+
+def _matches(kind: type, type_: str, name: str | None) -> Callable[[m.Message], bool]:
+    def accept(msg: m.Message) -> bool:
+        if not isinstance(msg, kind):
+            return False
+        if isinstance(msg, m.PlatformConf):
+            return True
+        if isinstance(msg, (m.Conf, m.Geo)):
+            if type_ != "Robot" and msg.type.lower() != type_.lower():
+                return False
+            return name is None or any(i.name.lower() == name.lower() for i in msg.items)
+        return True
+    return accept

@@ -1,0 +1,307 @@
+"""From a USARSim server to validated robot description files (the ``usar-arm urdf`` pipeline).
+
+discover (wire) -> WireArm -> frames (snap, z-up) -> KinematicChain -> URDF -> checks
+(check_urdf, yourdfpy, Pinocchio, semantics) -> collision matrix (python-fcl) -> SRDF ->
+joint_limits.yaml and discovery.json. Nothing is written until every check has passed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from usar_arm import __version__
+from usar_arm.discover.build import build_chain
+from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
+from usar_arm.discover.limits import home_state, load_limits_file, resolve
+from usar_arm.discover.naming import Naming
+from usar_arm.discover.session import DiscoveryRecord, discover
+from usar_arm.discover.wire_arm import WireArm
+from usar_arm.errors import InvalidInputError
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.model import KinematicChain
+from usar_arm.planning.acm import AcmResult, compute_acm
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.sim.robot_spec import ActuatorSpec, builtin_robots, joint_frames, tip_pose
+from usar_arm.sim.server import SimOptions, SimServer
+from usar_arm.spatial import FLIP_X, angle_between
+from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
+from usar_arm.urdf.validate import validate
+from usar_arm.urdf.writer import urdf_text
+from usar_arm.usarsim.client import UsarClient
+
+log = logging.getLogger("usar_arm.pipeline")
+
+FRAMES = ("z-up", "z-down")
+
+
+@dataclass(frozen=True)
+class DescribeOptions:
+    """Options of a discovery (the parameters of the 2012 node, and the new ones).
+
+    Attributes:
+        robot: robot class, with or without package (``KR60`` means ``USARBot.KR60``).
+        host: USARSim server; None starts the embedded simulator in-process.
+        port: server port (3000, as UDK). start: start position (default: the first).
+        naming: ``ros-i``, ``kuka-ros2`` or ``legacy-2012``. frame: ``z-up`` or ``z-down``.
+        velocity_limits: path of a limits file (overrides table and server).
+        wire_precision: number format of the embedded simulator (``udk`` or ``full``).
+        acm_samples, acm_seed: collision-matrix sampling. timeout: s per server reply.
+        actuator: which actuator to learn when the robot has several.
+        accuracy_samples: configurations for the embedded ground-truth accuracy check.
+    """
+
+    robot: str = "KR60"
+    host: str | None = None
+    port: int = 3000
+    start: str | None = None
+    naming: str = "ros-i"
+    frame: str = "z-up"
+    velocity_limits: str | None = None
+    wire_precision: str = "udk"
+    acm_samples: int = 10_000
+    acm_seed: int = 0
+    timeout: float = 5.0
+    actuator: str | None = None
+    accuracy_samples: int = 1000
+
+    def __post_init__(self) -> None:
+        if self.frame not in FRAMES:
+            raise InvalidInputError(f"--frame must be one of {', '.join(FRAMES)}, got "
+                                    f"'{self.frame}'")
+        Naming(self.naming, "x")  # validates the scheme name
+        if self.acm_samples < 1:
+            raise InvalidInputError(f"collision-matrix samples must be >= 1, got "
+                                    f"{self.acm_samples}")
+
+    @property
+    def robot_class(self) -> str:
+        """Package-qualified class name."""
+        return self.robot if "." in self.robot else f"USARBot.{self.robot}"
+
+
+@dataclass(frozen=True)
+class Description:
+    """A validated robot description and everything it was built from."""
+
+    chain: KinematicChain
+    urdf: str
+    srdf: str
+    joint_limits: str
+    discovery: dict[str, Any]
+    acm: AcmResult
+    home: dict[str, float]
+    limit_sources: tuple[tuple[str, str, str], ...]
+    warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    def files(self) -> dict[str, str]:
+        """File name -> content of the four outputs."""
+        name = self.chain.name
+        return {f"{name}.urdf": self.urdf, f"{name}.srdf": self.srdf,
+                f"{name}.joint_limits.yaml": self.joint_limits,
+                f"{name}.discovery.json": json.dumps(self.discovery, indent=2) + "\n"}
+
+
+@contextlib.contextmanager
+def embedded_simulator(wire_precision: str = "udk", **kwargs: Any) -> Iterator[SimServer]:
+    """The embedded simulator on a free loopback port, for the duration of a ``with`` block."""
+    server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,
+                                  **kwargs))
+    server.start()
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+def run_discovery(options: DescribeOptions) -> DiscoveryRecord:
+    """Connect (embedded or remote), spawn and learn the robot's arm."""
+    known = tuple(sorted(builtin_robots()))
+    if options.host is None:
+        with embedded_simulator(options.wire_precision) as server:
+            assert server.port is not None
+            with UsarClient("127.0.0.1", server.port, timeout=options.timeout) as client:
+                return discover(client, options.robot_class, start=options.start,
+                                actuator=options.actuator, timeout=options.timeout,
+                                known_classes=known)
+    with UsarClient(options.host, options.port, timeout=options.timeout) as client:
+        return discover(client, options.robot_class, start=options.start,
+                        actuator=options.actuator, timeout=options.timeout)
+
+
+def describe(options: DescribeOptions) -> Description:
+    """Discover the robot and build its validated description (nothing is written)."""
+    record = run_discovery(options)
+    assert record.arm is not None
+    return describe_arm(record, options)
+
+
+def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Description:
+    """Build and check the description of an arm already discovered."""
+    arm = record.arm
+    assert arm is not None
+    naming = Naming(options.naming, arm.name)
+    frames_down = accumulate(arm)
+    frames = to_frame(frames_down, options.frame)
+    override = None
+    if options.velocity_limits:
+        override = load_limits_file(options.velocity_limits, arm.dof,
+                                    [naming.joint(k + 1) for k in range(arm.dof)])
+    limits, warnings = resolve(arm, override)
+    sources = tuple(lim.sources for lim in limits)
+    notes = _notes(record, arm, options, frames_down.snaps, sources)
+    chain = build_chain(arm, frames, limits, naming, notes)
+    urdf = urdf_text(chain)
+    validate(chain, urdf)
+    kinematics = KinematicModel(urdf, chain.joint_names)
+    body_links = [naming.base if naming.legacy else naming.base_link]
+    body_links += [naming.link(k + 1) for k in range(arm.dof)]
+    for name in (n for n in body_links if chain.link(n).geometry is None):
+        warnings.append(f"link {name} has no collision geometry (it is too short for a cylinder), "
+                        "so collision checks cannot see it")
+        log.warning("%s", warnings[-1])
+    acm = compute_acm(chain, kinematics, options.acm_samples, options.acm_seed)
+    home_q, home_source = home_state(arm, list(chain.lower()), list(chain.upper()))
+    home = dict(zip(chain.joint_names, home_q, strict=True))
+    acm_notes = [
+        f"Generated by usar-arm {__version__} for {chain.name}; do not edit.",
+        f"Disabled collisions computed as the MoveIt Setup Assistant does (Adjacent, Default, "
+        f"Always >= 95 %, Never) with python-fcl over {acm.samples} random states, seed "
+        f"{acm.seed}.",
+        f"home: {home_source}."]
+    srdf = srdf_text(chain, [GroupState("home", home)], acm.disabled, acm_notes)
+    joint_limits = joint_limits_yaml(chain, sources)
+    discovery = _discovery_json(record, arm, options, chain, frames_down.snaps, acm, sources,
+                                warnings)
+    if options.host is None:
+        spec = builtin_robots()[options.robot_class]
+        act = next(a for a in spec.actuators if a.name == arm.name)
+        discovery["accuracy_vs_simulator"] = accuracy_report(chain, act, options.frame,
+                                                             options.accuracy_samples)
+    return Description(chain, urdf, srdf, joint_limits, discovery, acm, home, sources,
+                       tuple(warnings))
+
+
+def write_description(desc: Description, out_dir: str | Path) -> dict[str, Path]:
+    """Write the four files into ``out_dir`` atomically; returns kind -> path."""
+    files = desc.files()
+    paths = write_tree_atomic(out_dir, files)
+    kinds = ("urdf", "srdf", "joint_limits", "discovery")
+    return dict(zip(kinds, paths, strict=True))
+
+
+# ------------------------------------------------------------------------------ reports
+
+
+def _notes(record: DiscoveryRecord, arm: WireArm, options: DescribeOptions, snaps: tuple,
+           sources: tuple[tuple[str, str, str], ...]) -> list[str]:
+    where = "the embedded simulator" if options.host is None else f"{options.host}:{options.port}"
+    notes = [
+        f"Generated by usar-arm {__version__} from what a USARSim server ({where}) described "
+        "over its TCP protocol; do not edit, regenerate with `usar-arm urdf`.",
+        f"Robot {arm.robot_name} ({record.robot_class}), actuator {arm.name}, start "
+        f"{record.start}; naming {options.naming}.",
+        ("Frame: REP-103 z-up, converted from USARSim's z-down frame." if options.frame == "z-up"
+         else "Frame: USARSim's z-down frame, as the 2012 usar_urdf node wrote it."),
+        f"Wire resolution: GEO locations {arm.location_resolution:g} m, orientations "
+        f"{arm.orientation_resolution:g} rad, Tip {arm.tip_resolution:g} m (0 = exact); "
+        f"{len(snaps)} frame(s) snapped to canonical directions (see {arm.robot_name}."
+        "discovery.json).",
+        "No <inertial> elements: the USARSim wire carries no masses.",
+        "tool0 is the flange turned +90 deg about y (its z axis points out of the flange), "
+        "as in ROS-Industrial KUKA packages.",
+    ]
+    distinct = sorted({s for triple in sources for s in triple})
+    notes.append("Velocity/acceleration/jerk limits: " + "; ".join(distinct) + ".")
+    return notes
+
+
+def _discovery_json(record: DiscoveryRecord, arm: WireArm, options: DescribeOptions,
+                    chain: KinematicChain, snaps: tuple, acm: AcmResult,
+                    sources: tuple[tuple[str, str, str], ...], warnings: list[str]
+                    ) -> dict[str, Any]:
+    n = arm.dof
+    loc_bound = [math.sqrt(3) * arm.location_resolution * (k + 1) for k in range(n)]
+    flange_bound = math.sqrt(3) * (arm.location_resolution * n + arm.tip_resolution / 2)
+    joints = []
+    for jt, src, wj in zip(chain.actuated_joints, sources, arm.joints, strict=True):
+        lim = jt.limits
+        assert lim is not None
+        joints.append({
+            "name": jt.name, "type": jt.type.value, "usarsim_link": wj.link,
+            "parent_link": jt.parent, "child_link": jt.child,
+            "origin_xyz_m": list(jt.origin.xyz), "origin_rpy_rad": list(jt.origin.rpy),
+            "axis": list(jt.axis), "lower": lim.lower, "upper": lim.upper,
+            "velocity": lim.velocity, "acceleration": lim.acceleration, "jerk": lim.jerk,
+            "effort": lim.effort,
+            "sources": {"velocity": src[0], "acceleration": src[1], "jerk": src[2]}})
+    return {
+        "generator": f"usar-arm {__version__}",
+        "server": "embedded simulator" if options.host is None else
+        f"{options.host}:{options.port}",
+        "robot": {"class": record.robot_class, "name": arm.robot_name, "start": record.start,
+                  "actuator": arm.name, "platform": arm.platform_type},
+        "options": {"naming": options.naming, "frame": options.frame,
+                    "velocity_limits_file": options.velocity_limits,
+                    "wire_precision_of_embedded_simulator":
+                        options.wire_precision if options.host is None else None},
+        "exchanges": [{"request": e.request, "reply": e.reply} for e in record.exchanges
+                      if not e.request.startswith("INIT")],
+        "components": record.components,
+        "chain": {"robot": chain.name, "frames": dict(chain.frames), "joints": joints,
+                  "tip_m": list(arm.tip), "tip_sensor": arm.tip_sensor.name
+                  if arm.tip_sensor else None},
+        "precision": {
+            "location_resolution_m": arm.location_resolution,
+            "orientation_resolution_rad": arm.orientation_resolution,
+            "tip_resolution_m": arm.tip_resolution,
+            "snap_tolerance_rad": snap_tolerance_for(arm),
+            "snapped": [{"what": s.what, "deviation_rad": s.deviation_rad} for s in snaps],
+            "origin_error_bound_at_zero_pose_m": loc_bound,
+            "flange_error_bound_at_zero_pose_m": flange_bound},
+        "collision_matrix": {
+            "samples": acm.samples, "seed": acm.seed,
+            "disabled": {r: sum(1 for d in acm.disabled if d.reason == r)
+                         for r in ("Adjacent", "Default", "Always", "Never")},
+            "checked_pairs": [list(p) for p in acm.checked_pairs],
+            "links_without_geometry": list(acm.links_without_geometry)},
+        "warnings": list(warnings),
+    }
+
+
+def accuracy_report(chain: KinematicChain, act: ActuatorSpec, frame: str, samples: int,
+                    seed: int = 0) -> dict[str, Any]:
+    """Forward kinematics of ``chain`` against the simulator's ground truth at seeded random
+    configurations: the largest joint-origin, joint-axis and flange errors."""
+    flip = FLIP_X if frame == "z-up" else np.eye(3)
+    rng = np.random.default_rng(seed)
+    lo = np.array([j.limit_low for j in act.joints])
+    hi = np.array([j.limit_high for j in act.joints])
+    origin = axis = flange = 0.0
+    zero_axis = 0.0
+    for i in range(samples + 1):
+        q = np.zeros(len(lo)) if i == 0 else rng.uniform(lo, hi)
+        truth = joint_frames(act, q)
+        got = [(j, f) for j, f in chain.joint_frames(q) if j.actuated]
+        for (jt, f), t in zip(got, truth, strict=True):
+            origin = max(origin, float(np.linalg.norm(f[:3, 3] - flip @ t[:3, 3])))
+            err = angle_between(f[:3, :3] @ np.asarray(jt.axis), flip @ t[:3, 2])
+            axis = max(axis, err)
+            if i == 0:
+                zero_axis = max(zero_axis, err)
+        tp = tip_pose(act, q)
+        flange = max(flange, float(np.linalg.norm(chain.frame_pose("flange", q)[:3, 3]
+                                                  - flip @ tp[:3, 3])))
+    return {"reference": "the embedded simulator's own model (ground truth)",
+            "configurations": samples, "seed": seed,
+            "max_joint_origin_error_m": origin, "max_joint_axis_error_rad": axis,
+            "max_joint_axis_error_at_zero_pose_rad": zero_axis,
+            "max_flange_error_m": flange}

@@ -1,0 +1,275 @@
+"""Collision checking of the arm against itself and a scene, with python-fcl.
+
+The robot's links are the URDF's cylinders (optionally padded); pairs the SRDF disables are never
+checked. A broadphase (FCL's dynamic AABB trees) culls pairs whose boxes do not overlap before
+the exact narrowphase. :meth:`CollisionWorld.contacts_brute_force` checks every pair directly and
+is the reference the broadphase is tested against.
+
+This is the only module that imports ``fcl``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+
+from usar_arm.model import Cylinder, KinematicChain
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.scene import EMPTY, Box, CylinderShape, Mesh, Scene, Sphere
+from usar_arm.spatial import Array
+
+Pair = tuple[str, str]
+
+
+def pair(a: str, b: str) -> Pair:
+    """A link/object pair in canonical (sorted) order."""
+    return (a, b) if a <= b else (b, a)
+
+
+def _fcl_transform(t: Array) -> fcl.Transform:
+    return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
+
+
+def _shape_geometry(shape: object) -> fcl.CollisionGeometry:
+    if isinstance(shape, Box):
+        return fcl.Box(*shape.size)
+    if isinstance(shape, CylinderShape):
+        return fcl.Cylinder(shape.radius, shape.length)
+    if isinstance(shape, Sphere):
+        return fcl.Sphere(shape.radius)
+    if isinstance(shape, Mesh):
+        model = fcl.BVHModel()
+        model.beginModel(len(shape.vertices), len(shape.faces))
+        model.addSubModel(np.asarray(shape.vertices, dtype=float),
+                          np.asarray(shape.faces, dtype=np.int32))
+        model.endModel()
+        return model
+    raise TypeError(f"unsupported shape {shape!r}")
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Two bodies in contact and how deep (m; 0 when FCL reports no depth)."""
+
+    a: str
+    b: str
+    depth: float
+
+
+class CollisionWorld:
+    """The arm (cylinders from a chain) and a scene, checked with python-fcl.
+
+    Broadphase: each robot cylinder's world axis-aligned bounding box is computed for all links
+    at once (numpy) and compared with the other boxes of every checked pair; only overlapping
+    pairs reach FCL's exact narrowphase.
+
+    Args:
+        chain: the robot description (link cylinders).
+        kinematics: its Pinocchio model (link poses).
+        disabled: link pairs never checked (the SRDF's disable_collisions).
+        scene: obstacles in base_link (default: none).
+        padding: safety margin (m) added to every robot cylinder's radius and half-length.
+    """
+
+    def __init__(self, chain: KinematicChain, kinematics: KinematicModel,
+                 disabled: Iterable[Pair] = (), scene: Scene = EMPTY, padding: float = 0.0):
+        self.chain = chain
+        self.kinematics = kinematics
+        self.scene = scene
+        self.padding = float(padding)
+        links = [lk for lk in chain.links if lk.geometry is not None]
+        self._links = [lk.name for lk in links]
+        self._frame_ids = [kinematics.frame_id(n) for n in self._links]
+        self._local = np.array([lk.geometry.origin.matrix() for lk in links]).reshape(-1, 4, 4)
+        cyls: list[Cylinder] = [lk.geometry for lk in links]  # type: ignore[misc]
+        self._radius = np.array([c.radius + self.padding for c in cyls])
+        self._half = np.array([c.length / 2 + self.padding for c in cyls])
+        self._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
+                       for r, h in zip(self._radius, self._half, strict=True)]
+        self._static = [fcl.CollisionObject(_shape_geometry(o.shape), _fcl_transform(o.pose))
+                        for o in scene.objects]
+        self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
+        self._names = self._links + [o.name for o in scene.objects]
+        self._poses = np.zeros((len(self._links), 4, 4))
+        self._request = fcl.CollisionRequest()
+        self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
+        self.set_disabled(disabled)
+
+    @staticmethod
+    def _aabb(obj: object) -> Array:
+        """World AABB (2 x 3: min, max) of a static scene object."""
+        o = obj  # SceneObject
+        shape, pose = o.shape, o.pose  # type: ignore[attr-defined]
+        if isinstance(shape, Mesh):
+            pts = np.asarray(shape.vertices, dtype=float) @ pose[:3, :3].T + pose[:3, 3]
+            return np.array([pts.min(axis=0), pts.max(axis=0)])
+        if isinstance(shape, Box):
+            half = np.abs(pose[:3, :3]) @ (np.asarray(shape.size) / 2)
+        elif isinstance(shape, CylinderShape):
+            z = pose[:3, 2]
+            half = np.abs(z) * shape.length / 2 + shape.radius * np.sqrt(np.clip(1 - z * z, 0, 1))
+        else:
+            half = np.full(3, shape.radius)  # type: ignore[union-attr]
+        return np.array([pose[:3, 3] - half, pose[:3, 3] + half])
+
+    # ------------------------------------------------------------------ state
+    def set_disabled(self, pairs: Iterable[Pair]) -> None:
+        """Replace the set of robot-robot pairs that are never checked."""
+        self.disabled = {pair(a, b) for a, b in pairs}
+        allowed = {pair(link, o.name) for o in self.scene.objects for link in o.allow}
+        self._skip = self.disabled | allowed
+        n = len(self._links)
+        rr = [(i, j) for i in range(n) for j in range(i + 1, n)
+              if pair(self._links[i], self._links[j]) not in self._skip]
+        rs = [(i, k) for i in range(n) for k, o in enumerate(self.scene.objects)
+              if pair(self._links[i], o.name) not in self._skip]
+        self._rr = np.array(rr, dtype=int).reshape(-1, 2)
+        self._rs = np.array(rs, dtype=int).reshape(-1, 2)
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """Links that have collision geometry."""
+        return tuple(self._links)
+
+    def checked_pairs(self) -> list[Pair]:
+        """Every robot-robot and robot-scene pair that is checked (not disabled or allowed)."""
+        out = [pair(self._links[i], self._links[j]) for i, j in self._rr]
+        out += [pair(self._links[i], self.scene.objects[k].name) for i, k in self._rs]
+        return sorted(out)
+
+    def set_configuration(self, q: Array) -> None:
+        """Place the robot's cylinders at configuration ``q`` (rad/m)."""
+        self.kinematics.update(q)
+        oMf = self.kinematics.data.oMf
+        for k, fid in enumerate(self._frame_ids):
+            self._poses[k] = oMf[fid].homogeneous
+        self._world = self._poses @ self._local
+
+    def _robot_boxes(self) -> Array:
+        """World AABBs (n x 2 x 3) of the robot cylinders at the current configuration."""
+        w = self._world
+        z = w[:, :3, 2]
+        half = (np.abs(z) * self._half[:, None]
+                + self._radius[:, None] * np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0)))
+        c = w[:, :3, 3]
+        return np.stack([c - half, c + half], axis=1)
+
+    def _candidates(self) -> tuple[Array, Array]:
+        """Checked robot-robot and robot-scene pairs whose AABBs overlap."""
+        box = self._robot_boxes()
+        rr, rs = self._rr, self._rs
+        a, b = box[rr[:, 0]], box[rr[:, 1]]
+        hit_rr = rr[np.all((a[:, 0] <= b[:, 1]) & (b[:, 0] <= a[:, 1]), axis=1)]
+        if len(rs):
+            a, s = box[rs[:, 0]], self._static_box[rs[:, 1]]
+            hit_rs = rs[np.all((a[:, 0] <= s[:, 1]) & (s[:, 0] <= a[:, 1]), axis=1)]
+        else:
+            hit_rs = rs
+        return hit_rr, hit_rs
+
+    def _place(self, i: int) -> fcl.CollisionObject:
+        obj = self._robot[i]
+        obj.setTransform(_fcl_transform(self._world[i]))
+        return obj
+
+    # ------------------------------------------------------------------ queries
+    def in_collision(self, q: Array) -> bool:
+        """True when any checked pair overlaps at ``q``."""
+        self.set_configuration(q)
+        return bool(self._narrowphase(stop_at_first=True))
+
+    def contacts(self, q: Array) -> list[Pair]:
+        """Every checked pair in contact at ``q``, sorted."""
+        self.set_configuration(q)
+        return sorted(self._narrowphase(stop_at_first=False))
+
+    def _narrowphase(self, stop_at_first: bool) -> list[Pair]:
+        hit_rr, hit_rs = self._candidates()
+        found: list[Pair] = []
+        placed: dict[int, fcl.CollisionObject] = {}
+        request = self._request
+        for i, j in hit_rr:
+            oi = placed.get(i) or placed.setdefault(i, self._place(i))
+            oj = placed.get(j) or placed.setdefault(j, self._place(j))
+            if fcl.collide(oi, oj, request, fcl.CollisionResult()) > 0:
+                found.append(pair(self._links[i], self._links[j]))
+                if stop_at_first:
+                    return found
+        for i, k in hit_rs:
+            oi = placed.get(i) or placed.setdefault(i, self._place(i))
+            if fcl.collide(oi, self._static[k], request, fcl.CollisionResult()) > 0:
+                found.append(pair(self._links[i], self.scene.objects[k].name))
+                if stop_at_first:
+                    return found
+        return found
+
+    def contacts_brute_force(self, q: Array) -> list[Pair]:
+        """Every checked pair in contact at ``q``, testing each pair with FCL, no broadphase.
+
+        The reference implementation :meth:`contacts` and :meth:`in_collision` are tested
+        against.
+        """
+        self.set_configuration(q)
+        objects = [self._place(i) for i in range(len(self._links))]
+        found = []
+        for i, a in enumerate(self._links):
+            for j in range(i + 1, len(self._links)):
+                p = pair(a, self._links[j])
+                if p not in self._skip and fcl.collide(objects[i], objects[j], self._request,
+                                                       fcl.CollisionResult()) > 0:
+                    found.append(p)
+            for k, obj in enumerate(self.scene.objects):
+                p = pair(a, obj.name)
+                if p not in self._skip and fcl.collide(objects[i], self._static[k], self._request,
+                                                       fcl.CollisionResult()) > 0:
+                    found.append(p)
+        return sorted(found)
+
+    def contact_details(self, q: Array) -> list[Contact]:
+        """The pairs in contact at ``q`` with their penetration depth (m)."""
+        self.set_configuration(q)
+        index = {n: i for i, n in enumerate(self._links)}
+        statics = {o.name: k for k, o in enumerate(self.scene.objects)}
+        out = []
+        for a, b in self.contacts(q):
+            oa = self._place(index[a]) if a in index else self._static[statics[a]]
+            ob = self._place(index[b]) if b in index else self._static[statics[b]]
+            res = fcl.CollisionResult()
+            fcl.collide(oa, ob, self._contact_request, res)
+            depth = max((c.penetration_depth for c in res.contacts), default=0.0)
+            out.append(Contact(a, b, float(depth)))
+        return out
+
+    def distance(self, q: Array) -> float:
+        """Minimum clearance (m) over the checked pairs at ``q`` (0 or less in contact).
+
+        Pairs are visited in order of their AABB gap (a lower bound of their distance) and the
+        search stops when the next gap exceeds the best distance found.
+        """
+        self.set_configuration(q)
+        box = self._robot_boxes()
+        jobs: list[tuple[float, int, int, bool]] = []
+        for i, j in self._rr:
+            gap = np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - box[j, 1],
+                                                          box[j, 0] - box[i, 1])))
+            jobs.append((float(gap), int(i), int(j), False))
+        for i, k in self._rs:
+            s = self._static_box[k]
+            gap = np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - s[1], s[0] - box[i, 1])))
+            jobs.append((float(gap), int(i), int(k), True))
+        best = np.inf
+        request = fcl.DistanceRequest()
+        for gap, i, j, static in sorted(jobs):
+            if gap > best:
+                break
+            other = self._static[j] if static else self._place(j)
+            d = fcl.distance(self._place(i), other, request, fcl.DistanceResult())
+            best = min(best, float(d))
+        return float(best)
+
+    def check_many(self, qs: Sequence[Array]) -> list[bool]:
+        """:meth:`in_collision` for several configurations."""
+        return [self.in_collision(q) for q in qs]

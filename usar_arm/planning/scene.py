@@ -1,0 +1,89 @@
+"""Obstacle scenes: boxes, cylinders, spheres and triangle meshes, each with a name and a pose in
+base_link. Loaded from YAML (see :mod:`usar_arm.planning.scene_file`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from usar_arm.spatial import Array
+
+
+@dataclass(frozen=True)
+class Box:
+    """A box with edge lengths ``size`` (m), centred on its pose."""
+
+    size: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class CylinderShape:
+    """A cylinder along its pose's z axis, centred there; radius and length in m."""
+
+    radius: float
+    length: float
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """A sphere of ``radius`` m centred on its pose."""
+
+    radius: float
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A triangle mesh: vertices (m, in the object's frame) and faces (vertex indices)."""
+
+    vertices: Array
+    faces: Array
+    source: str = ""
+
+
+Shape = Box | CylinderShape | Sphere | Mesh
+
+
+@dataclass(frozen=True, eq=False)
+class SceneObject:
+    """An obstacle.
+
+    Attributes:
+        name: unique name. shape: its geometry. pose: 4x4 pose in base_link.
+        allow: robot links allowed to touch it (e.g. the base standing on a plinth).
+    """
+
+    name: str
+    shape: Shape
+    pose: Array
+    allow: tuple[str, ...] = ()
+
+    def bounding_radius(self) -> float:
+        """Radius (m) of a sphere around the pose that contains the whole object."""
+        s = self.shape
+        if isinstance(s, Box):
+            return float(np.linalg.norm(s.size) / 2)
+        if isinstance(s, CylinderShape):
+            return float(np.hypot(s.radius, s.length / 2))
+        if isinstance(s, Sphere):
+            return float(s.radius)
+        return float(np.linalg.norm(s.vertices, axis=1).max())
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A named set of obstacles (may be empty)."""
+
+    name: str
+    objects: tuple[SceneObject, ...] = field(default_factory=tuple)
+
+    def object(self, name: str) -> SceneObject:
+        """The object called ``name`` (KeyError lists the names)."""
+        for o in self.objects:
+            if o.name == name:
+                return o
+        raise KeyError(f"no object '{name}' in scene '{self.name}'; objects: "
+                       f"{', '.join(o.name for o in self.objects)}")
+
+
+EMPTY = Scene("empty")
