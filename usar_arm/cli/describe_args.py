@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from usar_arm.discover.naming import SCHEMES
-from usar_arm.pipeline import FRAMES, DescribeOptions
+from usar_arm.pipeline import FRAMES, DescribeOptions, run_discovery
+from usar_arm.robot import Robot, robot_from_files, robot_from_record
 
 
 def add_server_args(p: argparse.ArgumentParser) -> None:
@@ -49,3 +51,23 @@ def options_from(args: argparse.Namespace) -> DescribeOptions:
         wire_precision=args.wire_precision,
         acm_samples=getattr(args, "acm_samples", 10_000),
         acm_seed=getattr(args, "acm_seed", 0), timeout=args.timeout)
+
+
+def add_robot_args(p: argparse.ArgumentParser) -> None:
+    """Where the robot description comes from: --urdf/--srdf files, or discovery."""
+    add_server_args(p)
+    p.add_argument("--urdf", default=None, metavar="FILE",
+                   help="use this URDF instead of discovering the robot (its SRDF and "
+                        "joint_limits.yaml are read from beside it unless --srdf is given)")
+    p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
+    p.add_argument("--naming", choices=SCHEMES, default="ros-i", help=argparse.SUPPRESS)
+    p.add_argument("--frame", choices=FRAMES, default="z-up", help=argparse.SUPPRESS)
+
+
+def robot_from_args(args: argparse.Namespace) -> Robot:
+    """The Robot the arguments name: from files, or discovered (embedded or --host) and cached."""
+    if args.urdf:
+        return robot_from_files(args.urdf, args.srdf)
+    options = replace(options_from(args), accuracy_samples=0)
+    record = run_discovery(options)
+    return robot_from_record(record, options)

@@ -10,7 +10,7 @@ This is the only module that imports ``fcl``.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import fcl
@@ -18,6 +18,7 @@ import numpy as np
 
 from usar_arm.model import Cylinder, KinematicChain
 from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import EMPTY, Box, CylinderShape, Mesh, Scene, Sphere
 from usar_arm.spatial import Array
 
@@ -94,6 +95,7 @@ class CollisionWorld:
         self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
         self._names = self._links + [o.name for o in scene.objects]
         self._poses = np.zeros((len(self._links), 4, 4))
+        self._poe: PoeModel | None = None
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self.set_disabled(disabled)
@@ -270,6 +272,75 @@ class CollisionWorld:
             best = min(best, float(d))
         return float(best)
 
-    def check_many(self, qs: Sequence[Array]) -> list[bool]:
-        """:meth:`in_collision` for several configurations."""
-        return [self.in_collision(q) for q in qs]
+    # ------------------------------------------------------------------ batches
+    def in_collision_many(self, qs: Array) -> Array:
+        """:meth:`in_collision` for N configurations (N, n) at once -> bool (N,).
+
+        Forward kinematics of every link and the broadphase run vectorised (numpy) over the
+        whole batch; FCL's narrowphase runs only for the pairs whose boxes overlap, stopping at
+        a configuration's first contact. The fast path for edges and trajectories.
+        """
+        found = self._many(qs, stop_at_first=True)
+        out = np.zeros(len(found), dtype=bool)
+        for n, pairs in enumerate(found):
+            out[n] = bool(pairs)
+        return out
+
+    def contacts_many(self, qs: Array) -> list[list[Pair]]:
+        """:meth:`contacts` for N configurations at once."""
+        return [sorted(p) for p in self._many(qs, stop_at_first=False)]
+
+    def _placed(self, i: int, poses: Array, placed: dict[int, fcl.CollisionObject]
+                ) -> fcl.CollisionObject:
+        """Robot cylinder ``i`` moved to ``poses[i]`` (once per configuration)."""
+        o = placed.get(i)
+        if o is None:
+            o = self._robot[i]
+            o.setTransform(_fcl_transform(poses[i]))
+            placed[i] = o
+        return o
+
+    def _many(self, qs: Array, stop_at_first: bool) -> list[list[Pair]]:
+        qs = np.atleast_2d(np.asarray(qs, float))
+        if self._poe is None:
+            self._poe = PoeModel(self.chain)
+        world = self._poe.link_poses(qs, self._links) @ self._local   # (N, L, 4, 4)
+        z = world[..., :3, 2]
+        half = (np.abs(z) * self._half[:, None]
+                + self._radius[:, None] * np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0)))
+        centre = world[..., :3, 3]
+        lo, hi = centre - half, centre + half                            # (N, L, 3)
+        rr, rs = self._rr, self._rs
+        hit_rr = np.all((lo[:, rr[:, 0]] <= hi[:, rr[:, 1]])
+                        & (lo[:, rr[:, 1]] <= hi[:, rr[:, 0]]), axis=2)  # (N, P)
+        if len(rs):
+            s = self._static_box[rs[:, 1]]
+            hit_rs = np.all((lo[:, rs[:, 0]] <= s[:, 1]) & (s[:, 0] <= hi[:, rs[:, 0]]),
+                            axis=2)                                      # (N, Q)
+        else:
+            hit_rs = np.zeros((len(qs), 0), dtype=bool)
+        found: list[list[Pair]] = [[] for _ in range(len(qs))]
+        rows = np.flatnonzero(hit_rr.any(axis=1) | hit_rs.any(axis=1))
+        request = self._request
+        for n in rows:
+            placed: dict[int, fcl.CollisionObject] = {}
+            poses = world[n]
+            hits = found[n]
+            for p in np.flatnonzero(hit_rr[n]):
+                i, j = rr[p]
+                oi = self._placed(i, poses, placed)
+                oj = self._placed(j, poses, placed)
+                if fcl.collide(oi, oj, request, fcl.CollisionResult()) > 0:
+                    hits.append(pair(self._links[i], self._links[j]))
+                    if stop_at_first:
+                        break
+            if hits and stop_at_first:
+                continue
+            for p in np.flatnonzero(hit_rs[n]):
+                i, k = rs[p]
+                oi = self._placed(i, poses, placed)
+                if fcl.collide(oi, self._static[k], request, fcl.CollisionResult()) > 0:
+                    hits.append(pair(self._links[i], self.scene.objects[k].name))
+                    if stop_at_first:
+                        break
+        return found

@@ -7,6 +7,7 @@ of the URDF's actuated joints from the root outwards (the order of
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -72,9 +73,9 @@ class KinematicModel:
         pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
 
     def placement(self, link: str | int) -> Array:
-        """4x4 pose of a link in the root frame, after :meth:`update`."""
+        """4x4 pose of a link in the root frame, after :meth:`update` (a copy)."""
         fid = link if isinstance(link, int) else self.frame_id(link)
-        return self.data.oMf[fid].homogeneous
+        return self.data.oMf[fid].homogeneous.copy()
 
     def frame_pose(self, q: Array, link: str) -> Array:
         """4x4 pose of ``link`` in the root frame at ``q``."""
@@ -101,3 +102,53 @@ class KinematicModel:
                                        pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         pin.updateFramePlacement(self.model, self.data, fid)
         return self.data.oMf[fid].homogeneous, jac
+
+    # ------------------------------------------------------------------ IK primitives
+    @staticmethod
+    def target(rot: Array, pos: Array) -> object:
+        """An opaque target pose for :meth:`local_error` (built once per IK query)."""
+        return pin.SE3(np.ascontiguousarray(rot, dtype=float),
+                       np.ascontiguousarray(pos, dtype=float))
+
+    def local_error(self, q: Array, frame_id: int, target: object
+                    ) -> tuple[Array, float, float, Array]:
+        """The frame's error to a target, in the frame's own axes, and its Jacobian.
+
+        Returns ``(e, position_error, orientation_error, J)``: ``e`` (6,) = log6 of the
+        transform from the current frame to the target (linear m; angular rad), the two
+        distances (m, rad), and the LOCAL Jacobian (6 x nq) for the Newton step ``J dq = e``.
+        """
+        pin.computeJointJacobians(self.model, self.data, q)  # also updates the placements
+        jac = pin.getFrameJacobian(self.model, self.data, frame_id, pin.ReferenceFrame.LOCAL)
+        delta = pin.updateFramePlacement(self.model, self.data, frame_id).actInv(target)
+        e = pin.log6(delta).vector
+        t = delta.translation
+        w = e[3:]
+        return (e, math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]),
+                math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), jac)
+
+    def pose_error(self, q: Array, frame_id: int, target_rot: Array, target_pos: Array
+                   ) -> tuple[Array, Array]:
+        """Error of a frame against a target and the Jacobian that reduces it.
+
+        Returns ``(e, J)``: ``e`` (6,) = (target position - position, rotation vector of
+        target * current^-1), both in the root frame's axes (m, rad); ``J`` (6 x nq) the
+        LOCAL_WORLD_ALIGNED Jacobian, so ``J dq = e`` is the Newton step.
+        """
+        jac = pin.computeFrameJacobian(self.model, self.data, q, frame_id,
+                                       pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        pin.updateFramePlacement(self.model, self.data, frame_id)
+        m = self.data.oMf[frame_id]
+        e = np.empty(6)
+        e[:3] = target_pos - m.translation
+        e[3:] = pin.log3(target_rot @ m.rotation.T)
+        return e, jac
+
+    def pose_residual(self, q: Array, frame_id: int, target_rot: Array, target_pos: Array
+                      ) -> tuple[float, float]:
+        """Position (m) and orientation (rad) distance of a frame from a target at ``q``."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        m = self.data.oMf[frame_id]
+        pos = float(np.linalg.norm(target_pos - m.translation))
+        rot = float(np.linalg.norm(pin.log3(target_rot @ m.rotation.T)))
+        return pos, rot

@@ -1,0 +1,99 @@
+"""Motion planning with mplib 0.2.1: python run_mplib_plan.py PROBLEMS.json RESULTS.json
+
+Planner(urdf, move_group=tip_link, srdf=srdf, joint_vel_limits=vmax, joint_acc_limits=amax)
+(limits only when the problem file has them: mplib's default is 1 rad/s and 1 rad/s^2). Scene
+obstacles: planning_world.add_object(name, fcl.CollisionObject(fcl.Box/Cylinder/Sphere,
+Pose(xyz, quat_wxyz))), added once per scene and removed before the next scene.
+
+Planner.plan_qpos() = OMPL RRTConnect + simplification (planner.planner.plan) followed by
+TOPP-RA (planner.TOPP); this runner makes those two calls itself, as plan_qpos does (start
+clipped to the limits, range=0.1, simplify=True; time = time_limit_s), so that "seconds" is
+planning + simplification alone; "topp_seconds" and "duration_s" come from the following
+planner.TOPP(path, step=0.01). RNG: mplib.set_global_seed(problem seed) before each problem.
+"""
+
+import mplib
+import numpy as np
+import peerio
+from mplib import Planner, Pose
+from mplib.collision_detection import fcl
+
+spec, out = peerio.args()
+names = spec["joint_names"]
+limits = {
+    k: v
+    for k, v in (("joint_vel_limits", spec.get("vmax")), ("joint_acc_limits", spec.get("amax")))
+    if v is not None
+}
+planner = Planner(
+    urdf=spec["urdf"], move_group=spec.get("tip_link", "tool0"), srdf=spec.get("srdf"), **limits
+)
+idx = planner.move_group_joint_indices
+mp_names = [planner.user_joint_names[i] for i in idx]
+if len(idx) != len(planner.user_joint_names):
+    raise SystemExit("the robot has joints outside the move group; padding is not handled")
+present: list[str] = []
+
+
+def shape(ob):
+    if ob["type"] == "box":
+        return fcl.Box(np.array(ob["size"], float))
+    if ob["type"] == "cylinder":
+        return fcl.Cylinder(ob["radius"], ob["length"])
+    if ob["type"] == "sphere":
+        return fcl.Sphere(ob["radius"])
+    raise ValueError(f"unknown obstacle type {ob['type']!r}")
+
+
+def enter_scene(name):
+    while present:
+        planner.planning_world.remove_object(present.pop())
+    for i, ob in enumerate(spec["scenes"][name]):
+        key = f"{name}/{ob.get('name', i)}"
+        pose = Pose(
+            p=np.array(ob["xyz"], float), q=np.array(ob.get("quat_wxyz", [1, 0, 0, 0]), float)
+        )
+        planner.planning_world.add_object(key, fcl.CollisionObject(shape(ob), pose))
+        present.append(key)
+
+
+def solve(p):
+    start = np.array(peerio.reorder(p["start"], names, mp_names), float)
+    start = np.clip(
+        start, planner.joint_limits[idx, 0], planner.joint_limits[idx, 1]
+    )  # as plan_qpos
+    goal = np.array(peerio.reorder(p["goal"], names, mp_names), float)
+    mplib.set_global_seed(int(p.get("seed", 1)) or 1)
+    planner.robot.set_qpos(start, True)
+    (status, path), sec = peerio.timed(
+        planner.planner.plan, start, [goal], time=spec["time_limit_s"], range=0.1, simplify=True
+    )
+    if status != "Exact solution":
+        return {"success": False, "seconds": sec, "path": None, "status": status}
+    path = np.asarray(path)
+    r = {
+        "success": True,
+        "seconds": sec,
+        "path": [peerio.reorder(q, mp_names, names) for q in path],
+    }
+    if not np.allclose(path[0], start, atol=1e-9):  # OMPL perturbs an invalid start state
+        r["start_moved"] = True
+    try:
+        (_, _, _, _, duration), topp_sec = peerio.timed(planner.TOPP, path, 0.01)
+        r.update(duration_s=float(duration), topp_seconds=topp_sec)
+    except Exception as e:
+        r.update(duration_s=None, topp_error=f"{type(e).__name__}: {e}")
+    return r
+
+
+peerio.write(
+    out,
+    peer="mplib",
+    dist="mplib",
+    stage="plan",
+    results=peerio.solve_by_scene(spec["problems"], enter_scene, solve),
+    notes="seconds = OMPL RRTConnect + path simplification (planner.planner.plan); "
+    "duration_s from planner.TOPP (TOPP-RA on a spline through the path, "
+    + ("problem vmax/amax" if limits else "mplib default limits 1 rad/s, 1 rad/s^2")
+    + "), timed separately as topp_seconds",
+)

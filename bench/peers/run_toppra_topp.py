@@ -1,0 +1,50 @@
+"""Time parameterization with toppra 0.6.10: python run_toppra_topp.py PROBLEMS.json RESULTS.json
+
+As in toppra's quickstart: path = SplineInterpolator(linspace(0, 1, n), waypoints) (cubic,
+not-a-knot), constraints JointVelocityConstraint(vmax) and JointAccelerationConstraint(amax)
+(symmetric), TOPPRA([vel, acc], path, parametrizer="ParametrizeConstAccel") with default
+gridpoints and solver; compute_trajectory() with zero start/end path velocity. Timed: building
+the spline, the constraints and the instance, and compute_trajectory(); not the 100 Hz sampling.
+"""
+
+import numpy as np
+import peerio
+import toppra as ta
+import toppra.algorithm as algo
+import toppra.constraint as constraint
+
+spec, out = peerio.args()
+vmax, amax = np.array(spec["vmax"], float), np.array(spec["amax"], float)
+ta.setup_logging("WARNING")
+
+
+def parameterize(waypoints):
+    path = ta.SplineInterpolator(np.linspace(0, 1, len(waypoints)), waypoints)
+    vel = constraint.JointVelocityConstraint(np.stack([-vmax, vmax], axis=1))
+    acc = constraint.JointAccelerationConstraint(np.stack([-amax, amax], axis=1))
+    return algo.TOPPRA([vel, acc], path, parametrizer="ParametrizeConstAccel").compute_trajectory()
+
+
+def solve(p):
+    wp = peerio.waypoints(p, len(vmax))
+    traj, sec = peerio.timed(parameterize, wp)
+    if traj is None:
+        return {"success": False, "seconds": sec, "duration_s": None, "samples": None}
+    duration = float(traj.duration)
+    t = peerio.sample_times(duration)
+    return {
+        "success": True,
+        "seconds": sec,
+        "duration_s": duration,
+        "samples": {"t": t, "q": np.asarray(traj(t))},
+    }
+
+
+peerio.write(
+    out,
+    peer="toppra",
+    dist="toppra",
+    stage="topp",
+    results=peerio.solve_all(spec["problems"], solve),
+    notes="cubic spline through the waypoints (it may overshoot between them)",
+)

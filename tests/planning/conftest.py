@@ -1,0 +1,19 @@
+"""Robots described by discovery against the embedded simulator (shared by the module)."""
+
+from __future__ import annotations
+
+import pytest
+
+from usar_arm.pipeline import DescribeOptions, describe
+from usar_arm.robot import Robot, robot_from_description
+
+
+@pytest.fixture(scope="session")
+def kr60() -> Robot:
+    return robot_from_description(describe(DescribeOptions(accuracy_samples=0)))
+
+
+@pytest.fixture(scope="session")
+def fanuc() -> Robot:
+    return robot_from_description(describe(DescribeOptions(robot="Fanuc_M16iB20",
+                                                           accuracy_samples=0)))

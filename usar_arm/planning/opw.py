@@ -1,0 +1,364 @@
+"""Closed-form IK for ortho-parallel arms with a spherical wrist (the "OPW" class: KUKA KR...).
+
+The structure is read from the robot's own axes at the zero configuration (product of
+exponentials: each joint i has a unit axis w_i through a point p_i, and the tool pose is M), not
+from a table: joint 1 is perpendicular to joints 2 and 3, which are parallel; joints 4, 5, 6
+are successively perpendicular and (nearly) meet at a wrist centre. Then, for a tool target:
+
+1. the wrist centre W follows from the target and the tool's fixed offset from it;
+2. q1: the wrist centre's offset along the rotated joint-2 axis is fixed (the lateral offset b)
+   -> two solutions;
+3. q2, q3: a planar two-link problem in the plane normal to joint 2 -> two solutions each;
+4. q4, q5, q6: the remaining rotation, by Paden-Kahan subproblems -> two solutions each.
+
+So up to 8 branches. Where the real arm deviates slightly from the class (the USARSim KR60's
+wrist axes miss each other by 2 mm; wire-rounded offsets), every branch is polished by Newton
+steps on the exact model afterwards (:mod:`usar_arm.planning.ik`).
+
+Scalar maths on plain floats: this runs per IK query and must cost microseconds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from usar_arm.spatial import Array
+
+V = tuple[float, float, float]
+TWO_PI = 2.0 * math.pi
+
+
+class NotOrthoParallel(ValueError):
+    """The arm is not in the ortho-parallel/spherical-wrist class; the reason says why."""
+
+
+def _dot(a: V, b: V) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross(a: V, b: V) -> V:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _sub(a: V, b: V) -> V:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def _rot(w: V, angle: float, v: V) -> V:
+    """Rodrigues: v rotated by ``angle`` about unit axis ``w``."""
+    c, s = math.cos(angle), math.sin(angle)
+    k = _dot(w, v) * (1.0 - c)
+    x = _cross(w, v)
+    return (v[0] * c + x[0] * s + w[0] * k, v[1] * c + x[1] * s + w[1] * k,
+            v[2] * c + x[2] * s + w[2] * k)
+
+
+def _sp1(w: V, p: V, q: V) -> float:
+    """Paden-Kahan subproblem 1: the angle about unit axis ``w`` taking ``p`` to ``q``."""
+    pw, qw = _dot(w, p), _dot(w, q)
+    pp = (p[0] - w[0] * pw, p[1] - w[1] * pw, p[2] - w[2] * pw)
+    qq = (q[0] - w[0] * qw, q[1] - w[1] * qw, q[2] - w[2] * qw)
+    return math.atan2(_dot(w, _cross(pp, qq)), _dot(pp, qq))
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % TWO_PI - math.pi
+
+
+@dataclass(frozen=True)
+class OpwParameters:
+    """The classical OPW parameters (m) of the arm, for reports and other OPW solvers:
+    c1 shoulder height, a1 shoulder offset, b lateral offset, c2 upper arm, a2 elbow offset,
+    c3 forearm (elbow -> wrist centre), c4 wrist centre -> flange."""
+
+    a1: float
+    a2: float
+    b: float
+    c1: float
+    c2: float
+    c3: float
+    c4: float
+    wrist_offset: float
+    """How far (m) the wrist axes miss a common point on the real model (0 for a true OPW arm)."""
+
+
+class OrthoParallelArm:
+    """The closed-form solver of one arm, built from its zero-configuration axes.
+
+    Args:
+        axes: (6, 3) unit joint axes at q = 0, base frame.
+        points: (6, 3) a point on each axis, base frame (m).
+        tool: 4x4 pose of the IK frame at q = 0.
+        tolerance: allowed deviation (rad) from perpendicular/parallel and distance (m) of the
+            wrist axes from their common point.
+
+    Raises:
+        NotOrthoParallel: naming which condition fails.
+    """
+
+    def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
+        w = [tuple(float(c) for c in a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
+        p = [tuple(float(c) for c in pt) for pt in np.asarray(points, float)]
+        if len(w) != 6:
+            raise NotOrthoParallel(f"needs 6 revolute joints, has {len(w)}")
+        checks = [("joint 1 perpendicular to joint 2", abs(_dot(w[0], w[1]))),
+                  ("joint 2 parallel to joint 3", math.sqrt(max(0.0, 1 - _dot(w[1], w[2]) ** 2))),
+                  ("joint 3 perpendicular to joint 4", abs(_dot(w[2], w[3]))),
+                  ("joint 4 perpendicular to joint 5", abs(_dot(w[3], w[4]))),
+                  ("joint 5 perpendicular to joint 6", abs(_dot(w[4], w[5])))]
+        for what, dev in checks:
+            if dev > tolerance:
+                raise NotOrthoParallel(f"{what}: off by {dev:.4f}")
+        wrist, miss = _closest_point(np.array(w[3:]), np.array(p[3:]))
+        if miss > max(tolerance, 0.05):
+            raise NotOrthoParallel(f"wrist axes miss a common point by {miss:.4f} m")
+        self.w = w
+        self.p = p
+        self.tool = np.asarray(tool, float)
+        self.wrist_offset = miss
+        self.slack = 2.0 * miss + 1e-9
+        """How far (m) beyond the model's reach a target may be and still get a (clamped)
+        branch: the real arm's wrist offset can put it there."""
+        self.W0: V = (float(wrist[0]), float(wrist[1]), float(wrist[2]))
+        rm, pm = self.tool[:3, :3], self.tool[:3, 3]
+        self._rm_t = rm.T
+        self._tool_to_wrist = rm.T @ (wrist - pm)  # wrist centre in the tool frame
+        self.u: V = w[1]
+        self.s3 = 1.0 if _dot(w[2], self.u) > 0 else -1.0
+        # Basis of the plane normal to u with ea x eb = u.
+        ref = (1.0, 0.0, 0.0) if abs(self.u[0]) < 0.9 else (0.0, 1.0, 0.0)
+        ea = _cross(ref, self.u)
+        n = math.sqrt(_dot(ea, ea))
+        self.ea: V = (ea[0] / n, ea[1] / n, ea[2] / n)
+        self.eb: V = _cross(self.u, self.ea)
+        self.lateral = _dot(self.u, _sub(self.W0, p[0]))
+        p2, p3, w0 = self._2d(p[1]), self._2d(p[2]), self._2d(self.W0)
+        self.p2, self.p3 = p2, p3
+        c = (p3[0] - p2[0], p3[1] - p2[1])
+        e = (w0[0] - p3[0], w0[1] - p3[1])
+        self.e = e
+        self.L2sq, self.L3sq = c[0] ** 2 + c[1] ** 2, e[0] ** 2 + e[1] ** 2
+        self.K = c[0] * e[0] + c[1] * e[1]
+        self.J = c[0] * (-e[1]) + c[1] * e[0]
+        # Constants of the per-query maths.
+        self._tw = tuple(float(x) for x in self._tool_to_wrist)
+        self._w1xu = _cross(w[0], self.u)
+        self._p1_2d = self._2d(p[0])
+        self._p3p2 = (p3[0] - p2[0], p3[1] - p2[1])
+        self._mag = math.hypot(self.K, self.J)
+        self._phase = math.atan2(self.J, self.K)
+        self._reach = math.sqrt(self.L2sq + self.L3sq)
+        v = _cross(w[5], (1.0, 0.0, 0.0))
+        if _dot(v, v) < 1e-6:
+            v = _cross(w[5], (0.0, 1.0, 0.0))
+        nv = math.sqrt(_dot(v, v))
+        self._v: V = (v[0] / nv, v[1] / nv, v[2] / nv)
+        self._m6 = tuple(float(x) for x in self._rm_t @ np.array(w[5]))
+        self._mv = tuple(float(x) for x in self._rm_t @ np.array(self._v))
+        self._c45 = _dot(w[3], w[4])
+        self._w5w6 = _dot(w[4], w[5])
+        self._w4xw5 = _cross(w[3], w[4])
+        self._cr2 = _dot(self._w4xw5, self._w4xw5)
+        self.wrist_coupling = 1.0 if _dot(w[3], w[5]) > 0 else -1.0
+        """At q5 = 0 joints 4 and 6 turn about one line: only q4 + coupling * q6 matters."""
+
+
+    def _2d(self, x: V) -> tuple[float, float]:
+        return (_dot(self.ea, x), _dot(self.eb, x))
+
+    def parameters(self) -> OpwParameters:
+        """The classical OPW parameters, measured from the foot of joint 1's axis.
+
+        At this arm's zero pose the upper arm points along joint 1's axis and the forearm
+        across it, so: c1 = height of joint 2, a1 = reach of joint 2 from axis 1, c2 = upper
+        arm, c3 = forearm (joint 3 -> wrist centre, across), a2 = -(rise of the wrist centre
+        above joint 3), b = lateral offset, c4 = wrist centre -> tool. Approximate when
+        ``wrist_offset`` > 0.
+        """
+        w1, p1, u = self.w[0], self.p[0], self.u
+        foot = _sub(p1, tuple(_dot(w1, p1) * x for x in w1))  # type: ignore[arg-type]
+        across = _cross(u, w1)
+        rel2 = _sub(self.p[1], foot)
+        fore = _sub(self.W0, self.p[2])
+        sign = 1.0 if _dot(across, _sub(self.W0, foot)) >= 0 else -1.0
+        return OpwParameters(
+            a1=sign * _dot(across, rel2), a2=-_dot(w1, fore), b=self.lateral,
+            c1=_dot(w1, rel2), c2=math.sqrt(self.L2sq), c3=sign * _dot(across, fore),
+            c4=float(np.linalg.norm(self._tool_to_wrist)), wrist_offset=self.wrist_offset)
+
+    def arm_branches(self, rot: Array, pos: Array) -> list[tuple[float, float, float]]:
+        """(q1, q2, q3) of every arm branch (up to 4) placing the wrist centre for a tool pose."""
+        r = rot.tolist() if isinstance(rot, np.ndarray) else rot
+        tw = self._tw
+        wx = r[0][0] * tw[0] + r[0][1] * tw[1] + r[0][2] * tw[2] + float(pos[0])
+        wy = r[1][0] * tw[0] + r[1][1] * tw[1] + r[1][2] * tw[2] + float(pos[1])
+        wz = r[2][0] * tw[0] + r[2][1] * tw[1] + r[2][2] * tw[2] + float(pos[2])
+        w1, p1, u = self.w[0], self.p[0], self.u
+        d = (wx - p1[0], wy - p1[1], wz - p1[2])
+        h = _dot(w1, d)
+        dh = (d[0] - h * w1[0], d[1] - h * w1[1], d[2] - h * w1[2])
+        a = _dot(u, dh)
+        b = _dot(self._w1xu, dh)
+        rad = math.hypot(a, b)
+        if rad < 1e-12 or abs(self.lateral) > rad + self.slack:
+            return []
+        base = math.atan2(b, a)
+        spread = math.acos(max(-1.0, min(1.0, self.lateral / rad)))
+        out = []
+        mag = self._mag
+        for q1 in (base + spread, base - spread):
+            back = _rot(w1, -q1, d)
+            x = _dot(self.ea, back) + self._p1_2d[0]
+            y = _dot(self.eb, back) + self._p1_2d[1]
+            dx, dy = x - self.p2[0], y - self.p2[1]
+            rhs = (dx * dx + dy * dy - self.L2sq - self.L3sq) / 2.0
+            if mag < 1e-12 or abs(rhs) > mag + self.slack * self._reach:
+                continue  # beyond the reach (slightly beyond: clamped, Newton finishes it)
+            delta = math.acos(max(-1.0, min(1.0, rhs / mag)))
+            for t3 in (self._phase + delta, self._phase - delta):
+                c3, s3 = math.cos(t3), math.sin(t3)
+                ex = self._p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
+                ey = self._p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
+                q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
+                out.append((_wrap(q1), _wrap(q2), _wrap(self.s3 * t3)))
+        return out
+
+    def wrist_branches(self, rot: Array, q1: float, q2: float, q3: float
+                       ) -> list[tuple[float, float, float]]:
+        """(q4, q5, q6) of every wrist branch (up to 2) completing arm branch (q1, q2, q3).
+
+        With R_w = (R1 R2 R3)^T R_target R_M^T, solves Rot(w4,q4) Rot(w5,q5) Rot(w6,q6) = R_w
+        using only R_w w6 and R_w v (Paden-Kahan subproblems 2 and 1); R2 R3 is one rotation
+        about u by q2 + q3 (joints 2 and 3 are parallel).
+        """
+        r = rot.tolist() if isinstance(rot, np.ndarray) else rot
+        m6, mv = self._m6, self._mv
+        t6 = (r[0][0] * m6[0] + r[0][1] * m6[1] + r[0][2] * m6[2],
+              r[1][0] * m6[0] + r[1][1] * m6[1] + r[1][2] * m6[2],
+              r[2][0] * m6[0] + r[2][1] * m6[1] + r[2][2] * m6[2])
+        tv = (r[0][0] * mv[0] + r[0][1] * mv[1] + r[0][2] * mv[2],
+              r[1][0] * mv[0] + r[1][1] * mv[1] + r[1][2] * mv[2],
+              r[2][0] * mv[0] + r[2][1] * mv[1] + r[2][2] * mv[2])
+        theta = q2 + self.s3 * q3
+        w1, u = self.w[0], self.u
+        target = _rot(u, -theta, _rot(w1, -q1, t6))
+        rv = _rot(u, -theta, _rot(w1, -q1, tv))
+        w4, w5, w6 = self.w[3], self.w[4], self.w[5]
+        c = self._c45
+        den = c * c - 1.0
+        t4 = _dot(w4, target)
+        alpha = (c * self._w5w6 - t4) / den
+        beta = (c * t4 - self._w5w6) / den
+        cr = self._w4xw5
+        g2 = (1.0 - alpha * alpha - beta * beta - 2 * alpha * beta * c) / self._cr2
+        gammas = (0.0,) if g2 <= 1e-14 else (math.sqrt(g2), -math.sqrt(g2))
+        out = []
+        for g in gammas:
+            z = (alpha * w4[0] + beta * w5[0] + g * cr[0], alpha * w4[1] + beta * w5[1]
+                 + g * cr[1], alpha * w4[2] + beta * w5[2] + g * cr[2])
+            q5 = _sp1(w5, w6, z)
+            q4 = _sp1(w4, z, target)
+            mv6 = _rot(w5, -q5, _rot(w4, -q4, rv))
+            q6 = _sp1(w6, self._v, mv6)
+            out.append((_wrap(q4), _wrap(q5), _wrap(q6)))
+        return out
+
+    def solve(self, rot: Array, pos: Array) -> list[list[float]]:
+        """Every branch (up to 8) of joint values (rad, wrapped to (-pi, pi]) for a tool pose."""
+        r = rot.tolist()
+        return [[*arm, *wrist] for arm in self.arm_branches(r, pos)
+                for wrist in self.wrist_branches(r, *arm)]
+
+
+    # ------------------------------------------------------------------ batches
+    def solve_batch(self, rot: Array, pos: Array) -> tuple[Array, Array]:
+        """All 8 branches for N tool poses at once: joint values (N, 8, 6), wrapped to
+        (-pi, pi], and which exist (N, 8). The same maths as :meth:`arm_branches` and
+        :meth:`wrist_branches`, vectorised with numpy."""
+        rot = np.asarray(rot, float).reshape(-1, 3, 3)
+        pos = np.asarray(pos, float).reshape(-1, 3)
+        n = len(rot)
+        w1, u = np.array(self.w[0]), np.array(self.u)
+        d = rot @ np.array(self._tw) + pos - np.array(self.p[0])           # (N, 3)
+        dh = d - (d @ w1)[:, None] * w1
+        a, b = dh @ u, dh @ np.array(self._w1xu)
+        rad = np.hypot(a, b)
+        ok1 = (rad > 1e-12) & (np.abs(self.lateral) <= rad + self.slack)
+        spread = np.arccos(np.clip(self.lateral / np.maximum(rad, 1e-12), -1.0, 1.0))
+        q1 = np.arctan2(b, a)[:, None] + np.array([1.0, -1.0]) * spread[:, None]  # (N, 2)
+        back = _rot_batch(w1, -q1, d[:, None, :])                          # (N, 2, 3)
+        x = back @ np.array(self.ea) + self._p1_2d[0] - self.p2[0]
+        y = back @ np.array(self.eb) + self._p1_2d[1] - self.p2[1]
+        rhs = (x * x + y * y - self.L2sq - self.L3sq) / 2.0
+        ok2 = np.abs(rhs) <= self._mag + self.slack * self._reach           # (N, 2)
+        delta = np.arccos(np.clip(rhs / self._mag, -1.0, 1.0))
+        t3 = self._phase + np.stack([delta, -delta], axis=2)               # (N, 2, 2)
+        c3, s3 = np.cos(t3), np.sin(t3)
+        ex = self._p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
+        ey = self._p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
+        xx, yy = x[:, :, None], y[:, :, None]
+        q2 = np.arctan2(ex * yy - ey * xx, ex * xx + ey * yy)
+        q3 = self.s3 * t3
+        q1b = np.broadcast_to(q1[:, :, None], q2.shape)
+        theta = q2 + self.s3 * q3
+        t6 = rot @ np.array(self._m6)
+        tv = rot @ np.array(self._mv)
+        shape = (n, 2, 2, 3)
+        target = _rot_batch(u, -theta, _rot_batch(w1, -q1b, np.broadcast_to(
+            t6[:, None, None, :], shape)))
+        rv = _rot_batch(u, -theta, _rot_batch(w1, -q1b, np.broadcast_to(
+            tv[:, None, None, :], shape)))
+        w4, w5, w6 = (np.array(self.w[k]) for k in (3, 4, 5))
+        c = self._c45
+        den = c * c - 1.0
+        t4 = target @ w4
+        alpha = (c * self._w5w6 - t4) / den
+        beta = (c * t4 - self._w5w6) / den
+        g2 = (1.0 - alpha ** 2 - beta ** 2 - 2 * alpha * beta * c) / self._cr2
+        gamma = np.sqrt(np.maximum(g2, 0.0))
+        signs = np.array([1.0, -1.0])
+        z = (alpha[..., None, None] * w4 + beta[..., None, None] * w5
+             + (gamma[..., None] * signs)[..., None] * np.array(self._w4xw5))  # (N,2,2,2,3)
+        q5 = _sp1_batch(w5, np.broadcast_to(w6, z.shape), z)
+        tgt = np.broadcast_to(target[..., None, :], z.shape)
+        q4 = _sp1_batch(w4, z, tgt)
+        rvb = np.broadcast_to(rv[..., None, :], z.shape)
+        mv6 = _rot_batch(w5, -q5, _rot_batch(w4, -q4, rvb))
+        q6 = _sp1_batch(w6, np.broadcast_to(np.array(self._v), z.shape), mv6)
+        full = np.stack([np.broadcast_to(q1b[..., None], q4.shape),
+                         np.broadcast_to(q2[..., None], q4.shape),
+                         np.broadcast_to(q3[..., None], q4.shape), q4, q5, q6], axis=-1)
+        valid = (ok1[:, None, None, None] & ok2[:, :, None, None]
+                 & np.broadcast_to((g2 >= -1e-9)[..., None], q4.shape))
+        wrapped = (full + np.pi) % TWO_PI - np.pi
+        return wrapped.reshape(n, 8, 6), valid.reshape(n, 8)
+
+
+def _rot_batch(w: Array, angle: Array, v: Array) -> Array:
+    """Rodrigues on batches: vectors v (..., 3) rotated about unit axis w by angles (...)."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    return v * c + np.cross(w, v) * s + w * ((v @ w)[..., None] * (1.0 - c))
+
+
+def _sp1_batch(w: Array, p: Array, q: Array) -> Array:
+    """Paden-Kahan subproblem 1 on batches (angles about w taking p to q)."""
+    pp = p - (p @ w)[..., None] * w
+    qq = q - (q @ w)[..., None] * w
+    return np.arctan2(np.cross(pp, qq) @ w, np.sum(pp * qq, axis=-1))
+
+
+def _closest_point(axes: Array, points: Array) -> tuple[Array, float]:
+    """The point nearest (least squares) to several lines, and the largest distance to one."""
+    a = np.zeros((3, 3))
+    rhs = np.zeros(3)
+    for w, p in zip(axes, points, strict=True):
+        proj = np.eye(3) - np.outer(w, w)
+        a += proj
+        rhs += proj @ p
+    x = np.linalg.lstsq(a, rhs, rcond=None)[0]
+    miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - p)))
+               for w, p in zip(axes, points, strict=True))
+    return x, miss

@@ -1,0 +1,152 @@
+"""Vectorised forward kinematics and Jacobians of a serial chain (product of exponentials).
+
+Built from the chain's joint axes and points at the zero configuration and the links' zero poses,
+which represents the URDF exactly: a link moved by the first m joints sits at
+exp(xi_1 q_1) ... exp(xi_m q_m) T_link(0). Every function works on a batch of N configurations at
+once, so the per-configuration Python overhead vanishes for large N; :mod:`.kinematics`
+(Pinocchio) is the reference these are tested against.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from usar_arm.model import KinematicChain
+from usar_arm.spatial import Array
+
+
+def _rodrigues(w: Array, angle: Array) -> Array:
+    """Rotation matrices (N, 3, 3) about one unit axis ``w`` by N angles."""
+    c, s = np.cos(angle), np.sin(angle)
+    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    ww = np.outer(w, w)
+    return (c[:, None, None] * np.eye(3) + s[:, None, None] * k
+            + (1.0 - c)[:, None, None] * ww)
+
+
+def log3(r: Array) -> Array:
+    """Rotation vectors (N, 3) of rotation matrices (N, 3, 3) whose angle is below ~3 rad."""
+    tr = np.clip((np.trace(r, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arccos(tr)
+    skew = np.stack([r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]],
+                    axis=1)
+    s = np.sin(angle)
+    scale = np.where(angle < 1e-6, 0.5, angle / np.maximum(2.0 * s, 1e-300))
+    return skew * scale[:, None]
+
+
+class PoeModel:
+    """A serial chain as twists at the zero configuration.
+
+    Args:
+        chain: the robot description (its actuated joints must form one path from the root).
+    """
+
+    def __init__(self, chain: KinematicChain):
+        self.chain = chain
+        zero = np.zeros(chain.dof)
+        actuated = [(j, f) for j, f in chain.joint_frames(zero) if j.actuated]
+        self.axes = np.array([f[:3, :3] @ np.asarray(j.axis, float) for j, f in actuated])
+        self.points = np.array([f[:3, 3] for _, f in actuated])
+        self.revolute = np.array([j.type.value == "revolute" for j, _ in actuated])
+        self._names = [j.name for j, _ in actuated]
+        self._zero_poses = chain.link_poses(zero)
+        self._moving: dict[str, int] = {}
+
+    @property
+    def dof(self) -> int:
+        """Number of joints."""
+        return len(self.axes)
+
+    def joints_moving(self, link: str) -> int:
+        """How many of the chain's joints (from the first) move ``link``.
+
+        Raises:
+            ValueError: the link is moved by joints that are not a prefix of the chain.
+        """
+        if link not in self._moving:
+            path = [j.name for j in self.chain.path_to(link) if j.actuated]
+            if path != self._names[: len(path)]:
+                raise ValueError(f"link {link} is moved by {path}: not a prefix of the serial "
+                                 f"chain {self._names}")
+            self._moving[link] = len(path)
+        return self._moving[link]
+
+    def accumulate(self, q: Array) -> tuple[Array, Array, Array, Array]:
+        """Products of the first m exponentials for m = 0..n: rotations (N, n+1, 3, 3) and
+        positions (N, n+1, 3), plus each joint's current axis (N, n, 3) and point (N, n, 3)."""
+        q = np.atleast_2d(np.asarray(q, float))
+        n_cfg, n = len(q), self.dof
+        rots = np.empty((n_cfg, n + 1, 3, 3))
+        poss = np.empty((n_cfg, n + 1, 3))
+        axes = np.empty((n_cfg, n, 3))
+        points = np.empty((n_cfg, n, 3))
+        rot = np.broadcast_to(np.eye(3), (n_cfg, 3, 3))
+        pos = np.zeros((n_cfg, 3))
+        rots[:, 0], poss[:, 0] = rot, pos
+        for i in range(n):
+            w, p = self.axes[i], self.points[i]
+            axes[:, i] = rot @ w
+            points[:, i] = rot @ p + pos
+            if self.revolute[i]:
+                e = _rodrigues(w, q[:, i])
+                pos = pos + np.einsum("nij,j->ni", rot, p) - np.einsum(
+                    "nij,nj->ni", rot, e @ p)
+                rot = rot @ e
+            else:
+                pos = pos + axes[:, i] * q[:, i:i + 1]
+            rots[:, i + 1], poss[:, i + 1] = rot, pos
+        return rots, poss, axes, points
+
+    def link_poses(self, q: Array, links: Sequence[str]) -> Array:
+        """Poses (N, len(links), 4, 4) of the given links at configurations q (N, n)."""
+        rots, poss, _, _ = self.accumulate(q)
+        n_cfg = len(rots)
+        out = np.zeros((n_cfg, len(links), 4, 4))
+        out[..., 3, 3] = 1.0
+        for k, link in enumerate(links):
+            m = self.joints_moving(link)
+            zero = self._zero_poses[link]
+            out[:, k, :3, :3] = rots[:, m] @ zero[:3, :3]
+            out[:, k, :3, 3] = rots[:, m] @ zero[:3, 3] + poss[:, m]
+        return out
+
+    def frame_jacobian(self, q: Array, frame: str) -> tuple[Array, Array]:
+        """Poses (N, 4, 4) and LOCAL_WORLD_ALIGNED Jacobians (N, 6, n) of ``frame``."""
+        name = self.chain.frames.get(frame, frame)
+        if self.joints_moving(name) != self.dof:
+            raise ValueError(f"frame {name} is not moved by every joint")
+        rots, poss, axes, points = self.accumulate(q)
+        zero = self._zero_poses[name]
+        n_cfg = len(rots)
+        poses = np.zeros((n_cfg, 4, 4))
+        poses[:, :3, :3] = rots[:, -1] @ zero[:3, :3]
+        poses[:, :3, 3] = rots[:, -1] @ zero[:3, 3] + poss[:, -1]
+        poses[:, 3, 3] = 1.0
+        jac = np.zeros((n_cfg, 6, self.dof))
+        lever = poses[:, None, :3, 3] - points
+        rev = self.revolute
+        jac[:, :3, rev] = np.cross(axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
+        jac[:, 3:, rev] = axes[:, rev].transpose(0, 2, 1)
+        jac[:, :3, ~rev] = axes[:, ~rev].transpose(0, 2, 1)
+        return poses, jac
+
+
+class PoeChain:
+    """Batched pose errors of one frame (for batched Newton steps)."""
+
+    def __init__(self, chain: KinematicChain, frame: str):
+        self.model = PoeModel(chain)
+        self.frame = frame
+        self.model.frame_jacobian(np.zeros((1, chain.dof)), frame)  # validates the frame
+
+    def pose_errors(self, q: Array, target_rot: Array, target_pos: Array
+                    ) -> tuple[Array, Array]:
+        """Errors (N, 6) = (target - position, log(target R^T)) and Jacobians (N, 6, n)."""
+        poses, jac = self.model.frame_jacobian(q, self.frame)
+        e = np.empty((len(poses), 6))
+        e[:, :3] = target_pos - poses[:, :3, 3]
+        e[:, 3:] = log3(target_rot @ poses[:, :3, :3].transpose(0, 2, 1))
+        return e, jac

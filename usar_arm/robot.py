@@ -1,0 +1,161 @@
+"""A described arm, ready for IK, collision checking and planning, and where it comes from.
+
+A :class:`Robot` is built from a fresh discovery (:func:`robot_from_record`, which caches the
+generated description under a key made of the CONF/GEO lines it was built from, so a second run
+against the same server skips the collision-matrix sampling), from files a user gives
+(:func:`robot_from_files`), or from a :class:`~usar_arm.pipeline.Description`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from usar_arm import __version__
+from usar_arm.discover.session import DiscoveryRecord
+from usar_arm.errors import FileFormatError
+from usar_arm.model import KinematicChain
+from usar_arm.pipeline import DescribeOptions, Description, describe_arm, write_description
+from usar_arm.planning.collision import CollisionWorld, Pair
+from usar_arm.planning.ik import IKOptions, IKSolver
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.scene import EMPTY, Scene
+from usar_arm.planning.scene_file import validate_allow
+from usar_arm.urdf.reader import apply_joint_limits, parse_srdf, parse_urdf
+
+log = logging.getLogger("usar_arm.robot")
+
+
+@dataclass
+class Robot:
+    """An arm's description and the solvers built on it.
+
+    Attributes:
+        chain: the kinematic chain (limits with acceleration and jerk when known).
+        urdf: its URDF text. disabled: the SRDF's disabled collision pairs.
+        states: the SRDF's named states (``home``...), joint name -> value.
+        actuator: the USARSim actuator that moves it (for ACT), when known.
+        source: where the description came from (for messages).
+    """
+
+    chain: KinematicChain
+    urdf: str
+    disabled: set[Pair] = field(default_factory=set)
+    states: dict[str, dict[str, float]] = field(default_factory=dict)
+    actuator: str | None = None
+    source: str = ""
+    _kinematics: KinematicModel | None = None
+    _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
+
+    @property
+    def kinematics(self) -> KinematicModel:
+        """The Pinocchio model (built on first use)."""
+        if self._kinematics is None:
+            self._kinematics = KinematicModel(self.urdf, self.chain.joint_names)
+        return self._kinematics
+
+    def ik_solver(self, options: IKOptions | None = None, frame: str = "tool0") -> IKSolver:
+        """An IK solver of ``frame`` (cached per options)."""
+        key = (frame, options or IKOptions())
+        if key not in self._ik:
+            self._ik[key] = IKSolver(self.chain, self.kinematics, frame, key[1])
+        return self._ik[key]
+
+    def collision_world(self, scene: Scene = EMPTY, padding: float = 0.0) -> CollisionWorld:
+        """A collision world of this arm in ``scene``."""
+        validate_allow(scene, {lk.name for lk in self.chain.links})
+        return CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding)
+
+    def named_state(self, name: str) -> list[float]:
+        """A named state (``home``) in joint order."""
+        if name not in self.states:
+            raise KeyError(f"no state '{name}'; states: {', '.join(self.states) or 'none'}")
+        values = self.states[name]
+        return [values[j] for j in self.chain.joint_names]
+
+
+def robot_from_description(desc: Description, actuator: str | None = None) -> Robot:
+    """A Robot from a freshly built description."""
+    return Robot(desc.chain, desc.urdf, desc.acm.pairs(), {"home": dict(desc.home)},
+                 actuator or desc.discovery.get("robot", {}).get("actuator"),
+                 f"discovery of {desc.chain.name}")
+
+
+def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
+                     joint_limits: str | Path | None = None) -> Robot:
+    """A Robot from a URDF (and SRDF, joint_limits.yaml; found beside the URDF when not given,
+    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``)."""
+    path = Path(urdf)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    chain, notes = parse_urdf(text, str(path))
+    for note in notes:
+        log.warning("%s: %s", path, note)
+    stem = path.name.removesuffix(".urdf")
+    srdf_path = Path(srdf) if srdf else path.with_name(f"{stem}.srdf")
+    disabled: set[Pair] = set()
+    states: dict[str, dict[str, float]] = {}
+    if srdf_path.exists():
+        disabled, states = parse_srdf(srdf_path.read_text(), str(srdf_path))
+    elif srdf:
+        raise FileFormatError(str(srdf_path), "no such SRDF file")
+    limits_path = Path(joint_limits) if joint_limits else path.with_name(
+        f"{stem}.joint_limits.yaml")
+    if limits_path.exists():
+        chain = apply_joint_limits(chain, limits_path)
+    actuator = None
+    info = path.with_name(f"{stem}.discovery.json")
+    if info.exists():
+        doc = json.loads(info.read_text())
+        roles = doc.get("chain", {}).get("frames", {})
+        chain = KinematicChain(chain.name, chain.links, chain.joints,
+                               {**chain.frames, **roles}, chain.notes)
+        actuator = doc.get("robot", {}).get("actuator")
+    return Robot(chain, text, disabled, states, actuator, str(path))
+
+
+def cache_dir() -> Path:
+    """Where generated descriptions are cached (``$USAR_ARM_CACHE``, else
+    ``$XDG_CACHE_HOME/usar-arm`` or ``~/.cache/usar-arm``)."""
+    if os.environ.get("USAR_ARM_CACHE"):
+        return Path(os.environ["USAR_ARM_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "usar-arm" / "descriptions"
+
+
+def description_key(record: DiscoveryRecord, options: DescribeOptions) -> str:
+    """A key made of everything a description depends on: the CONF/GEO lines and the options."""
+    limits = Path(options.velocity_limits).read_text() if options.velocity_limits else ""
+    material = json.dumps({"version": __version__, "class": record.robot_class,
+                           "lines": record.reply_lines(), "naming": options.naming,
+                           "frame": options.frame, "limits": limits,
+                           "acm": [options.acm_samples, options.acm_seed]}, sort_keys=True)
+    return hashlib.sha256(material.encode()).hexdigest()[:20]
+
+
+def robot_from_record(record: DiscoveryRecord, options: DescribeOptions,
+                      cache: Path | None = None) -> Robot:
+    """The Robot a discovery describes, from the cache when the same CONF/GEO were described
+    before, else built (and cached)."""
+    assert record.arm is not None
+    folder = (cache or cache_dir()) / description_key(record, options)
+    urdf = folder / f"{record.arm.robot_name}.urdf"
+    if urdf.exists():
+        try:
+            robot = robot_from_files(urdf)
+            log.info("description of %s from the cache (%s)", record.arm.robot_name, folder)
+            return robot
+        except (FileFormatError, ValueError, KeyError) as exc:
+            log.warning("ignoring a broken cache entry %s: %s", folder, exc)
+    desc = describe_arm(record, options)
+    try:
+        write_description(desc, folder)
+    except OSError as exc:
+        log.warning("cannot cache the description in %s: %s", folder, exc)
+    return robot_from_description(desc, record.arm.name)
