@@ -48,6 +48,10 @@ class Robot:
     states: dict[str, dict[str, float]] = field(default_factory=dict)
     actuator: str | None = None
     source: str = ""
+    links: tuple[int, ...] = ()
+    """USARSim link number (1-based, as in ASTA) of each joint, in joint order."""
+    tip_sensor: str | None = None
+    """Name of the server's tip GroundTruth sensor (and of its URDF frame), when it has one."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
 
@@ -82,7 +86,13 @@ def robot_from_description(desc: Description, actuator: str | None = None) -> Ro
     """A Robot from a freshly built description."""
     return Robot(desc.chain, desc.urdf, desc.acm.pairs(), {"home": dict(desc.home)},
                  actuator or desc.discovery.get("robot", {}).get("actuator"),
-                 f"discovery of {desc.chain.name}")
+                 f"discovery of {desc.chain.name}", *_wire_facts(desc.discovery))
+
+
+def _wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
+    chain = discovery.get("chain", {})
+    links = tuple(int(j["usarsim_link"]) for j in chain.get("joints", []))
+    return links, chain.get("tip_sensor")
 
 
 def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
@@ -109,7 +119,7 @@ def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
         f"{stem}.joint_limits.yaml")
     if limits_path.exists():
         chain = apply_joint_limits(chain, limits_path)
-    actuator = None
+    actuator, links, tip_sensor = None, tuple(range(1, chain.dof + 1)), None
     info = path.with_name(f"{stem}.discovery.json")
     if info.exists():
         doc = json.loads(info.read_text())
@@ -117,7 +127,8 @@ def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
         chain = KinematicChain(chain.name, chain.links, chain.joints,
                                {**chain.frames, **roles}, chain.notes)
         actuator = doc.get("robot", {}).get("actuator")
-    return Robot(chain, text, disabled, states, actuator, str(path))
+        links, tip_sensor = _wire_facts(doc)
+    return Robot(chain, text, disabled, states, actuator, str(path), links, tip_sensor)
 
 
 def cache_dir() -> Path:

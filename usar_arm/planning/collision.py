@@ -25,6 +25,10 @@ from usar_arm.spatial import Array
 Pair = tuple[str, str]
 
 
+SMALL_BATCH = 24
+"""Batches up to this size get their link poses from Pinocchio (cheaper than numpy's overhead)."""
+
+
 def pair(a: str, b: str) -> Pair:
     """A link/object pair in canonical (sorted) order."""
     return (a, b) if a <= b else (b, a)
@@ -290,6 +294,21 @@ class CollisionWorld:
         """:meth:`contacts` for N configurations at once."""
         return [sorted(p) for p in self._many(qs, stop_at_first=False)]
 
+    def _link_poses(self, qs: Array) -> Array:
+        """World poses (N, L, 4, 4) of the links with geometry: Pinocchio one configuration at
+        a time for small batches, vectorised products of exponentials for large ones."""
+        if len(qs) > SMALL_BATCH:
+            if self._poe is None:
+                self._poe = PoeModel(self.chain)
+            return self._poe.link_poses(qs, self._links)
+        out = np.empty((len(qs), len(self._links), 4, 4))
+        oMf = self.kinematics.data.oMf
+        for n, q in enumerate(qs):
+            self.kinematics.update(q)
+            for k, fid in enumerate(self._frame_ids):
+                out[n, k] = oMf[fid].homogeneous
+        return out
+
     def _placed(self, i: int, poses: Array, placed: dict[int, fcl.CollisionObject]
                 ) -> fcl.CollisionObject:
         """Robot cylinder ``i`` moved to ``poses[i]`` (once per configuration)."""
@@ -302,9 +321,7 @@ class CollisionWorld:
 
     def _many(self, qs: Array, stop_at_first: bool) -> list[list[Pair]]:
         qs = np.atleast_2d(np.asarray(qs, float))
-        if self._poe is None:
-            self._poe = PoeModel(self.chain)
-        world = self._poe.link_poses(qs, self._links) @ self._local   # (N, L, 4, 4)
+        world = self._link_poses(qs) @ self._local                       # (N, L, 4, 4)
         z = world[..., :3, 2]
         half = (np.abs(z) * self._half[:, None]
                 + self._radius[:, None] * np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0)))

@@ -19,11 +19,16 @@ from usar_arm.spatial import Array
 
 def _rodrigues(w: Array, angle: Array) -> Array:
     """Rotation matrices (N, 3, 3) about one unit axis ``w`` by N angles."""
-    c, s = np.cos(angle), np.sin(angle)
     k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    ww = np.outer(w, w)
-    return (c[:, None, None] * np.eye(3) + s[:, None, None] * k
-            + (1.0 - c)[:, None, None] * ww)
+    return _rodrigues_k(k, np.outer(w, w), np.asarray(angle, float))
+
+
+def _rodrigues_k(k: Array, ww: Array, angle: Array) -> Array:
+    """Rodrigues with the axis' cross matrix ``k`` and outer product ``ww`` precomputed:
+    R = ww + cos(a) (I - ww) + sin(a) k."""
+    c = np.cos(angle)[:, None, None]
+    s = np.sin(angle)[:, None, None]
+    return ww + c * (np.eye(3) - ww) + s * k
 
 
 def log3(r: Array) -> Array:
@@ -54,6 +59,9 @@ class PoeModel:
         self._names = [j.name for j, _ in actuated]
         self._zero_poses = chain.link_poses(zero)
         self._moving: dict[str, int] = {}
+        self._k = [np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+                   for w in self.axes]
+        self._ww = [np.outer(w, w) for w in self.axes]
 
     @property
     def dof(self) -> int:
@@ -89,12 +97,12 @@ class PoeModel:
         for i in range(n):
             w, p = self.axes[i], self.points[i]
             axes[:, i] = rot @ w
-            points[:, i] = rot @ p + pos
+            rp = rot @ p
+            points[:, i] = rp + pos
             if self.revolute[i]:
-                e = _rodrigues(w, q[:, i])
-                pos = pos + np.einsum("nij,j->ni", rot, p) - np.einsum(
-                    "nij,nj->ni", rot, e @ p)
+                e = _rodrigues_k(self._k[i], self._ww[i], q[:, i])
                 rot = rot @ e
+                pos = pos + rp - rot @ p  # T_prev * exp: p_new = pos + R (I - E) p
             else:
                 pos = pos + axes[:, i] * q[:, i:i + 1]
             rots[:, i + 1], poss[:, i + 1] = rot, pos

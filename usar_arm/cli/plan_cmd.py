@@ -1,0 +1,123 @@
+"""``usar-arm plan``: plan a PTP or LIN motion (and, with --execute, run it on the arm)."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from usar_arm.arm import Arm
+from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.describe_args import add_server_args
+from usar_arm.cli.units import UNITS, pose_from_args
+from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.motion import MotionOptions
+from usar_arm.planning.lin import LinOptions
+from usar_arm.planning.ompl_adapter import PLANNERS, OmplOptions
+
+
+def add_motion_args(p: argparse.ArgumentParser) -> None:
+    """The motion options shared by plan and demo."""
+    p.add_argument("--scene", default=None, metavar="FILE",
+                   help="obstacles: a scene YAML file, or one of empty, table, shelf, cage")
+    p.add_argument("--planner", choices=PLANNERS, default="RRTConnect",
+                   help="OMPL geometric planner for PTP (default RRTConnect)")
+    p.add_argument("--time-limit", type=float, default=2.0, metavar="S",
+                   help="planning budget in seconds (default 2)")
+    p.add_argument("--resolution", type=float, default=0.01, metavar="RAD",
+                   help="largest joint step between collision checks along edges (default 0.01)")
+    p.add_argument("--speed-scale", type=float, default=0.5, metavar="F",
+                   help="fraction of the velocity/acceleration/jerk limits (default 0.5)")
+    p.add_argument("--blend", action="store_true",
+                   help="PTP: pass through waypoints without stopping (re-checked; falls back "
+                        "to stopping where the blended motion would collide or leave a limit)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the planner (default 0)")
+
+
+def motion_options(args: argparse.Namespace, motion: str) -> MotionOptions:
+    """MotionOptions from the parsed arguments."""
+    return MotionOptions(motion=motion, ompl=OmplOptions(
+        planner=args.planner, time_limit=args.time_limit, resolution=args.resolution,
+        seed=args.seed), lin=LinOptions(resolution=args.resolution),
+        speed_scale=args.speed_scale, blend=args.blend)
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "plan", help="plan a collision-free, jerk-limited motion to a pose or joint values",
+        description="Plan a PTP motion (joint space, OMPL + Ruckig) or a LIN motion (straight "
+                    "tool0 line, IK at every step + a jerk-limited profile) for the arm the "
+                    "server describes, from its current joints (read from ASTA) or "
+                    "--from-joints. Without --host the embedded simulator is used.")
+    goal = p.add_mutually_exclusive_group(required=True)
+    goal.add_argument("--pose", type=float, nargs=6, metavar=("X", "Y", "Z", "R", "P", "Y"),
+                      help="goal pose of tool0 in base_link, in --units")
+    goal.add_argument("--joints", type=float, nargs="+", metavar="Q",
+                      help="goal joint values (rad/m)")
+    p.add_argument("--units", choices=UNITS, default="m-rad",
+                   help="m-rad (default); mm-deg; kuka: X Y Z mm, A B C deg of KUKA's tool "
+                        "frame, as on a pendant")
+    p.add_argument("--motion", choices=("ptp", "lin"), default="ptp",
+                   help="ptp: joint space (default); lin: straight tool0 line")
+    p.add_argument("--from-joints", type=float, nargs="+", metavar="Q",
+                   help="start here instead of the arm's current joints")
+    add_motion_args(p)
+    p.add_argument("--out", default=None, metavar="FILE", help="write the trajectory (JSON)")
+    p.add_argument("--urdf", default=None, metavar="FILE",
+                   help="plan for this URDF (SRDF and joint limits beside it) without a server")
+    p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
+    p.add_argument("--json", action="store_true", help="print one JSON summary on stdout")
+    add_server_args(p)
+    add_verbosity(p)
+    p.set_defaults(handler=run)
+
+
+def joint_vector(values: list[float] | None, arm: Arm, what: str) -> np.ndarray | None:
+    """A joint vector from the command line, checked against the arm's joint count."""
+    if values is None:
+        return None
+    if len(values) != len(arm.joint_names):
+        raise InvalidInputError(f"{what} needs {len(arm.joint_names)} values "
+                                f"({', '.join(arm.joint_names)}), got {len(values)}")
+    return np.array(values, float)
+
+
+def goal_pose(args: argparse.Namespace, arm: Arm) -> np.ndarray | None:
+    """The goal pose of tool0, converted from --units."""
+    if args.pose is None:
+        return None
+    zero = np.zeros(len(arm.joint_names))
+    tool0_in_flange = np.linalg.inv(arm.fk(zero, "flange")) @ arm.fk(zero, "tool0")
+    return pose_from_args(args.pose, args.units, tool0_in_flange)
+
+
+def open_arm(args: argparse.Namespace) -> Arm:
+    """The arm: offline from --urdf, or live (embedded simulator or --host)."""
+    if getattr(args, "urdf", None):
+        return Arm.from_files(args.urdf, args.srdf)
+    where = "the embedded simulator" if args.host is None else f"{args.host}:{args.port}"
+    err(f"connecting to {where} and discovering {args.robot}...")
+    return Arm.connect(args.robot, args.host, args.port, args.start_position, args.timeout,
+                       wire_precision=args.wire_precision)
+
+
+def run(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    with open_arm(args) as arm:
+        start = joint_vector(args.from_joints, arm, "--from-joints")
+        plan = arm.plan(joints=joint_vector(args.joints, arm, "--joints"),
+                        pose=goal_pose(args, arm), motion=args.motion, scene=args.scene,
+                        start=start, options=motion_options(args, args.motion))
+        if args.out:
+            plan.trajectory.save(args.out)
+        summary = {**plan.summary(), "out": args.out}
+        if args.json:
+            print_json(summary)
+        else:
+            out(f"{plan.motion.upper()} plan: {plan.planning_seconds * 1000:.1f} ms planning, "
+                f"{plan.trajectory.duration:.2f} s motion, {len(plan.waypoints)} waypoints, "
+                f"path {plan.path_length:.3f} rad")
+            out("goal: " + " ".join(f"{v:.4f}" for v in plan.goal))
+            if args.out:
+                out(f"wrote {args.out}")
+    return EXIT_OK

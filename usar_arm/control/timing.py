@@ -1,0 +1,311 @@
+"""Time-parameterisation with Ruckig (community edition, offline, state-to-state calls only).
+
+Three ways to time a path:
+
+* :func:`stop_at_waypoints` (PTP default): each path segment from rest to rest, timed by a
+  jerk-limited Ruckig profile of its path parameter (limits = the tightest joint's limit over its
+  share of the segment), so the arm moves exactly along the collision-checked straight segments
+  (Ruckig's multi-DoF phase synchronisation is not always possible and then bends the path).
+* :func:`blended` (PTP ``--blend``): the arm passes through the waypoints with chosen velocities;
+  every blended segment is re-checked (position limits, which Ruckig's community edition does not
+  enforce, and collisions through a callback) and falls back to stop-at-both-ends where the check
+  fails.
+* :func:`along_path` (LIN): one scalar jerk-limited Ruckig profile of the path parameter s, with
+  s-limits derived from the path's derivatives so that every joint stays within its limits.
+
+The result is a :class:`TimedMotion`, which can be sampled at any rate.
+
+This is the only module that imports ``ruckig``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from ruckig import InputParameter, Result, Ruckig, Synchronization
+from ruckig import Trajectory as RuckigTrajectory
+from scipy.interpolate import CubicSpline
+
+from usar_arm.control.trajectory import MotionLimits, Trajectory
+from usar_arm.errors import TimingError
+from usar_arm.spatial import Array
+
+DEFAULT_RATE_HZ = 500.0
+"""Sample rate of the trajectories the planner returns (>= 250 Hz)."""
+PASS_THROUGH_FRACTION = 0.9
+"""Blend: pass-through velocities stay this fraction below the velocity limits (Ruckig needs
+consistent target states)."""
+
+SampleCheck = Callable[[Array], Array]
+"""Given configurations (m, n), True where a configuration is not allowed (collision)."""
+
+
+def _calculate(start: Array, target: Array, v0: Array, v1: Array, limits: MotionLimits,
+               sync: Synchronization) -> RuckigTrajectory:
+    dof = len(start)
+    otg = Ruckig(dof)
+    inp = InputParameter(dof)
+    inp.current_position = start.tolist()
+    inp.current_velocity = v0.tolist()
+    inp.current_acceleration = [0.0] * dof
+    inp.target_position = target.tolist()
+    inp.target_velocity = v1.tolist()
+    inp.target_acceleration = [0.0] * dof
+    inp.max_velocity = limits.velocity.tolist()
+    inp.max_acceleration = limits.acceleration.tolist()
+    inp.max_jerk = limits.jerk.tolist()
+    inp.synchronization = sync
+    traj = RuckigTrajectory(dof)
+    result = otg.calculate(inp, traj)
+    if result not in (Result.Working, Result.Finished):
+        raise TimingError(f"Ruckig could not time a segment ({result.name}) from "
+                          f"{np.round(start, 4).tolist()} to {np.round(target, 4).tolist()}")
+    return traj
+
+
+@dataclass
+class _Straight:
+    """A rest-to-rest straight segment a -> a + delta, timed by a 1-DoF profile of s in [0, 1]:
+    exactly on the line (multi-DoF phase synchronisation is not always possible)."""
+
+    start: Array
+    delta: Array
+    profile: RuckigTrajectory
+
+    @property
+    def duration(self) -> float:
+        return float(self.profile.duration)
+
+    def at(self, t: float) -> tuple[Array, Array, Array]:
+        s, sd, sdd = self.profile.at_time(min(t, self.duration))
+        return self.start + s[0] * self.delta, sd[0] * self.delta, sdd[0] * self.delta
+
+    @property
+    def peak_speed(self) -> float:
+        """Largest ds/dt of the profile (1/s)."""
+        return float(max(abs(self.profile.at_time(t)[1][0]) for t in
+                         np.linspace(0.0, self.duration, 21)))
+
+
+@dataclass
+class _Free:
+    """A multi-DoF Ruckig segment between two states (used where the motion blends)."""
+
+    traj: RuckigTrajectory
+
+    @property
+    def duration(self) -> float:
+        return float(self.traj.duration)
+
+    def at(self, t: float) -> tuple[Array, Array, Array]:
+        pos, vel, acc = self.traj.at_time(min(t, self.duration))
+        return np.array(pos), np.array(vel), np.array(acc)
+
+
+Segment = _Straight | _Free
+
+
+def _scalar_profile(length: float, v: float, a: float, j: float, name: str
+                    ) -> RuckigTrajectory:
+    otg = Ruckig(1)
+    inp = InputParameter(1)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+    inp.target_position, inp.target_velocity, inp.target_acceleration = [length], [0.0], [0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [v], [a], [j]
+    profile = RuckigTrajectory(1)
+    result = otg.calculate(inp, profile)
+    if result not in (Result.Working, Result.Finished):
+        raise TimingError(f"Ruckig could not time the {name} ({result.name})")
+    return profile
+
+
+def straight(a: Array, b: Array, limits: MotionLimits) -> _Straight:
+    """The time-optimal rest-to-rest motion along the segment a -> b under the joint limits."""
+    delta = b - a
+    moving = np.abs(delta) > 1e-12
+    if not np.any(moving):
+        return _Straight(a, delta, _scalar_profile(0.0, 1.0, 1.0, 1.0, "segment"))
+    span = np.abs(delta[moving])
+    v = float(np.min(limits.velocity[moving] / span))
+    acc = float(np.min(limits.acceleration[moving] / span))
+    jerk = float(np.min(limits.jerk[moving] / span))
+    return _Straight(a, delta, _scalar_profile(1.0, v, acc, jerk, "segment"))
+
+
+@dataclass
+class TimedMotion:
+    """A continuous-time motion: Ruckig segments in sequence, or an s-profile along a path."""
+
+    joint_names: tuple[str, ...]
+    limits: MotionLimits
+    waypoints: Array
+    mode: str
+    segments: list[Segment] = field(default_factory=list)
+    starts: Array = field(default_factory=lambda: np.zeros(0))
+    path: CubicSpline | None = None
+    profile: RuckigTrajectory | None = None
+    seconds: float = 0.0
+    """Time spent computing the timing (s)."""
+    fallbacks: int = 0
+    """Blend: segments that had to stop at their ends."""
+
+    @property
+    def duration(self) -> float:
+        """Duration (s)."""
+        if self.profile is not None:
+            return float(self.profile.duration)
+        return float(self.starts[-1] + self.segments[-1].duration) if self.segments else 0.0
+
+    def evaluate(self, times: Array) -> tuple[Array, Array, Array]:
+        """Positions, velocities, accelerations (m, n) at ``times`` (s)."""
+        times = np.clip(np.asarray(times, float), 0.0, self.duration)
+        n = len(self.joint_names)
+        q, qd, qdd = (np.empty((len(times), n)) for _ in range(3))
+        if self.profile is not None:
+            assert self.path is not None
+            s = np.empty((len(times), 3))
+            for k, t in enumerate(times):
+                pos, vel, acc = self.profile.at_time(float(t))
+                s[k] = (pos[0], vel[0], acc[0])
+            d1, d2 = self.path(s[:, 0], 1), self.path(s[:, 0], 2)
+            q[:] = self.path(s[:, 0])
+            qd[:] = d1 * s[:, 1:2]
+            qdd[:] = d2 * s[:, 1:2] ** 2 + d1 * s[:, 2:3]
+            return q, qd, qdd
+        index = np.clip(np.searchsorted(self.starts, times, side="right") - 1, 0,
+                        len(self.segments) - 1)
+        for k, (t, i) in enumerate(zip(times, index, strict=True)):
+            q[k], qd[k], qdd[k] = self.segments[i].at(float(t - self.starts[i]))
+        return q, qd, qdd
+
+    def sample(self, rate: float = DEFAULT_RATE_HZ, motion: str = "ptp") -> Trajectory:
+        """Samples on a uniform grid of at least ``rate`` Hz that ends exactly at the end."""
+        count = max(2, math.ceil(self.duration * rate) + 1)
+        times = np.linspace(0.0, self.duration, count)
+        q, qd, qdd = self.evaluate(times)
+        qd[-1] = 0.0
+        qdd[-1] = 0.0
+        return Trajectory(self.joint_names, times, q, qd, qdd, self.waypoints, self.limits,
+                          motion, self.mode, {"timing_seconds": self.seconds,
+                                              "blend_fallbacks": self.fallbacks})
+
+
+def stop_at_waypoints(names: tuple[str, ...], waypoints: Array, limits: MotionLimits
+                      ) -> TimedMotion:
+    """Rest at every waypoint; each segment a phase-synchronised straight line."""
+    start = time.perf_counter()
+    wp = _dedupe(np.asarray(waypoints, float))
+    segments: list[Segment] = [straight(wp[k], wp[k + 1], limits) for k in range(len(wp) - 1)]
+    return _assemble(names, limits, wp, "stop", segments, time.perf_counter() - start)
+
+
+def blended(names: tuple[str, ...], waypoints: Array, limits: MotionLimits,
+            forbidden: SampleCheck | None = None, check_step: float = 0.005) -> TimedMotion:
+    """Pass through the waypoints without stopping, then re-check every segment.
+
+    A segment whose samples (every ``check_step`` s) leave the position limits or hit
+    ``forbidden`` is redone from rest to rest, and its neighbours are retimed to match.
+    """
+    start = time.perf_counter()
+    wp = _dedupe(np.asarray(waypoints, float))
+    n_wp = len(wp)
+    lines = [straight(wp[k], wp[k + 1], limits) for k in range(n_wp - 1)]
+    vel = _pass_through(wp, lines, limits)
+    stopped = np.zeros(n_wp, dtype=bool)
+    stopped[[0, -1]] = True
+    fallbacks = 0
+    while True:
+        v = np.where(stopped[:, None], 0.0, vel)
+        segments: list[Segment] = []
+        bad = None
+        for k in range(n_wp - 1):
+            if stopped[k] and stopped[k + 1]:
+                segments.append(lines[k])
+                continue
+            seg = _Free(_calculate(wp[k], wp[k + 1], v[k], v[k + 1], limits,
+                                   Synchronization.Time))
+            segments.append(seg)
+            if bad is None and not _segment_ok(seg, limits, forbidden, check_step):
+                bad = k
+        if bad is None:
+            break
+        stopped[bad] = stopped[bad + 1] = True
+        fallbacks += 1
+    motion = _assemble(names, limits, wp, "blend", segments, time.perf_counter() - start)
+    motion.fallbacks = fallbacks
+    return motion
+
+
+def _pass_through(wp: Array, lines: list[_Straight], limits: MotionLimits) -> Array:
+    """A velocity at each interior waypoint: the mean of the two neighbouring straight
+    segments' peak velocity vectors, shrunk by how sharply the path turns (zero for a right
+    angle or worse) and kept below the joint limits."""
+    vel = np.zeros_like(wp)
+    for k in range(1, len(wp) - 1):
+        v_in = lines[k - 1].peak_speed * lines[k - 1].delta
+        v_out = lines[k].peak_speed * lines[k].delta
+        a, b = lines[k - 1].delta, lines[k].delta
+        cos_turn = float(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)))
+        if cos_turn <= 0.0:
+            continue
+        v = 0.5 * (v_in + v_out) * cos_turn
+        over = np.max(np.abs(v) / (PASS_THROUGH_FRACTION * limits.velocity))
+        vel[k] = v / max(1.0, float(over))
+    return vel
+
+
+def _segment_ok(seg: _Free, limits: MotionLimits, forbidden: SampleCheck | None,
+                step: float) -> bool:
+    times = np.append(np.arange(0.0, seg.duration, step), seg.duration)
+    q = np.array([seg.at(float(t))[0] for t in times])
+    if np.any(q < limits.lower - 1e-9) or np.any(q > limits.upper + 1e-9):
+        return False
+    return not (forbidden is not None and bool(np.any(forbidden(q))))
+
+
+def _dedupe(wp: Array) -> Array:
+    keep = [0] + [k for k in range(1, len(wp)) if np.max(np.abs(wp[k] - wp[k - 1])) > 1e-9]
+    out = wp[keep]
+    if len(out) < 2:
+        out = np.vstack([wp[0], wp[0]])
+    return out
+
+
+def _assemble(names: tuple[str, ...], limits: MotionLimits, wp: Array, mode: str,
+              segments: list[Segment], seconds: float) -> TimedMotion:
+    durations = np.array([seg.duration for seg in segments])
+    starts = np.concatenate([[0.0], np.cumsum(durations)[:-1]])
+    return TimedMotion(names, limits, wp, mode, segments, starts, seconds=seconds)
+
+
+def along_path(names: tuple[str, ...], s: Array, q: Array, limits: MotionLimits,
+               max_speed: float = math.inf, max_acceleration: float = math.inf
+               ) -> TimedMotion:
+    """Time a dense path q(s) with one jerk-limited profile of s (0 -> s[-1]).
+
+    The joint velocity is q'(s) s', the acceleration q'' s'^2 + q' s'', the jerk
+    q''' s'^3 + 3 q'' s' s'' + q' s'''. With the largest |q'|, |q''|, |q'''| along the path,
+    s' <= v_s, |s''| <= a_s and |s'''| <= j_s are chosen so that every term stays within the
+    joint's limit (half of the acceleration, a third of the jerk budget each), then Ruckig
+    shapes the fastest profile of s under those bounds. ``max_speed``/``max_acceleration``
+    cap s' and s'' (e.g. a Cartesian speed when s is the tool's path length).
+    """
+    start = time.perf_counter()
+    spline = CubicSpline(s, q, axis=0)
+    grid = np.linspace(s[0], s[-1], max(200, 4 * len(s)))
+    m1 = np.abs(spline(grid, 1)).max(axis=0) + 1e-12
+    m2 = np.abs(spline(grid, 2)).max(axis=0) + 1e-12
+    m3 = np.abs(spline(grid, 3)).max(axis=0) + 1e-12
+    vel, acc, jerk = limits.velocity, limits.acceleration, limits.jerk
+    v_s = min(float(np.min(vel / m1)), float(np.min(np.sqrt(0.5 * acc / m2))),
+              float(np.min(np.cbrt(jerk / (3 * m3)))), max_speed)
+    a_s = min(float(np.min(0.5 * acc / m1)), float(np.min(jerk / (9 * m2 * v_s))),
+              max_acceleration)
+    j_s = float(np.min(jerk / (3 * m1)))
+    profile = _scalar_profile(float(s[-1]), v_s, a_s, j_s, "path profile")
+    return TimedMotion(names, limits, np.asarray(q), "lin", path=spline,
+                       profile=profile, seconds=time.perf_counter() - start)

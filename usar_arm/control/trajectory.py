@@ -1,0 +1,200 @@
+"""Time-parameterised joint trajectories: samples, limits, JSON files, and limit checks."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from usar_arm.errors import FileFormatError
+from usar_arm.fileio import write_atomic
+from usar_arm.model import KinematicChain
+from usar_arm.spatial import Array
+
+
+@dataclass(frozen=True)
+class MotionLimits:
+    """Per-joint limits a trajectory must respect (rad or m, per s, s^2, s^3)."""
+
+    lower: Array
+    upper: Array
+    velocity: Array
+    acceleration: Array
+    jerk: Array
+
+    @classmethod
+    def from_chain(cls, chain: KinematicChain, scale: float = 1.0) -> MotionLimits:
+        """The chain's limits with velocity, acceleration and jerk multiplied by ``scale``.
+
+        Joints without an acceleration (jerk) limit get 2x their velocity (10x acceleration)
+        per second, a conservative assumption.
+        """
+        if not 0 < scale <= 1:
+            raise ValueError(f"speed scale must be in (0, 1], got {scale}")
+        lims = chain.limits()
+        vel = np.array([lim.velocity for lim in lims])
+        acc = np.array([lim.acceleration or 2 * lim.velocity for lim in lims])
+        jerk = np.array([lim.jerk or 10 * a for lim, a in zip(lims, acc, strict=True)])
+        return cls(chain.lower(), chain.upper(), vel * scale, acc * scale, jerk * scale)
+
+    def as_dict(self, names: Sequence[str]) -> dict[str, dict[str, float]]:
+        """joint name -> {lower, upper, velocity, acceleration, jerk}."""
+        return {n: {"lower": float(self.lower[i]), "upper": float(self.upper[i]),
+                    "velocity": float(self.velocity[i]),
+                    "acceleration": float(self.acceleration[i]), "jerk": float(self.jerk[i])}
+                for i, n in enumerate(names)}
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A trajectory sampled on a uniform time grid.
+
+    Attributes:
+        joint_names: joint order of every array.
+        t: sample times (s), from 0, uniform. q, qd, qdd: (m, n) positions, velocities,
+            accelerations (rad or m, per s, per s^2).
+        waypoints: (k, n) the geometric path it follows (collision-checked).
+        limits: the limits it was timed with.
+        motion: ``ptp`` or ``lin``. mode: ``stop`` (rest at every waypoint), ``blend``, ``lin``.
+        info: free-form figures (planning time, path length...).
+    """
+
+    joint_names: tuple[str, ...]
+    t: Array
+    q: Array
+    qd: Array
+    qdd: Array
+    waypoints: Array
+    limits: MotionLimits
+    motion: str = "ptp"
+    mode: str = "stop"
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def duration(self) -> float:
+        """Duration (s)."""
+        return float(self.t[-1])
+
+    @property
+    def rate(self) -> float:
+        """Samples per second."""
+        return (len(self.t) - 1) / self.duration if self.duration > 0 else math.inf
+
+    def at(self, time: float) -> tuple[Array, Array]:
+        """Position and velocity at ``time`` (s), by cubic Hermite interpolation of the
+        samples; clamped to the first and last sample outside [0, duration]."""
+        if time <= 0:
+            return self.q[0].copy(), self.qd[0].copy()
+        if time >= self.duration:
+            return self.q[-1].copy(), np.zeros_like(self.qd[-1])
+        dt = self.t[1] - self.t[0]
+        k = min(int(time / dt), len(self.t) - 2)
+        h = (time - self.t[k]) / dt
+        h2, h3 = h * h, h * h * h
+        q0, q1, v0, v1 = self.q[k], self.q[k + 1], self.qd[k] * dt, self.qd[k + 1] * dt
+        q = ((2 * h3 - 3 * h2 + 1) * q0 + (h3 - 2 * h2 + h) * v0 + (-2 * h3 + 3 * h2) * q1
+             + (h3 - h2) * v1)
+        v = ((6 * h2 - 6 * h) * q0 + (3 * h2 - 4 * h + 1) * v0 + (-6 * h2 + 6 * h) * q1
+             + (3 * h2 - 2 * h) * v1) / dt
+        return q, v
+
+    # ------------------------------------------------------------------ files
+    def to_json(self) -> dict[str, Any]:
+        """The JSON document ``usar-arm plan --out`` writes."""
+        return {"format": "usar-arm trajectory 1", "joint_names": list(self.joint_names),
+                "motion": self.motion, "mode": self.mode, "duration": self.duration,
+                "rate_hz": self.rate, "t": self.t.tolist(), "q": self.q.tolist(),
+                "qd": self.qd.tolist(), "qdd": self.qdd.tolist(),
+                "waypoints": self.waypoints.tolist(),
+                "limits": self.limits.as_dict(self.joint_names), "info": self.info}
+
+    @classmethod
+    def from_json(cls, doc: Any, path: str = "<trajectory>") -> Trajectory:
+        """Read a trajectory document, naming the field of any error."""
+        if not isinstance(doc, dict):
+            raise FileFormatError(path, "expected a JSON object")
+        for key in ("joint_names", "t", "q", "qd", "qdd", "limits"):
+            if key not in doc:
+                raise FileFormatError(path, f"missing '{key}'", field=key)
+        names = tuple(doc["joint_names"])
+        n = len(names)
+        arrays = {}
+        for key in ("t", "q", "qd", "qdd"):
+            try:
+                arrays[key] = np.asarray(doc[key], dtype=float)
+            except (TypeError, ValueError):
+                raise FileFormatError(path, "expected numbers", field=key) from None
+        m = len(arrays["t"])
+        if m < 2 or arrays["t"].ndim != 1:
+            raise FileFormatError(path, "needs at least 2 sample times", field="t")
+        if np.any(np.diff(arrays["t"]) <= 0):
+            raise FileFormatError(path, "sample times must increase", field="t")
+        for key in ("q", "qd", "qdd"):
+            if arrays[key].shape != (m, n):
+                raise FileFormatError(path, f"expected {m} rows of {n} values (one per joint "
+                                      f"and sample), got shape {arrays[key].shape}", field=key)
+        if not all(np.all(np.isfinite(a)) for a in arrays.values()):
+            raise FileFormatError(path, "contains NaN or infinite values")
+        lim = doc["limits"]
+        try:
+            limits = MotionLimits(*(np.array([float(lim[j][k]) for j in names]) for k in (
+                "lower", "upper", "velocity", "acceleration", "jerk")))
+        except (KeyError, TypeError, ValueError):
+            raise FileFormatError(path, "expected lower, upper, velocity, acceleration, jerk "
+                                  "for every joint", field="limits") from None
+        waypoints = np.asarray(doc.get("waypoints") or arrays["q"][[0, -1]], dtype=float)
+        return cls(names, arrays["t"], arrays["q"], arrays["qd"], arrays["qdd"],
+                   waypoints.reshape(-1, n), limits, doc.get("motion", "ptp"),
+                   doc.get("mode", "stop"), dict(doc.get("info", {})))
+
+    def save(self, path: str | Path) -> None:
+        """Write the JSON file atomically."""
+        write_atomic(path, json.dumps(self.to_json()) + "\n")
+
+    @classmethod
+    def load(cls, path: str | Path) -> Trajectory:
+        """Read a JSON file written by :meth:`save` (or by hand, in that format)."""
+        try:
+            doc = json.loads(Path(path).read_text())
+        except OSError as exc:
+            raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+        except json.JSONDecodeError as exc:
+            raise FileFormatError(str(path), f"not valid JSON: {exc.msg}", line=exc.lineno) \
+                from None
+        return cls.from_json(doc, str(path))
+
+
+@dataclass(frozen=True)
+class LimitReport:
+    """The largest use of each limit over a sampled trajectory (1.0 = at the limit)."""
+
+    position_margin: float
+    velocity_ratio: float
+    acceleration_ratio: float
+    jerk_ratio: float
+    worst_joint: dict[str, str]
+
+    def within(self, tolerance: float = 1e-6) -> bool:
+        """True when no limit is exceeded (beyond ``tolerance`` relative)."""
+        return (self.position_margin >= -tolerance and self.velocity_ratio <= 1 + tolerance
+                and self.acceleration_ratio <= 1 + tolerance and self.jerk_ratio <= 1 + tolerance)
+
+
+def check_limits(t: Array, q: Array, qd: Array, qdd: Array, limits: MotionLimits,
+                 names: Sequence[str]) -> LimitReport:
+    """How close samples come to the limits; jerk by finite differences of acceleration."""
+    dt = np.diff(t)
+    jerk = np.diff(qdd, axis=0) / dt[:, None] if len(t) > 1 else np.zeros_like(qdd)
+    margin = np.minimum(q - limits.lower, limits.upper - q)
+    ratios = {"velocity": np.abs(qd) / limits.velocity,
+              "acceleration": np.abs(qdd) / limits.acceleration,
+              "jerk": np.abs(jerk) / limits.jerk if len(jerk) else np.zeros((1, len(names)))}
+    worst = {k: names[int(np.argmax(v.max(axis=0)))] for k, v in ratios.items()}
+    worst["position"] = names[int(np.argmin(margin.min(axis=0)))]
+    return LimitReport(float(margin.min()), float(ratios["velocity"].max()),
+                       float(ratios["acceleration"].max()), float(ratios["jerk"].max()), worst)

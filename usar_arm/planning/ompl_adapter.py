@@ -1,0 +1,179 @@
+"""Joint-space path planning with OMPL (the ``ompl`` 2.x wheels, nanobind bindings).
+
+States are checked one by one; edges by a Python motion validator that checks every
+configuration along the edge at a stated resolution in one batched call (coarse points first,
+so a blocked edge usually costs one small batch). OMPL's RNG is process-global and can only be
+seeded before the first sample (an OMPL 2.x limitation): the first plan of a process seeds it,
+so a process's sequence of plans is reproducible.
+
+This is the only module that imports ``ompl``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from usar_arm.errors import InvalidInputError, NoPathError
+from usar_arm.spatial import Array
+
+log = logging.getLogger("usar_arm.planning")
+
+PLANNERS = ("RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "SORRTstar", "BITstar",
+            "AORRTC", "PRM", "PRMstar", "KPIECE1", "BKPIECE1", "LBKPIECE1", "FMT", "BFMT")
+"""Geometric planners of the ompl wheel usable by name."""
+
+_seeded: list[int] = []
+ou.setLogLevel(ou.LogLevel.LOG_WARN)
+
+
+@dataclass(frozen=True)
+class OmplOptions:
+    """Options of a joint-space plan.
+
+    Attributes:
+        planner: one of :data:`PLANNERS` (default RRTConnect, as MoveIt).
+        time_limit: planning budget (s).
+        resolution: largest joint change (rad or m) between checked configurations on an edge.
+        simplify: shortcut and reduce the path (checked edges only).
+        seed: seed of OMPL's RNG (effective for the first plan of a process).
+    """
+
+    planner: str = "RRTConnect"
+    time_limit: float = 2.0
+    resolution: float = 0.01
+    simplify: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise InvalidInputError(f"unknown planner '{self.planner}'; the ompl wheel offers: "
+                                    f"{', '.join(PLANNERS)}")
+        if not self.time_limit > 0:
+            raise InvalidInputError(f"time limit must be > 0 s, got {self.time_limit}")
+        if not self.resolution > 0:
+            raise InvalidInputError(f"edge resolution must be > 0, got {self.resolution}")
+        if self.seed < 0:
+            raise InvalidInputError(f"seed must be >= 0, got {self.seed}")
+
+
+@dataclass(frozen=True)
+class OmplResult:
+    """A path (k, n waypoints, start first) and what it cost."""
+
+    waypoints: Array
+    planner: str
+    planning_seconds: float
+    simplify_seconds: float
+    states_checked: int
+    edges_checked: int
+
+
+def edge_configurations(a: Array, b: Array, resolution: float) -> Array:
+    """Configurations along a -> b, at most ``resolution`` apart per joint, both ends included,
+    ordered coarse-to-fine (ends, middle, quarters, ...) so early entries find most blocks."""
+    steps = max(1, math.ceil(float(np.max(np.abs(b - a))) / resolution))
+    fractions = np.linspace(0.0, 1.0, steps + 1)
+    order = [0, steps]
+    stride = steps
+    seen = {0, steps}
+    while stride > 1:
+        stride //= 2
+        for k in range(stride, steps, max(stride, 1)):
+            if k not in seen:
+                seen.add(k)
+                order.append(k)
+    order += [k for k in range(steps + 1) if k not in seen]
+    return a + (b - a) * fractions[order][:, None]
+
+
+def _stages(count: int) -> list[tuple[int, int]]:
+    """Index ranges of growing batches (8, 32, the rest) over coarse-to-fine configurations."""
+    bounds = [0, min(8, count), min(40, count), count]
+    return [(a, b) for a, b in itertools.pairwise(bounds) if b > a]
+
+
+def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
+              state_valid: Callable[[Array], bool], states_valid: Callable[[Array], Array],
+              options: OmplOptions) -> OmplResult:
+    """A collision-free joint path from ``start`` to ``goal``.
+
+    Args:
+        state_valid: True when one configuration is allowed.
+        states_valid: for (m, n) configurations, True where each is allowed (batched).
+
+    Raises:
+        NoPathError: no path within the time limit (naming the planner and the budget).
+    """
+    if not _seeded:
+        ou.RNG.setSeed(int(options.seed) + 1)  # OMPL refuses 0
+        _seeded.append(int(options.seed))
+    elif _seeded[0] != options.seed:
+        log.debug("OMPL was seeded with %d by this process's first plan; seed %d has no effect",
+                  _seeded[0], options.seed)
+    n = len(start)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(lower[i]))
+        bounds.setHigh(i, float(upper[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    counts = {"states": 0, "edges": 0}
+
+    def to_array(state: object) -> Array:
+        return np.array([state[i] for i in range(n)])  # type: ignore[index]
+
+    def valid(state: object) -> bool:
+        counts["states"] += 1
+        return bool(state_valid(to_array(state)))
+
+    ss.setStateValidityChecker(valid)
+    si = ss.getSpaceInformation()
+
+    class EdgeValidator(ob.MotionValidator):
+        def checkMotion(self, *args: object) -> bool:
+            counts["edges"] += 1
+            qs = edge_configurations(to_array(args[0]), to_array(args[1]), options.resolution)
+            # Coarse-to-fine in stages: a blocked edge is usually caught by the first batch.
+            for lo, hi in _stages(len(qs)):
+                if not np.all(states_valid(qs[lo:hi])):
+                    return False
+            return True
+
+    validator = EdgeValidator(si)
+    si.setMotionValidator(validator)
+    s, g = space.allocState(), space.allocState()
+    for i in range(n):
+        s[i], g[i] = float(start[i]), float(goal[i])
+    ss.setStartAndGoalStates(s, g)
+    ss.setPlanner(getattr(og, options.planner)(si))
+    begin = time.perf_counter()
+    status = ss.solve(options.time_limit)
+    planning = time.perf_counter() - begin
+    if not ss.haveExactSolutionPath():
+        raise NoPathError(options.planner, options.time_limit,
+                          f"{status}; {counts['states']} states and {counts['edges']} edges "
+                          "checked")
+    simplify = 0.0
+    path = ss.getSolutionPath()
+    if options.simplify:
+        begin = time.perf_counter()
+        simplifier = og.PathSimplifier(si)
+        simplifier.reduceVertices(path)
+        simplifier.partialShortcutPath(path)
+        simplifier.reduceVertices(path)
+        simplify = time.perf_counter() - begin
+    waypoints = np.array([to_array(path.getState(k)) for k in range(path.getStateCount())])
+    waypoints[0], waypoints[-1] = start, goal
+    return OmplResult(waypoints, options.planner, planning, simplify, counts["states"],
+                      counts["edges"])
