@@ -22,6 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
+from usar_arm.control.tip import TipSensor, platform_sensor_name, pose_error
+from usar_arm.control.tip_correction import correct_tip
+from usar_arm.control.trajectory import Trajectory
 from usar_arm.discover.session import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
@@ -33,8 +37,9 @@ from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot, robot_from_files, robot_from_record
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
-from usar_arm.spatial import Array
+from usar_arm.spatial import FLIP_X, Array, invert, transform
 from usar_arm.usarsim.client import UsarClient
+from usar_arm.usarsim.numbers import printed_resolution
 
 log = logging.getLogger("usar_arm.arm")
 
@@ -51,6 +56,7 @@ class Arm:
         self.client = client
         self.server = server
         self._scenes: dict[str, tuple[Scene, CollisionWorld]] = {}
+        self._executor: Executor | None = None
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -187,3 +193,102 @@ class Arm:
                            goal=None if joints is None else np.asarray(joints, float),
                            pose=None if pose is None else np.asarray(pose, float),
                            options=opts)
+
+    # ------------------------------------------------------------------ execution
+    def executor(self, options: ExecutionOptions | None = None) -> Executor:
+        """The executor of this connection (its drive model is identified once and kept)."""
+        client = self._live()
+        if self._executor is None:
+            chain = self.robot.chain
+            self._executor = Executor(client, str(self.robot.actuator), self.robot.links,
+                                      chain.joint_names, chain.lower(), chain.upper(), options)
+        elif options is not None:
+            self._executor.options = options
+        return self._executor
+
+    def execute(self, trajectory: Trajectory, *, goal_pose: Array | None = None,
+                tip_correction: bool = False, options: ExecutionOptions | None = None
+                ) -> ExecutionReport:
+        """Stream a trajectory to the arm, settle, and measure where tool0 ended up.
+
+        The tool0 error is measured against ``goal_pose`` (default: the model's tool0 at the
+        trajectory's end) with the server's tip GroundTruth sensor, or computed from the final
+        ASTA values when the server has none. With ``tip_correction`` the joint goal is then
+        corrected through the Jacobian until the sensor sees tool0 within tolerance. When the
+        simulator runs in this process, the true error (its physics) is reported too.
+
+        Raises:
+            ExecutionAbortedError: see :meth:`Executor.execute`.
+        """
+        executor = self.executor(options)
+        report = executor.execute(trajectory)
+        target = self.fk(trajectory.q[-1]) if goal_pose is None else np.asarray(goal_pose)
+        sensor = self._tip_sensor()
+        tip: dict[str, Any] = {}
+        goal = report.goal
+        if sensor is not None:
+            reading = sensor.read()
+            _, err_m, err_rad = pose_error(target, reading.pose)
+            tip = {"tip_source": sensor.source, "tip_error_m": err_m, "tip_error_rad": err_rad,
+                   "tip_sensor_step_m": reading.step_m}
+            if tip_correction:
+                fix = correct_tip(sensor, lambda q: self._sensor_world(sensor, q),
+                                  lambda pose, seed: np.array(
+                                      self.robot.ik_solver().solve(pose, seed).best.q),
+                                  executor.settle, lambda: executor.measure()[0], report.goal,
+                                  target, joint_step=self._joint_step())
+                goal = fix.goal
+                tip.update(tip_error_before_correction_m=fix.before_m,
+                           tip_error_before_correction_rad=fix.before_rad,
+                           tip_error_m=fix.after_m, tip_error_rad=fix.after_rad,
+                           tip_readings=fix.readings,
+                           tip_bias_m=float(np.linalg.norm(fix.bias.position)),
+                           tip_bias_rad=float(np.linalg.norm(fix.bias.rotation)),
+                           tip_bias_consistent=fix.bias.consistent)
+        else:
+            q, _ = executor.measure()
+            _, err_m, err_rad = pose_error(target, self.fk(q))
+            tip = {"tip_source": "forward kinematics of the final ASTA values",
+                   "tip_error_m": err_m, "tip_error_rad": err_rad}
+        truth = self._true_tool0()
+        if truth is not None:
+            _, true_m, true_rad = pose_error(target, truth)
+            tip.update(true_tip_error_m=true_m, true_tip_error_rad=true_rad)
+        final, _ = executor.measure()
+        return replace(report, tip=tip, goal=goal, final_joint_error_rad=np.abs(final - goal))
+
+    def _joint_step(self) -> float:
+        """The resolution the server prints joint values with (0 = full precision)."""
+        line = self._live().latest_line("ASTA", str(self.robot.actuator)) or ""
+        return printed_resolution(line, "Value")
+
+    def _sensor_world(self, sensor: TipSensor, q: Array) -> Array:
+        """The tip sensor frame's world pose (z-down) by the model at ``q``."""
+        return sensor.world_from_tool0(self.fk(q))
+
+    def _sensor_to_tool0(self) -> Array:
+        zero = np.zeros(len(self.joint_names))
+        return np.linalg.inv(self.fk(zero, str(self.robot.tip_sensor))) @ self.fk(zero)
+
+    def _tip_sensor(self) -> TipSensor | None:
+        sensor = self.robot.tip_sensor
+        if self.client is None or not sensor:
+            return None
+        platform = platform_sensor_name(self.client, sensor)
+        if platform is None:
+            return None
+        return TipSensor(self.client, sensor, platform, self._sensor_to_tool0())
+
+    def _true_tool0(self) -> Array | None:
+        """tool0 in base_link from the embedded simulator's own physics (None otherwise)."""
+        if self.server is None or self.client is None or not self.robot.tip_sensor:
+            return None
+        port = self.client.local_port
+        for session in list(self.server.sessions.values()):
+            if session.peer.endswith(f":{port}") and session.robot is not None:
+                world = self.server.world
+                tip = world.tip_pose(session.key, str(self.robot.actuator))
+                flip = transform(FLIP_X)
+                sensor = flip @ invert(world.platform_pose(session.key)) @ tip @ flip
+                return sensor @ self._sensor_to_tool0()
+        return None

@@ -170,6 +170,18 @@ class Trajectory:
 
 
 @dataclass(frozen=True)
+class ExecutedSamples:
+    """Joint values measured on the robot (from ASTA feedback) during an execution.
+
+    Attributes:
+        t: (m,) s since the start of the trajectory. q: (m, n) in the trajectory's joint order.
+    """
+
+    t: Array
+    q: Array
+
+
+@dataclass(frozen=True)
 class LimitReport:
     """The largest use of each limit over a sampled trajectory (1.0 = at the limit)."""
 

@@ -7,11 +7,11 @@ relative to the parent joint). Nothing is converted or rounded; see :mod:`.frame
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 from usar_arm.errors import DescriptionError
 from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.numbers import printed_resolution
 
 Vec3 = tuple[float, float, float]
 
@@ -85,26 +85,6 @@ class WireArm:
     def dof(self) -> int:
         """Number of joints."""
         return len(self.joints)
-
-
-def printed_resolution(line: str, key: str) -> float:
-    """The finest step (10^-decimals) of the numbers printed in ``{key ...}`` blocks of a line.
-
-    >>> printed_resolution("GEO {Location 0.070,0.010,-0.413} {Orientation 3.14,0.00,0.00}",
-    ...                    "Orientation")
-    0.01
-    """
-    decimals = 0
-    for block in re.findall(r"\{" + key + r"\s+([^}]*)\}", line, flags=re.IGNORECASE):
-        for number in block.split(","):
-            text = number.strip().lower()
-            if "e" in text:
-                return 0.0  # exponent notation: full precision
-            if "." in text:
-                decimals = max(decimals, len(text.split(".")[1]))
-    if decimals >= 9:
-        return 0.0
-    return 10.0 ** -decimals
 
 
 def serial_order(parents: dict[int, int]) -> list[int]:

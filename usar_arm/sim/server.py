@@ -27,8 +27,11 @@ from usar_arm.usarsim.numbers import STYLES, NumberStyle
 log = logging.getLogger("usar_arm.sim")
 wire_log = logging.getLogger("usar_arm.sim.wire")
 
-FRAME_S = 0.005
+FRAME_S = 0.002
 """Simulated seconds per physics frame (commands are applied at frame boundaries)."""
+CATCH_UP_FRAMES = 100
+"""Frames (0.2 s of simulated time) the physics may run back to back to catch up with the
+clock; further behind, simulated time is re-anchored (and runs slower than asked)."""
 MAX_CONNECTIONS = 64
 """As UDK's ``[USARBotAPI.BotServer] MaxConnections``."""
 MAX_WRITE_BUFFER = 4 * 1024 * 1024
@@ -262,10 +265,10 @@ class SimServer:
         while True:
             target = sim0 + (loop.time() - wall0) * speed
             frames = 0
-            while self.world.time + FRAME_S / 2 <= target and frames < 20:
+            while self.world.time + FRAME_S / 2 <= target and frames < CATCH_UP_FRAMES:
                 self._frame()
                 frames += 1
-            if frames == 20:  # more than 20 frames behind: re-anchor rather than spiral
+            if frames == CATCH_UP_FRAMES:  # far behind: re-anchor rather than spiral
                 if not behind_logged:
                     log.warning("physics cannot keep up with --speed %g; simulated time now "
                                 "runs slower than asked", speed)

@@ -134,6 +134,11 @@ class UsarClient:
         self.close()
 
     @property
+    def local_port(self) -> int | None:
+        """This end's TCP port (the server sees the client as host:local_port)."""
+        return None if self._sock is None else int(self._sock.getsockname()[1])
+
+    @property
     def connected(self) -> bool:
         """True while the connection is open."""
         return self._sock is not None and self._closed_reason is None
@@ -262,6 +267,11 @@ class UsarClient:
         """The most recent SEN of ``sensor``, if any arrived."""
         rec = self._latest.get(("SEN", sensor))
         return rec.message if rec else None  # type: ignore[return-value]
+
+    def latest_line(self, kind: str, name: str) -> str | None:
+        """The raw text of the latest ``kind`` (ASTA, SEN, EFF) line of component ``name``."""
+        rec = self._latest.get((kind, name))
+        return rec.line if rec else None
 
     def wait_asta(self, actuator: str, after_time: float | None = None,
                   timeout: float | None = None) -> m.Asta:

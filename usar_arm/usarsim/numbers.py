@@ -15,6 +15,8 @@ learnt model to equal the simulator's exactly).
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -116,3 +118,33 @@ UDK = NumberStyle("udk", scalar_decimals=4, fixed_precision=3, vector_decimals=2
 FULL = NumberStyle("full", scalar_decimals=None, fixed_precision=None, vector_decimals=None)
 
 STYLES: dict[str, NumberStyle] = {"udk": UDK, "full": FULL}
+
+
+def printed_resolution(line: str, key: str) -> float:
+    """The finest step (10^-decimals) of the numbers printed in ``{key ...}`` blocks of a line,
+    or 0.0 for full precision: UDK never prints more than 4 decimals, so more (or an exponent)
+    means a full-precision server.
+
+    >>> printed_resolution("GEO {Location 0.070,0.010,-0.413} {Orientation 3.14,0.00,0.00}",
+    ...                    "Orientation")
+    0.01
+    """
+    decimals = 0
+    for block in re.findall(r"\{" + key + r"\s+([^}]*)\}", line, flags=re.IGNORECASE):
+        for number in block.split(","):
+            text = number.strip().lower()
+            if "e" in text:
+                return 0.0  # exponent notation: full precision
+            if "." in text:
+                decimals = max(decimals, len(text.split(".")[1]))
+    if decimals > 4:
+        return 0.0
+    return 10.0 ** -decimals
+
+
+def truncated_midpoint(values: Sequence[float], step: float) -> list[float]:
+    """Best estimates of values printed truncated (toward zero) to ``step``: the middle of the
+    interval each printed value stands for (a printed 0 stays 0)."""
+    if step <= 0:
+        return [float(v) for v in values]
+    return [float(v) + (0.0 if v == 0 else math.copysign(step / 2, v)) for v in values]

@@ -1,0 +1,58 @@
+"""The dither poses the tip correction visits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from usar_arm.control.tip_correction import (
+    DITHERS,
+    LOCK_MARGIN,
+    away_from_lock,
+    dither_pose,
+    model_tolerance,
+)
+from usar_arm.spatial import log_so3, matrix_to_rpy, rpy_to_matrix, transform
+
+angles = st.floats(-3.0, 3.0)
+
+
+@given(angles, st.floats(-1.5707, 1.5707), angles)
+@settings(max_examples=200, deadline=None)
+def test_dithers_split_every_step_and_never_cross_gimbal_lock(r: float, p: float,
+                                                              y: float) -> None:
+    base = transform(rpy_to_matrix((r, p, y)), (1.0, -0.5, -1.2))
+    tilted = away_from_lock(base)
+    assert abs(matrix_to_rpy(tilted[:3, :3])[1]) <= np.pi / 2 - LOCK_MARGIN + 1e-12
+    shifts = []
+    for k in range(DITHERS):
+        pose = dither_pose(tilted, k, 1e-3, 1e-3)
+        assert np.linalg.norm(pose[:3, 3] - tilted[:3, 3]) < 2e-3
+        assert np.linalg.norm(log_so3(pose[:3, :3] @ tilted[:3, :3].T)) < 0.1
+        shifts.append((pose[0, 3] - tilted[0, 3]) / 1e-3)
+    assert sorted(np.round(shifts, 9)) == pytest.approx([k / DITHERS for k in range(DITHERS)])
+
+
+def test_poses_away_from_gimbal_lock_are_left_alone() -> None:
+    base = transform(rpy_to_matrix((0.1, 0.4, -2.0)), (0.3, 0.2, 0.1))
+    assert np.array_equal(away_from_lock(base), base)
+    down = transform(rpy_to_matrix((0.0, np.pi / 2, 0.3)), (0.3, 0.2, 0.1))
+    tilted = away_from_lock(down)
+    turned = np.linalg.norm(log_so3(tilted[:3, :3] @ down[:3, :3].T))
+    assert turned == pytest.approx(LOCK_MARGIN)
+    assert np.array_equal(tilted[:3, 3], down[:3, 3])
+
+
+def test_the_model_tolerance_follows_the_joint_resolution() -> None:
+    def pose(q: np.ndarray) -> np.ndarray:  # a planar 2-link arm, 1 m links
+        rot = rpy_to_matrix((0.0, 0.0, q[0] + q[1]))
+        return transform(rot, (np.cos(q[0]) + np.cos(q[0] + q[1]),
+                               np.sin(q[0]) + np.sin(q[0] + q[1]), 0.0))
+
+    assert model_tolerance(pose, np.zeros(2), 0.0) == (0.0, 0.0)
+    tol_m, tol_rad = model_tolerance(pose, np.zeros(2), 1e-4)
+    # RMS over joints of |d pose/dq| (2 m and 1 m; 1 rad and 1 rad), times the half step, x2.
+    assert tol_m == pytest.approx(1e-4 * np.sqrt(5), rel=1e-4)
+    assert tol_rad == pytest.approx(1e-4 * np.sqrt(2), rel=1e-4)

@@ -1,0 +1,345 @@
+"""Streaming a trajectory to the arm: ACT out at a steady rate, ASTA in, measured and safe.
+
+* **Streaming**: full ACT lines (0-based links) every 1/rate s on a monotonic clock; deadlines are
+  ``t0 + k / rate`` (no drift); each target is the trajectory's position plus the drive model's
+  lag compensation (:mod:`.drive`), always clamped into the joint limits.
+* **Feedback**: every ASTA (10 Hz, 1-based links) is compared with where the trajectory was when
+  it arrived; the largest difference is the tracking error.
+* **Settling**: after the last point the final target is held and nudged (a bounded integral
+  correction) until every joint is within the tolerance: a stiffness-only drive sags under
+  gravity, and the correction removes that.
+* **Safety**: too large a tracking error, feedback that stops, a dropped connection or Ctrl-C
+  stop the motion: the arm is told to hold where it is (when the connection still allows) and
+  :class:`~usar_arm.errors.ExecutionAbortedError` says which joint, by how much, and when.
+"""
+
+from __future__ import annotations
+
+import gc
+import logging
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from usar_arm.control.drive import DriveModel, excitation, fit
+from usar_arm.control.trajectory import ExecutedSamples, Trajectory
+from usar_arm.errors import ConnectionLostError, ExecutionAbortedError, ResponseTimeoutError
+from usar_arm.spatial import Array
+from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.client import Received, UsarClient
+
+log = logging.getLogger("usar_arm.control")
+
+
+@dataclass(frozen=True)
+class ExecutionOptions:
+    """How to execute.
+
+    Attributes:
+        rate_hz: ACT lines per second (default 100).
+        settle_tolerance: rad (or m) every joint must reach after the motion (default 0.0001,
+            the resolution UDK prints ASTA values with: 1e-4 rad at 2 m is 0.2 mm).
+        settle_timeout: s to reach it.
+        max_tracking_error: rad (or m): a larger error during the motion aborts it.
+        feedback_timeout: s without ASTA that aborts the motion.
+        start_tolerance: rad (or m): the arm must be this close to the trajectory's start.
+        correction_limit: rad (or m): the largest settle correction of a target.
+        feedforward: compensate each drive's lag (identified on the first execution).
+    """
+
+    rate_hz: float = 100.0
+    settle_tolerance: float = 0.0001
+    settle_timeout: float = 5.0
+    max_tracking_error: float = 0.1
+    feedback_timeout: float = 0.5
+    start_tolerance: float = 0.05
+    correction_limit: float = 0.05
+    feedforward: bool = True
+
+
+@dataclass(frozen=True)
+class ExecutionReport:
+    """What happened on the arm.
+
+    Attributes:
+        final_joint_error_rad: per joint, |measured - goal| after settling (rad or m).
+        max_tracking_error_rad: the largest |measured - planned| during the motion.
+        tracking_error_per_joint: its per-joint maxima.
+        rate_hz: ACT lines per second achieved; jitter_p50_ms, jitter_p99_ms: how far the send
+            times strayed from their deadlines.
+        settled: every joint reached the tolerance; settle_seconds: how long that took.
+        goal: the joint goal held at the end (the trajectory's last point, plus any tip
+            correction); executed: the ASTA samples (time since the start, joints).
+        tip: tip figures added by the caller (tip_error_m, tip_error_rad, ...).
+    """
+
+    joint_names: tuple[str, ...]
+    final_joint_error_rad: Array
+    max_tracking_error_rad: float
+    tracking_error_per_joint: Array
+    rate_hz: float
+    jitter_p50_ms: float
+    jitter_p99_ms: float
+    duration_s: float
+    settled: bool
+    settle_seconds: float
+    goal: Array
+    executed: ExecutedSamples
+    tip: dict[str, Any] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, Any]:
+        """The stable keys ``--json`` prints."""
+        return {"final_joint_error_rad": float(np.max(self.final_joint_error_rad)),
+                "final_joint_error_per_joint_rad": self.final_joint_error_rad.tolist(),
+                "max_tracking_error_rad": self.max_tracking_error_rad,
+                "tracking_error_per_joint_rad": self.tracking_error_per_joint.tolist(),
+                "rate_hz": self.rate_hz, "jitter_p50_ms": self.jitter_p50_ms,
+                "jitter_p99_ms": self.jitter_p99_ms, "duration_s": self.duration_s,
+                "settled": self.settled, "settle_seconds": self.settle_seconds,
+                "tip_error_m": self.tip.get("tip_error_m"),
+                "tip_error_rad": self.tip.get("tip_error_rad"),
+                **{k: v for k, v in self.tip.items() if k not in ("tip_error_m", "tip_error_rad")}}
+
+
+class _Feedback:
+    """ASTA samples of one actuator, as (receipt time, joint values in joint order)."""
+
+    def __init__(self, actuator: str, links: tuple[int, ...]):
+        self.actuator = actuator
+        self.links = links
+        self.times: list[float] = []
+        self.values: list[Array] = []
+        self.sim_times: list[float] = []
+
+    def __call__(self, rec: Received) -> None:
+        msg = rec.message
+        if isinstance(msg, m.Asta) and msg.name.lower() == self.actuator.lower():
+            values = dict(msg.values)
+            if all(k in values for k in self.links):
+                self.values.append(np.array([values[k] for k in self.links]))
+                self.times.append(rec.wall_time)
+                self.sim_times.append(msg.time)
+
+    def sampled_at(self, i: int) -> float:
+        """When (perf_counter s) sample ``i`` was taken: its simulated time plus the smallest
+        receipt latency seen (the server's clock runs at wall speed; receipt times alone carry
+        a few ms of jitter, which at 3 rad/s is a 0.01 rad error)."""
+        lo = max(0, i - 20)  # a recent window: the server may re-anchor its clock when busy
+        offset = min(t - s for t, s in zip(self.times[lo:i + 21], self.sim_times[lo:i + 21],
+                                          strict=True))
+        return self.sim_times[i] + offset
+
+
+class Executor:
+    """Executes trajectories on one actuator of a connected server.
+
+    Args:
+        client: the connection that owns the robot.
+        actuator: its name (ACT/ASTA). links: USARSim link (1-based) of each joint, in order.
+        names, lower, upper: joint names and limits (targets are always clamped into them).
+        options: rates, tolerances, bounds.
+    """
+
+    def __init__(self, client: UsarClient, actuator: str, links: tuple[int, ...],
+                 names: tuple[str, ...], lower: Array, upper: Array,
+                 options: ExecutionOptions | None = None):
+        self.client = client
+        self.actuator = actuator
+        self.links = links
+        self.names = names
+        self.lower = np.asarray(lower, float)
+        self.upper = np.asarray(upper, float)
+        self.options = options or ExecutionOptions()
+        self.drive: DriveModel | None = None
+        self._act_index = [k - 1 for k in links]
+
+    # ------------------------------------------------------------------ low level
+    def send(self, targets: Array) -> None:
+        """One full ACT line (targets clamped into the limits)."""
+        u = np.clip(targets, self.lower, self.upper)
+        self.client.act(self.actuator, dict(zip(self._act_index, u.tolist(), strict=True)))
+
+    def measure(self, timeout: float = 2.0, after: float | None = None) -> tuple[Array, float]:
+        """The joints of the next ASTA (newer than simulated time ``after``) and its time."""
+        asta = self.client.wait_asta(self.actuator, after_time=after, timeout=timeout)
+        values = dict(asta.values)
+        return np.array([values[k] for k in self.links]), asta.time
+
+    def hold(self) -> None:
+        """Tell the arm to stay where it is now (best effort)."""
+        try:
+            q, _ = self.measure(timeout=0.3)
+            self.send(q)
+        except (ConnectionLostError, ResponseTimeoutError, OSError) as exc:
+            log.warning("could not command a hold: %s", exc)
+
+    # ------------------------------------------------------------------ identification
+    def identify(self, duration: float = 2.0) -> DriveModel:
+        """Learn each drive's lag and sag from a small swing around the current position
+        (about 0.03 rad / 0.01 m), streamed like a trajectory."""
+        start, _ = self.measure()
+        amplitude = np.where(self.upper - self.lower > 0.5, 0.03, 0.01)
+        _, commands = excitation(start, self.lower, self.upper, amplitude, duration)
+        feedback = _Feedback(self.actuator, self.links)
+        sent = self._stream(commands, feedback)
+        self._settle_to(commands[-1], settle_timeout=1.0, feedback=None)
+        sample_times = np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) \
+            - sent[0]
+        samples = np.array(feedback.values)
+        usable = sample_times >= 0
+        self.drive = fit(sent - sent[0], commands, sample_times[usable], samples[usable])
+        log.info("drive lags %s s (fit rms %s)", np.round(self.drive.lag, 3),
+                 np.round(self.drive.residual, 5))
+        return self.drive
+
+    def _stream(self, commands: Array, feedback: _Feedback) -> Array:
+        """Send rows of ``commands`` at the rate; return the send times (perf_counter)."""
+        unsubscribe = self.client.subscribe(feedback)
+        dt = 1.0 / self.options.rate_hz
+        sent = np.empty(len(commands))
+        old = sys.getswitchinterval()
+        sys.setswitchinterval(0.0005)  # the embedded simulator shares the GIL: take turns often
+        gc.disable()  # a collection pause would be a late command
+        try:
+            t0 = time.perf_counter()
+            for k, u in enumerate(commands):
+                _sleep_until(t0 + k * dt)
+                sent[k] = time.perf_counter()
+                self.send(u)
+        finally:
+            gc.enable()
+            sys.setswitchinterval(old)
+            unsubscribe()
+        return sent
+
+    # ------------------------------------------------------------------ execution
+    def execute(self, trajectory: Trajectory, goal: Array | None = None) -> ExecutionReport:
+        """Stream ``trajectory``, then settle on ``goal`` (default: its last point).
+
+        Raises:
+            ExecutionAbortedError: the arm is not at the start, the tracking error or the
+                feedback age passed its bound, the connection dropped, or Ctrl-C; the arm was
+                told to hold where it is.
+        """
+        opts = self.options
+        q_now, _ = self.measure()
+        gap = np.abs(q_now - trajectory.q[0])
+        if np.max(gap) > opts.start_tolerance:
+            j = int(np.argmax(gap))
+            raise ExecutionAbortedError(
+                f"the arm is not at the trajectory's start (tolerance {opts.start_tolerance})",
+                self.names[j], float(gap[j]), 0.0)
+        if opts.feedforward and self.drive is None:
+            self.identify()
+        drive = self.drive if opts.feedforward and self.drive else DriveModel.none(len(q_now))
+        feedback = _Feedback(self.actuator, self.links)
+        unsubscribe = self.client.subscribe(feedback)
+        dt = 1.0 / opts.rate_hz
+        count = int(np.floor(trajectory.duration / dt)) + 1
+        sends = np.empty(count)
+        deadlines = np.empty(count)
+        worst = np.zeros(len(q_now))
+        checked = 0
+        old = sys.getswitchinterval()
+        sys.setswitchinterval(0.0005)
+        gc.disable()
+        t0 = time.perf_counter()
+        try:
+            for k in range(count):
+                deadlines[k] = t0 + k * dt
+                _sleep_until(deadlines[k])
+                # Each target holds for dt (a zero-order hold): aim at the middle of its period.
+                q, v = trajectory.at(k * dt + dt / 2)
+                sends[k] = time.perf_counter()
+                self.send(drive.command(q, v))
+                checked = self._watch(trajectory, feedback, t0, checked, worst)
+        except KeyboardInterrupt:
+            self.hold()
+            raise ExecutionAbortedError("interrupted (Ctrl-C)",
+                                        at_time_s=time.perf_counter() - t0) from None
+        except ConnectionLostError as exc:
+            raise ExecutionAbortedError(f"the connection dropped: {exc}",
+                                        at_time_s=time.perf_counter() - t0) from exc
+        finally:
+            gc.enable()
+            sys.setswitchinterval(old)
+        goal = trajectory.q[-1] if goal is None else np.asarray(goal, float)
+        try:
+            settled, seconds = self._settle_to(goal, opts.settle_timeout, feedback,
+                                               start=goal - drive.offset)
+            self._watch(trajectory, feedback, t0, checked, worst)
+        finally:
+            unsubscribe()
+        final, _ = self.measure()
+        jitter = np.abs(sends - deadlines) * 1000
+        executed = ExecutedSamples(
+            np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) - t0,
+            np.array(feedback.values).reshape(-1, len(q_now)))
+        return ExecutionReport(
+            self.names, np.abs(final - goal), float(np.max(worst)), worst.copy(),
+            (count - 1) / (sends[-1] - sends[0]) if count > 1 else 0.0,
+            float(np.percentile(jitter, 50)), float(np.percentile(jitter, 99)),
+            float(sends[-1] - t0), settled, seconds, goal, executed)
+
+    def _watch(self, trajectory: Trajectory, feedback: _Feedback, t0: float, checked: int,
+               worst: Array) -> int:
+        """Check the ASTA samples that arrived since ``checked``; abort on a bound."""
+        now = time.perf_counter()
+        last = feedback.times[-1] if feedback.times else t0
+        if now - last > self.options.feedback_timeout and now - t0 > self.options.feedback_timeout:
+            self.hold()
+            raise ExecutionAbortedError(
+                f"no ASTA feedback for {now - last:.2f} s (bound "
+                f"{self.options.feedback_timeout} s)", at_time_s=now - t0)
+        for i in range(checked, len(feedback.times)):
+            t = feedback.sampled_at(i) - t0
+            if t < 0 or t > trajectory.duration:
+                continue
+            error = np.abs(feedback.values[i] - trajectory.at(t)[0])
+            np.maximum(worst, error, out=worst)
+            j = int(np.argmax(error))
+            if error[j] > self.options.max_tracking_error:
+                self.hold()
+                raise ExecutionAbortedError(
+                    f"tracking error above the bound {self.options.max_tracking_error}",
+                    self.names[j], float(error[j]), t)
+        return len(feedback.times)
+
+    def _settle_to(self, goal: Array, settle_timeout: float, feedback: _Feedback | None,
+                   start: Array | None = None) -> tuple[bool, float]:
+        """Hold ``goal``, nudging the target by the measured error (half of it per ASTA,
+        bounded by ``correction_limit``), until two ASTAs in a row are within tolerance."""
+        tol = self.options.settle_tolerance
+        target = goal.copy() if start is None else start.copy()
+        self.send(target)
+        begin = time.perf_counter()
+        good = 0
+        after: float | None = None
+        while time.perf_counter() - begin < settle_timeout:
+            q, after = self.measure(timeout=self.options.feedback_timeout + 0.5, after=after)
+            error = q - goal
+            good = good + 1 if np.max(np.abs(error)) <= tol else 0
+            if good >= 2:
+                return True, time.perf_counter() - begin
+            target = np.clip(target - 0.5 * error, goal - self.options.correction_limit,
+                             goal + self.options.correction_limit)
+            self.send(target)
+        return False, time.perf_counter() - begin
+
+    def settle(self, goal: Array) -> tuple[bool, float]:
+        """Bring the joints to ``goal`` (a small move) and settle there."""
+        drive = self.drive or DriveModel.none(len(goal))
+        return self._settle_to(np.asarray(goal, float), self.options.settle_timeout, None,
+                               start=np.asarray(goal, float) - drive.offset)
+
+
+def _sleep_until(deadline: float) -> None:
+    """Sleep until ``deadline`` (perf_counter s): coarse sleep, then short yields."""
+    remaining = deadline - time.perf_counter()
+    if remaining > 0.001:
+        time.sleep(remaining - 0.0008)
+    while time.perf_counter() < deadline:
+        time.sleep(0)

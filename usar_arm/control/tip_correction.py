@@ -1,0 +1,149 @@
+"""Tip correction: move the joint goal until the *real* tool0 is where it should be.
+
+The description learnt through UDK is off by about a millimetre and a few tenths of a mrad at
+the tool (UDK prints link offsets to the millimetre and orientations to 0.01 rad). Near one
+pose that error is a nearly constant bias, which the tip GroundTruth sensor can measure -- but
+it too prints truncated numbers (1 mm, 0.001 rad). So the arm visits :data:`DITHERS` poses a
+fraction of a printed step apart in every number (:func:`dither_pose`), each reading bounds the
+bias to a box, and :mod:`.tip_bias` intersects the boxes. The joint goal is then solved for the
+target minus the bias.
+
+Near gimbal lock (the sensor's x axis vertical, as for a tool pointing down) roll and yaw
+separately are not smooth functions of the pose, so the readings are taken with the sensor
+tilted :data:`LOCK_MARGIN` away from it; the bias changes by far less than a step over that
+tilt.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from usar_arm.control.tip import RawReading, TipSensor, pose_error
+from usar_arm.control.tip_bias import BiasEstimate, Reading, estimate_bias
+from usar_arm.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix, transform
+
+DITHERS = 6
+"""Readings per bias estimate (see :func:`dither_pose`)."""
+LOCK_MARGIN = 0.05
+"""rad: readings are taken with the sensor's pitch at least this far from +-pi/2."""
+
+
+@dataclass(frozen=True)
+class TipCorrection:
+    """The outcome of :func:`correct_tip`.
+
+    Attributes:
+        goal: the joint goal finally held.
+        before_m, before_rad: tool0's error (m, rad) read before the correction (each printed
+            number at the middle of its step).
+        after_m, after_rad: tool0's error estimated after it (the model at the measured joints
+            plus the bias).
+        readings: sensor readings taken.
+        bias: the estimate, with its uncertainty.
+    """
+
+    goal: Array
+    before_m: float
+    before_rad: float
+    after_m: float
+    after_rad: float
+    readings: int
+    bias: BiasEstimate
+
+
+def away_from_lock(world: Array, margin: float = LOCK_MARGIN) -> Array:
+    """``world`` (a z-down world pose) with its pitch moved to at most pi/2 - ``margin`` in
+    magnitude (the sensor tilted about its origin, toward its current yaw)."""
+    roll, pitch, yaw = matrix_to_rpy(world[:3, :3])
+    limit = np.pi / 2 - margin
+    if abs(pitch) <= limit:
+        return world.copy()
+    return transform(rpy_to_matrix((roll, float(np.copysign(limit, pitch)), yaw)), world[:3, 3])
+
+
+def dither_pose(world: Array, k: int, step_m: float, step_rad: float) -> Array:
+    """``world`` (a z-down world pose) moved for the ``k``-th of :data:`DITHERS` readings, so
+    that together the readings split every printed number's step-wide box into pieces.
+
+    Location x, y, z and yaw move by k/N of a step, pitch by another ordering of the same
+    fractions (toward zero), and roll by k/N against pitch's sign. When the sensor's x axis is
+    near vertical the rotation about the vertical shows only in yaw - sign(pitch) * roll,
+    which a reading bounds to two steps; it moves by 2k/N steps, splitting those boxes as
+    finely.
+    """
+    f = k / DITHERS
+    g = (k * (DITHERS - 1)) % DITHERS / DITHERS
+    roll, pitch, yaw = matrix_to_rpy(world[:3, :3])
+    sign = 1.0 if pitch >= 0 else -1.0
+    rpy = (roll - sign * f * step_rad, pitch - sign * g * step_rad, yaw + f * step_rad)
+    return transform(rpy_to_matrix(rpy), world[:3, 3] + f * step_m)
+
+
+def model_tolerance(model_sensor_pose: Callable[[Array], Array], q: Array,
+                    joint_step: float) -> tuple[float, float]:
+    """How far (m, rad) the model's sensor pose may move when each joint is off by up to half
+    ``joint_step`` (the measured joints' printed resolution): twice the RMS over the joints."""
+    if joint_step <= 0:
+        return 0.0, 0.0
+    h = 1e-6
+    base = model_sensor_pose(q)
+    dp, dw = [], []
+    for i in range(len(q)):
+        dq = q.copy()
+        dq[i] += h
+        moved = model_sensor_pose(dq)
+        dp.append(np.linalg.norm(moved[:3, 3] - base[:3, 3]) / h)
+        dw.append(np.linalg.norm(log_so3(moved[:3, :3] @ base[:3, :3].T)) / h)
+    half = joint_step / 2
+    return 2 * half * float(np.linalg.norm(dp)), 2 * half * float(np.linalg.norm(dw))
+
+
+def correct_tip(sensor: TipSensor, model_sensor_pose: Callable[[Array], Array],
+                solve: Callable[[Array, Array], Array], settle: Callable[[Array], object],
+                measure: Callable[[], Array], goal: Array, target: Array,
+                joint_step: float = 0.0) -> TipCorrection:
+    """Move the joint goal so that the real tool0 reaches ``target`` (4x4, base_link).
+
+    Args:
+        sensor: the tip sensor (its platform pose is refreshed by every reading).
+        model_sensor_pose: q -> the sensor frame's world pose (4x4, z-down) by the model.
+        solve: (tool0 pose in base_link, seed q) -> joint values (IK on the model).
+        settle: moves to a joint goal and waits there. measure: the joints now (rad, m).
+        goal: the joint goal the arm holds now. joint_step: the measured joints' printed
+            resolution (0 = exact).
+    """
+    first = sensor.read_raw()
+    _, before_m, before_rad = pose_error(target, sensor.tool0_from_raw(first))
+
+    def reading(raw: RawReading, q: Array) -> Reading:
+        tol_m, tol_rad = model_tolerance(model_sensor_pose, q, joint_step)
+        return Reading(raw.location, raw.orientation, raw.step_m, raw.step_rad,
+                       model_sensor_pose(q), tol_m, tol_rad)
+
+    readings = [reading(first, measure())]
+    taken = 1
+    if first.step_m > 0 or first.step_rad > 0:
+        base = model_sensor_pose(goal)
+        tilted = away_from_lock(base)
+        if not np.allclose(tilted, base):
+            readings = []  # the first reading is near gimbal lock: tilt for all of them
+        for k in range(len(readings), DITHERS):
+            world = dither_pose(tilted, k, first.step_m, first.step_rad)
+            settle(solve(sensor.tool0_from_world(world), goal))
+            raw = sensor.read_raw(after=sensor.read_raw().time)
+            readings.append(reading(raw, measure()))
+            taken += 1
+    bias = estimate_bias(readings)
+    # The sensor pose the model must show so that the real one is the target's.
+    wanted = sensor.world_from_tool0(target)
+    shown = transform(exp_so3(-bias.rotation) @ wanted[:3, :3], wanted[:3, 3] - bias.position)
+    new_goal = solve(sensor.tool0_from_world(shown), goal)
+    settle(new_goal)
+    predicted = model_sensor_pose(measure())
+    estimate = transform(exp_so3(bias.rotation) @ predicted[:3, :3],
+                         predicted[:3, 3] + bias.position)
+    _, after_m, after_rad = pose_error(target, sensor.tool0_from_world(estimate))
+    return TipCorrection(new_goal, before_m, before_rad, after_m, after_rad, taken, bias)
