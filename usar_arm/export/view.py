@@ -1,0 +1,256 @@
+"""Interactive 3D replays in a web browser, with viser (the optional extra ``usar-arm[viz]``).
+
+:func:`serve_replay` serves a live page (play/pause, loop, speed and a time slider);
+:func:`export_html` writes one self-contained HTML file that replays the motion on a timeline,
+viewable offline. The arm comes from its URDF text (yourdfpy), obstacles from a
+:class:`~usar_arm.planning.scene.Scene`; lengths in m, times in s.
+
+viser is imported lazily, so the rest of the package works without it. viser prints a banner when
+a server starts and a line when it stops, whatever its ``verbose`` flag: :func:`export_html`, which
+only starts a server to record the scene, silences both (the library never prints).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from usar_arm.control.trajectory import Trajectory
+from usar_arm.errors import InvalidInputError
+from usar_arm.fileio import write_atomic
+from usar_arm.planning.scene import Box, CylinderShape, Scene, Sphere
+from usar_arm.spatial import Array, quat_from_matrix
+
+log = logging.getLogger("usar_arm.export.view")
+
+OBSTACLE_RGB = (150, 160, 175)
+OBSTACLE_OPACITY = 0.4
+PATH_RGB = (31, 79, 191)
+
+
+def _viser() -> Any:
+    """The viser module, or an error that says how to install it."""
+    try:
+        import viser
+        import viser.extras
+    except ImportError as exc:
+        raise InvalidInputError(f"the 3D viewer needs viser ({exc.msg}); install with "
+                                "pip install 'usar-arm[viz]'") from None
+    return viser
+
+
+def _load_urdf(urdf_text: str) -> Any:
+    import yourdfpy
+
+    try:
+        return yourdfpy.URDF.load(io.StringIO(urdf_text), build_scene_graph=True,
+                                  load_meshes=False, build_collision_scene_graph=False,
+                                  load_collision_meshes=False)
+    except Exception as exc:  # yourdfpy raises assorted errors for malformed XML
+        raise InvalidInputError(f"cannot read the URDF for the viewer: {exc}") from None
+
+
+@dataclass
+class _Replay:
+    """The arm in a viser scene, posed from trajectory time (s)."""
+
+    robot: Any
+    trajectory: Trajectory
+    columns: Array
+
+    def show(self, time_s: float) -> None:
+        self.robot.update_cfg(self.trajectory.at(time_s)[0][self.columns])
+
+
+def _columns(urdf: Any, trajectory: Trajectory) -> Array:
+    """Trajectory column of each actuated URDF joint."""
+    names = list(urdf.actuated_joint_names)
+    missing = [n for n in names if n not in trajectory.joint_names]
+    if missing:
+        raise InvalidInputError(f"the trajectory has no values for the URDF's joints "
+                                f"{', '.join(missing)} "
+                                f"(it has {', '.join(trajectory.joint_names)})")
+    return np.array([trajectory.joint_names.index(n) for n in names])
+
+
+def _tool_path(urdf: Any, replay: _Replay, frame: str = "tool0", points: int = 200) -> Array:
+    """tool0 positions (m) along the trajectory, by the URDF's forward kinematics."""
+    if frame not in urdf.link_map:
+        return np.zeros((0, 3))
+    out = []
+    for s in np.linspace(0.0, replay.trajectory.duration, points):
+        urdf.update_cfg(replay.trajectory.at(s)[0][replay.columns])
+        out.append(urdf.get_transform(frame, urdf.base_link)[:3, 3])
+    return np.array(out)
+
+
+def _add_obstacles(server: Any, scene: Scene) -> None:
+    import trimesh
+
+    for obj in scene.objects:
+        name, s = f"/scene/{obj.name}", obj.shape
+        pose = {"wxyz": quat_from_matrix(obj.pose[:3, :3]), "position": obj.pose[:3, 3]}
+        look = {"color": OBSTACLE_RGB, "opacity": OBSTACLE_OPACITY}
+        if isinstance(s, Box):
+            server.scene.add_box(name, dimensions=s.size, **look, **pose)
+        elif isinstance(s, Sphere):
+            server.scene.add_icosphere(name, radius=s.radius, **look, **pose)
+        else:
+            mesh = (trimesh.creation.cylinder(radius=s.radius, height=s.length, sections=32)
+                    if isinstance(s, CylinderShape) else trimesh.Trimesh(s.vertices, s.faces))
+            server.scene.add_mesh_simple(name, np.asarray(mesh.vertices, np.float32),
+                                         np.asarray(mesh.faces, np.uint32), flat_shading=True,
+                                         side="double", **look, **pose)
+
+
+def _build(server: Any, urdf_text: str, trajectory: Trajectory, scene: Scene | None) -> _Replay:
+    """Put the arm, the obstacles, the ground grid, the tool path and a camera in the scene."""
+    viser = _viser()
+    urdf = _load_urdf(urdf_text)
+    replay = _Replay(None, trajectory, _columns(urdf, trajectory))
+    path = _tool_path(urdf, replay)
+    server.scene.set_up_direction("+z")
+    server.scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25, section_size=1.0,
+                          position=(0.0, 0.0, 0.001))
+    server.scene.add_frame("/base_link_axes", axes_length=0.25, axes_radius=0.008)
+    if scene is not None:
+        _add_obstacles(server, scene)
+    if len(path) > 1:
+        server.scene.add_spline_catmull_rom("/tool0_path", path, color=PATH_RGB,
+                                            thickness=0.012)
+    replay.robot = viser.extras.ViserUrdf(server, urdf, root_node_name="/arm")
+    replay.show(0.0)
+    centre = np.vstack([path, [[0.0, 0.0, 0.8]]]).mean(axis=0) if len(path) else np.zeros(3)
+    server.initial_camera.look_at = centre
+    server.initial_camera.position = centre + np.array([2.2, -3.2, 1.6])
+    return replay
+
+
+@contextlib.contextmanager
+def _quiet() -> Any:
+    """Silence viser's unconditional banner (it writes to sys.stdout via rich)."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield
+
+
+@dataclass
+class ReplayServer:
+    """A running replay page. ``url`` to open; :meth:`stop` ends it; :meth:`wait` blocks."""
+
+    url: str
+    server: Any
+    _stop: threading.Event = field(default_factory=threading.Event)
+    _thread: threading.Thread | None = None
+
+    def stop(self) -> None:
+        """Stop the player thread and the web server (frees the port); safe to call twice."""
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        with _quiet():
+            self.server.stop()
+
+    def wait(self) -> None:
+        """Serve until :meth:`stop` is called from another thread or Ctrl-C."""
+        try:
+            while not self._stop.wait(0.5):
+                pass
+        except KeyboardInterrupt:
+            self.stop()
+
+    def __enter__(self) -> ReplayServer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = None,
+                 host: str = "127.0.0.1", port: int = 8080, loop: bool = True,
+                 fps: float = 30.0) -> ReplayServer:
+    """Serve an interactive page replaying ``trajectory`` in real time (returns at once).
+
+    The page shows the arm, the scene's obstacles and the tool0 path, with a play/pause box, a
+    loop box, a speed slider (x real time) and a time slider (s) to scrub. ``port`` 0 picks a
+    free port (the next free one is used if ``port`` is taken); ``fps`` is the update rate (Hz).
+
+    Returns:
+        a :class:`ReplayServer` (``url``, ``stop()``, ``wait()``; also a context manager).
+    """
+    viser = _viser()
+    with _quiet():
+        server = viser.ViserServer(host=host, port=port, verbose=False)
+    try:
+        replay = _build(server, urdf_text, trajectory, scene)
+        duration = trajectory.duration
+        gui = server.gui
+        gui.add_markdown(f"**{len(trajectory.joint_names)} joints**, {duration:.2f} s "
+                         f"({trajectory.motion.upper()}, {trajectory.mode})")
+        playing = gui.add_checkbox("Play", initial_value=True)
+        looping = gui.add_checkbox("Loop", initial_value=loop)
+        speed = gui.add_slider("Speed (x)", min=0.1, max=2.0, step=0.1, initial_value=1.0)
+        slider = gui.add_slider("Time (s)", min=0.0, max=max(duration, 1e-3), step=0.01,
+                                initial_value=0.0)
+    except BaseException:
+        with _quiet():
+            server.stop()
+        raise
+    slider.on_update(lambda _event: replay.show(float(slider.value)))
+    handle = ReplayServer(f"http://{host}:{server.get_port()}", server)
+
+    def play() -> None:
+        last = time.perf_counter()
+        while not handle._stop.wait(1.0 / fps):
+            now = time.perf_counter()
+            step, last = (now - last) * float(speed.value), now
+            if not playing.value:
+                continue
+            t = float(slider.value) + step
+            if t > duration:
+                t = 0.0 if looping.value else duration
+                playing.value = bool(looping.value)
+            slider.value = t
+
+    handle._thread = threading.Thread(target=play, name="usar-arm-replay", daemon=True)
+    handle._thread.start()
+    log.info("replay served at %s", handle.url)
+    return handle
+
+
+def export_html(path: str | Path, urdf_text: str, trajectory: Trajectory,
+                scene: Scene | None = None, fps: float = 30.0) -> Path:
+    """Write a self-contained HTML page that replays ``trajectory`` (no server needed).
+
+    viser records the scene and one arm pose every 1/``fps`` s (Hz) of trajectory time; its
+    embedded player shows a timeline. A loopback server runs on a free port while recording.
+
+    Returns:
+        ``path`` (written atomically).
+    """
+    if fps <= 0:
+        raise InvalidInputError(f"fps must be positive, got {fps}")
+    viser = _viser()
+    with _quiet():
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+        try:
+            replay = _build(server, urdf_text, trajectory, scene)
+            recorder = server.get_scene_serializer()
+            frames = max(2, int(np.ceil(trajectory.duration * fps)) + 1)
+            for s in np.linspace(0.0, trajectory.duration, frames):
+                replay.show(float(s))
+                recorder.insert_sleep(trajectory.duration / (frames - 1))
+            html = recorder.as_html()
+        finally:
+            server.stop()
+    log.info("wrote a %d-frame replay (%.0f kB) to %s", frames, len(html) / 1e3, path)
+    return write_atomic(path, html)
