@@ -28,6 +28,7 @@ from usar_arm.control.tip_correction import correct_tip
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.discover.session import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
+from usar_arm.fileio import write_tree_atomic
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.pipeline import DescribeOptions
 from usar_arm.planning.collision import CollisionWorld
@@ -133,6 +134,13 @@ class Arm:
         """The SRDF's home configuration."""
         return np.array(self.robot.named_state("home"))
 
+    def write_description(self, out_dir: str | Path) -> list[Path]:
+        """Write the description's files (URDF, SRDF, joint limits, discovery notes) into
+        ``out_dir``, atomically; returns their paths."""
+        if not self.robot.files:
+            raise InvalidInputError("this arm's description has no files to write")
+        return write_tree_atomic(out_dir, self.robot.files)
+
     def fk(self, q: Array, frame: str = "tool0") -> Array:
         """4x4 pose of ``frame`` in base_link at ``q``."""
         return self.robot.kinematics.frame_pose(np.asarray(q, float), frame)
@@ -213,17 +221,24 @@ class Arm:
 
         The tool0 error is measured against ``goal_pose`` (default: the model's tool0 at the
         trajectory's end) with the server's tip GroundTruth sensor, or computed from the final
-        ASTA values when the server has none. With ``tip_correction`` the joint goal is then
-        corrected through the Jacobian until the sensor sees tool0 within tolerance. When the
-        simulator runs in this process, the true error (its physics) is reported too.
+        ASTA values when the server has none. With ``tip_correction`` (a tip sensor is needed)
+        the model's tool bias is measured and the joint goal re-solved until the sensor agrees
+        that tool0 is within 0.5 mm / 0.5 mrad (:mod:`usar_arm.control.tip_correction`; about
+        8 s per move). When the simulator runs in this process, the true error (its physics)
+        is reported too.
 
         Raises:
             ExecutionAbortedError: see :meth:`Executor.execute`.
         """
         executor = self.executor(options)
+        sensor = self._tip_sensor()
+        if tip_correction and sensor is None:
+            raise InvalidInputError(
+                "tip correction needs the arm's tip GroundTruth sensor, and the server reports "
+                f"none for {self.robot.actuator} (it streams "
+                f"{', '.join(self._live().known_components()) or 'no sensors'})")
         report = executor.execute(trajectory)
         target = self.fk(trajectory.q[-1]) if goal_pose is None else np.asarray(goal_pose)
-        sensor = self._tip_sensor()
         tip: dict[str, Any] = {}
         goal = report.goal
         if sensor is not None:
@@ -244,7 +259,8 @@ class Arm:
                            tip_readings=fix.readings,
                            tip_bias_m=float(np.linalg.norm(fix.bias.position)),
                            tip_bias_rad=float(np.linalg.norm(fix.bias.rotation)),
-                           tip_bias_consistent=fix.bias.consistent)
+                           tip_bias_consistent=fix.bias.consistent,
+                           tip_correction_rounds=fix.rounds, tip_verified=fix.verified)
         else:
             q, _ = executor.measure()
             _, err_m, err_rad = pose_error(target, self.fk(q))

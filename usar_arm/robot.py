@@ -52,6 +52,8 @@ class Robot:
     """USARSim link number (1-based, as in ASTA) of each joint, in joint order."""
     tip_sensor: str | None = None
     """Name of the server's tip GroundTruth sensor (and of its URDF frame), when it has one."""
+    files: dict[str, str] = field(default_factory=dict)
+    """The description's files (name -> text: URDF, SRDF, joint limits, discovery notes)."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
 
@@ -84,9 +86,10 @@ class Robot:
 
 def robot_from_description(desc: Description, actuator: str | None = None) -> Robot:
     """A Robot from a freshly built description."""
+    links, tip_sensor = _wire_facts(desc.discovery)
     return Robot(desc.chain, desc.urdf, desc.acm.pairs(), {"home": dict(desc.home)},
                  actuator or desc.discovery.get("robot", {}).get("actuator"),
-                 f"discovery of {desc.chain.name}", *_wire_facts(desc.discovery))
+                 f"discovery of {desc.chain.name}", links, tip_sensor, desc.files())
 
 
 def _wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
@@ -128,7 +131,9 @@ def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
                                {**chain.frames, **roles}, chain.notes)
         actuator = doc.get("robot", {}).get("actuator")
         links, tip_sensor = _wire_facts(doc)
-    return Robot(chain, text, disabled, states, actuator, str(path), links, tip_sensor)
+    files = {p.name: p.read_text() for p in (path, srdf_path, limits_path, info)
+             if p.exists()}
+    return Robot(chain, text, disabled, states, actuator, str(path), links, tip_sensor, files)
 
 
 def cache_dir() -> Path:

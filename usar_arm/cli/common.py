@@ -15,8 +15,14 @@ from usar_arm import errors
 Handler = Callable[[argparse.Namespace], int]
 
 
+_QUIET = False
+
+
 def setup_logging(verbosity: int, default: int = logging.WARNING) -> None:
-    """Log to stderr: -q -> errors only, default ``default``, -v INFO, -vv DEBUG (wire lines)."""
+    """Log to stderr: -q -> errors only, default ``default``, -v INFO, -vv DEBUG (wire lines).
+    -q also silences :func:`progress`."""
+    global _QUIET
+    _QUIET = verbosity < 0
     level = default
     if verbosity < 0:
         level = logging.ERROR
@@ -72,6 +78,12 @@ def err(text: str) -> None:
     """A message on stderr."""
     sys.stderr.write(text + "\n")
     sys.stderr.flush()
+
+
+def progress(text: str) -> None:
+    """A progress message on stderr (not with -q)."""
+    if not _QUIET:
+        err(text)
 
 
 def report_error(exc: BaseException) -> int:

@@ -7,10 +7,10 @@ import sys
 from collections.abc import Sequence
 
 from usar_arm import __version__
-from usar_arm.cli import demo_cmd, ik_cmd, plan_cmd, sim_cmd, urdf_cmd
+from usar_arm.cli import demo_cmd, execute_cmd, ik_cmd, picture_cmds, plan_cmd, sim_cmd, urdf_cmd
 from usar_arm.cli.common import EXIT_CODES_HELP, report_error
 
-COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd]
+COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,6 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in COMMANDS:
         module.add_parser(sub)
+    picture_cmds.add_parsers(sub)
     return parser
 
 

@@ -7,9 +7,17 @@ import argparse
 import numpy as np
 
 from usar_arm.arm import Arm
-from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.describe_args import add_server_args
+from usar_arm.cli.execution_args import (
+    add_execution_args,
+    check_bag_target,
+    execution_options,
+    print_report,
+    save_bag,
+)
 from usar_arm.cli.units import UNITS, pose_from_args
+from usar_arm.control.executor import ExecutionOptions
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.motion import MotionOptions
 from usar_arm.planning.lin import LinOptions
@@ -67,6 +75,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="plan for this URDF (SRDF and joint limits beside it) without a server")
     p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
     p.add_argument("--json", action="store_true", help="print one JSON summary on stdout")
+    p.add_argument("--execute", action="store_true",
+                   help="execute the plan on the arm and report how it went")
+    add_execution_args(p)
     add_server_args(p)
     add_verbosity(p)
     p.set_defaults(handler=run)
@@ -96,28 +107,55 @@ def open_arm(args: argparse.Namespace) -> Arm:
     if getattr(args, "urdf", None):
         return Arm.from_files(args.urdf, args.srdf)
     where = "the embedded simulator" if args.host is None else f"{args.host}:{args.port}"
-    err(f"connecting to {where} and discovering {args.robot}...")
+    progress(f"connecting to {where} and discovering {args.robot}...")
     return Arm.connect(args.robot, args.host, args.port, args.start_position, args.timeout,
                        wire_precision=args.wire_precision)
 
 
+def _check_execute_args(args: argparse.Namespace) -> ExecutionOptions | None:
+    """The execution options, or None without --execute (where execution flags are errors)."""
+    if args.execute:
+        if args.urdf:
+            raise InvalidInputError("--execute needs a live arm: drop --urdf (the description "
+                                    "then comes from the server)")
+        if args.from_joints is not None:
+            raise InvalidInputError("--execute starts from the arm's current joints: drop "
+                                    "--from-joints")
+        return execution_options(args)
+    if args.tip_correction:
+        raise InvalidInputError("--tip-correction needs --execute")
+    return None
+
+
 def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
+    execution = _check_execute_args(args)
+    check_bag_target(args.bag)
     with open_arm(args) as arm:
         start = joint_vector(args.from_joints, arm, "--from-joints")
         plan = arm.plan(joints=joint_vector(args.joints, arm, "--joints"),
                         pose=goal_pose(args, arm), motion=args.motion, scene=args.scene,
                         start=start, options=motion_options(args, args.motion))
+        report = None
+        if execution is not None:
+            progress(f"executing {plan.trajectory.duration:.2f} s of motion...")
+            report = arm.execute(plan.trajectory, goal_pose=plan.goal_pose,
+                                 tip_correction=args.tip_correction, options=execution)
+        if args.bag:
+            save_bag(args.bag, arm, plan.trajectory, report.executed if report else None)
         if args.out:
-            plan.trajectory.save(args.out)
-        summary = {**plan.summary(), "out": args.out}
-        if args.json:
-            print_json(summary)
-        else:
-            out(f"{plan.motion.upper()} plan: {plan.planning_seconds * 1000:.1f} ms planning, "
-                f"{plan.trajectory.duration:.2f} s motion, {len(plan.waypoints)} waypoints, "
-                f"path {plan.path_length:.3f} rad")
-            out("goal: " + " ".join(f"{v:.4f}" for v in plan.goal))
-            if args.out:
-                out(f"wrote {args.out}")
+            plan.trajectory.save(args.out, report.executed if report else None)
+    summary = {**plan.summary(), "out": args.out}
+    if args.json:
+        print_json({**summary, **(report.as_json() if report else {}), "bag": args.bag})
+        return EXIT_OK
+    out(f"{plan.motion.upper()} plan: {plan.planning_seconds * 1000:.1f} ms planning, "
+        f"{plan.trajectory.duration:.2f} s motion, {len(plan.waypoints)} waypoints, "
+        f"path {plan.path_length:.3f} rad")
+    out("goal: " + " ".join(f"{v:.4f}" for v in plan.goal))
+    if report is not None:
+        print_report(report, plan.trajectory.joint_names)
+    for what, path in (("trajectory", args.out), ("bag", args.bag)):
+        if path:
+            out(f"wrote {what}: {path}")
     return EXIT_OK

@@ -74,6 +74,8 @@ class ExecutionReport:
         goal: the joint goal held at the end (the trajectory's last point, plus any tip
             correction); executed: the ASTA samples (time since the start, joints).
         tip: tip figures added by the caller (tip_error_m, tip_error_rad, ...).
+        started_at: when the first ACT was sent (time.perf_counter s): to place the motion
+            on a longer timeline.
     """
 
     joint_names: tuple[str, ...]
@@ -89,6 +91,7 @@ class ExecutionReport:
     goal: Array
     executed: ExecutedSamples
     tip: dict[str, Any] = field(default_factory=dict)
+    started_at: float = 0.0
 
     def as_json(self) -> dict[str, Any]:
         """The stable keys ``--json`` prints."""
@@ -275,14 +278,16 @@ class Executor:
             unsubscribe()
         final, _ = self.measure()
         jitter = np.abs(sends - deadlines) * 1000
+        sample_t = np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) - t0
+        after_start = sample_t >= 0  # an ASTA taken just before the first command
         executed = ExecutedSamples(
-            np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) - t0,
-            np.array(feedback.values).reshape(-1, len(q_now)))
+            sample_t[after_start],
+            np.array(feedback.values).reshape(-1, len(q_now))[after_start])
         return ExecutionReport(
             self.names, np.abs(final - goal), float(np.max(worst)), worst.copy(),
             (count - 1) / (sends[-1] - sends[0]) if count > 1 else 0.0,
             float(np.percentile(jitter, 50)), float(np.percentile(jitter, 99)),
-            float(sends[-1] - t0), settled, seconds, goal, executed)
+            float(sends[-1] - t0), settled, seconds, goal, executed, started_at=t0)
 
     def _watch(self, trajectory: Trajectory, feedback: _Feedback, t0: float, checked: int,
                worst: Array) -> int:

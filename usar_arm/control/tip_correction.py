@@ -16,17 +16,24 @@ tilt.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from usar_arm.control.tip import RawReading, TipSensor, pose_error
-from usar_arm.control.tip_bias import BiasEstimate, Reading, estimate_bias
+from usar_arm.control.tip_bias import BiasEstimate, Reading, estimate_bias, interval
 from usar_arm.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix, transform
+
+log = logging.getLogger("usar_arm.control")
 
 DITHERS = 6
 """Readings per bias estimate (see :func:`dither_pose`)."""
+MAX_ROUNDS = 3
+"""Correction rounds at most (one suffices unless the sensor disagrees with the estimate)."""
+TOLERANCE = (0.5e-3, 0.5e-3)
+"""Estimated tool0 error (m, rad) a correction round must reach."""
 LOCK_MARGIN = 0.05
 """rad: readings are taken with the sensor's pitch at least this far from +-pi/2."""
 
@@ -42,7 +49,9 @@ class TipCorrection:
         after_m, after_rad: tool0's error estimated after it (the model at the measured joints
             plus the bias).
         readings: sensor readings taken.
-        bias: the estimate, with its uncertainty.
+        bias: the last estimate, with its uncertainty.
+        rounds: correction rounds run. verified: the last check reading agreed with the
+            estimate.
     """
 
     goal: Array
@@ -52,6 +61,8 @@ class TipCorrection:
     after_rad: float
     readings: int
     bias: BiasEstimate
+    rounds: int = 1
+    verified: bool = True
 
 
 def away_from_lock(world: Array, margin: float = LOCK_MARGIN) -> Array:
@@ -101,11 +112,30 @@ def model_tolerance(model_sensor_pose: Callable[[Array], Array], q: Array,
     return 2 * half * float(np.linalg.norm(dp)), 2 * half * float(np.linalg.norm(dw))
 
 
+def agrees(raw: RawReading, predicted: Array, tol_m: float, tol_rad: float) -> bool:
+    """Whether a reading could have been printed from the ``predicted`` sensor pose (z-down
+    world): each location number within half a step (+ ``tol_m``) of its box middle, and the
+    rotation within 1.5 steps (+ ``tol_rad``) of the box middle's -- the farthest any rotation
+    in a roll-pitch-yaw box lies from its middle, gimbal lock included."""
+    mid_loc = np.array([sum(interval(v, raw.step_m)) / 2 for v in raw.location])
+    mid_rpy = [sum(interval(v, raw.step_rad)) / 2 for v in raw.orientation]
+    off_m = np.abs(mid_loc - predicted[:3, 3])
+    off_rad = np.linalg.norm(log_so3(rpy_to_matrix(mid_rpy) @ predicted[:3, :3].T))
+    return bool(np.all(off_m <= raw.step_m / 2 + tol_m + 1e-9)
+                and off_rad <= 1.5 * raw.step_rad + tol_rad + 1e-9)
+
+
 def correct_tip(sensor: TipSensor, model_sensor_pose: Callable[[Array], Array],
                 solve: Callable[[Array, Array], Array], settle: Callable[[Array], object],
                 measure: Callable[[], Array], goal: Array, target: Array,
-                joint_step: float = 0.0) -> TipCorrection:
+                joint_step: float = 0.0, tolerance: tuple[float, float] = TOLERANCE
+                ) -> TipCorrection:
     """Move the joint goal so that the real tool0 reaches ``target`` (4x4, base_link).
+
+    One round: read the bias (:data:`DITHERS` readings), solve the goal for the target minus
+    the bias, settle there, and check with one more reading that the sensor agrees with the
+    prediction. Rounds repeat (at most :data:`MAX_ROUNDS`) while it does not, or while the
+    estimated error is above ``tolerance``.
 
     Args:
         sensor: the tip sensor (its platform pose is refreshed by every reading).
@@ -113,7 +143,7 @@ def correct_tip(sensor: TipSensor, model_sensor_pose: Callable[[Array], Array],
         solve: (tool0 pose in base_link, seed q) -> joint values (IK on the model).
         settle: moves to a joint goal and waits there. measure: the joints now (rad, m).
         goal: the joint goal the arm holds now. joint_step: the measured joints' printed
-            resolution (0 = exact).
+            resolution (0 = exact). tolerance: (m, rad) of the estimated tool0 error.
     """
     first = sensor.read_raw()
     _, before_m, before_rad = pose_error(target, sensor.tool0_from_raw(first))
@@ -123,27 +153,43 @@ def correct_tip(sensor: TipSensor, model_sensor_pose: Callable[[Array], Array],
         return Reading(raw.location, raw.orientation, raw.step_m, raw.step_rad,
                        model_sensor_pose(q), tol_m, tol_rad)
 
-    readings = [reading(first, measure())]
-    taken = 1
-    if first.step_m > 0 or first.step_rad > 0:
-        base = model_sensor_pose(goal)
-        tilted = away_from_lock(base)
-        if not np.allclose(tilted, base):
-            readings = []  # the first reading is near gimbal lock: tilt for all of them
-        for k in range(len(readings), DITHERS):
-            world = dither_pose(tilted, k, first.step_m, first.step_rad)
-            settle(solve(sensor.tool0_from_world(world), goal))
-            raw = sensor.read_raw(after=sensor.read_raw().time)
-            readings.append(reading(raw, measure()))
-            taken += 1
-    bias = estimate_bias(readings)
-    # The sensor pose the model must show so that the real one is the target's.
-    wanted = sensor.world_from_tool0(target)
-    shown = transform(exp_so3(-bias.rotation) @ wanted[:3, :3], wanted[:3, 3] - bias.position)
-    new_goal = solve(sensor.tool0_from_world(shown), goal)
-    settle(new_goal)
-    predicted = model_sensor_pose(measure())
-    estimate = transform(exp_so3(bias.rotation) @ predicted[:3, :3],
-                         predicted[:3, 3] + bias.position)
-    _, after_m, after_rad = pose_error(target, sensor.tool0_from_world(estimate))
-    return TipCorrection(new_goal, before_m, before_rad, after_m, after_rad, taken, bias)
+    def fresh() -> RawReading:
+        return sensor.read_raw(after=sensor.read_raw().time)
+
+    taken, latest = 1, first
+    for round_ in range(1, MAX_ROUNDS + 1):
+        readings = [reading(latest, measure())]
+        if latest.step_m > 0 or latest.step_rad > 0:
+            base = model_sensor_pose(goal)
+            tilted = away_from_lock(base)
+            if not np.allclose(tilted, base):
+                readings = []  # near gimbal lock: every reading is taken tilted
+            for k in range(len(readings), DITHERS):
+                world = dither_pose(tilted, k, latest.step_m, latest.step_rad)
+                settle(solve(sensor.tool0_from_world(world), goal))
+                readings.append(reading(fresh(), measure()))
+                taken += 1
+        bias = estimate_bias(readings)
+        # The sensor pose the model must show so that the real one is the target's.
+        wanted = sensor.world_from_tool0(target)
+        shown = transform(exp_so3(-bias.rotation) @ wanted[:3, :3],
+                          wanted[:3, 3] - bias.position)
+        goal = solve(sensor.tool0_from_world(shown), goal)
+        settle(goal)
+        latest = fresh()
+        taken += 1
+        q = measure()
+        predicted = model_sensor_pose(q)
+        estimate = transform(exp_so3(bias.rotation) @ predicted[:3, :3],
+                             predicted[:3, 3] + bias.position)
+        _, after_m, after_rad = pose_error(target, sensor.tool0_from_world(estimate))
+        tol_m, tol_rad = model_tolerance(model_sensor_pose, q, joint_step)
+        ok = agrees(latest, estimate, tol_m + float(np.max(bias.position_halfwidth)),
+                    tol_rad + max(bias.rotation_radius, 0.0))
+        if ok and after_m <= tolerance[0] and after_rad <= tolerance[1]:
+            break
+        log.info("tip correction round %d: estimated error %.2f mm %.2f mrad, sensor %s; "
+                 "again", round_, after_m * 1e3, after_rad * 1e3,
+                 "agrees" if ok else "disagrees")
+    return TipCorrection(goal, before_m, before_rad, after_m, after_rad, taken, bias,
+                         round_, ok)

@@ -152,21 +152,44 @@ class Trajectory:
                    waypoints.reshape(-1, n), limits, doc.get("motion", "ptp"),
                    doc.get("mode", "stop"), dict(doc.get("info", {})))
 
-    def save(self, path: str | Path) -> None:
-        """Write the JSON file atomically."""
-        write_atomic(path, json.dumps(self.to_json()) + "\n")
+    def save(self, path: str | Path, executed: ExecutedSamples | None = None) -> None:
+        """Write the JSON file atomically (with the ASTA samples of its execution, if any,
+        under ``executed``: ``t`` s since the start, ``q`` one row per sample)."""
+        doc = self.to_json()
+        if executed is not None:
+            doc["executed"] = {"t": executed.t.tolist(), "q": executed.q.tolist()}
+        write_atomic(path, json.dumps(doc) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> Trajectory:
         """Read a JSON file written by :meth:`save` (or by hand, in that format)."""
-        try:
-            doc = json.loads(Path(path).read_text())
-        except OSError as exc:
-            raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
-        except json.JSONDecodeError as exc:
-            raise FileFormatError(str(path), f"not valid JSON: {exc.msg}", line=exc.lineno) \
-                from None
-        return cls.from_json(doc, str(path))
+        return cls.from_json(_read_json(path), str(path))
+
+
+def _read_json(path: str | Path) -> Any:
+    try:
+        return json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(str(path), f"not valid JSON: {exc.msg}", line=exc.lineno) \
+            from None
+
+
+def load_with_executed(path: str | Path) -> tuple[Trajectory, ExecutedSamples | None]:
+    """A trajectory file and the executed samples saved with it (None when it has none)."""
+    doc = _read_json(path)
+    traj = Trajectory.from_json(doc, str(path))
+    done = doc.get("executed")
+    if done is None:
+        return traj, None
+    try:
+        t = np.asarray(done["t"], dtype=float)
+        q = np.asarray(done["q"], dtype=float).reshape(len(t), len(traj.joint_names))
+    except (KeyError, TypeError, ValueError):
+        raise FileFormatError(str(path), "expected t (times) and q (one row of joint values "
+                              "per time)", field="executed") from None
+    return traj, ExecutedSamples(t, q)
 
 
 @dataclass(frozen=True)

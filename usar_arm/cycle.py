@@ -1,0 +1,139 @@
+"""A pick-and-place cycle in the ``table`` scene: the demo's job, also timed by the benchmarks.
+
+Seven moves, in the KUKA/Pilz vocabulary: PTP to above the part, LIN down to it, LIN up, PTP
+around the tower to above the bin, LIN down into it, LIN up, PTP home. Each move is planned from
+where the arm really is, executed, and measured; :func:`run_cycle` returns one row per move.
+
+Poses are tool0 in base_link (m, rad), the tool pointing straight down.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from usar_arm.arm import Arm
+from usar_arm.control.executor import ExecutionOptions, ExecutionReport
+from usar_arm.control.timeline import join_executed, join_trajectories
+from usar_arm.control.trajectory import ExecutedSamples, Trajectory
+from usar_arm.motion import MotionOptions, MotionPlan
+from usar_arm.spatial import Array, rpy_to_matrix, transform
+
+TOOL_DOWN = rpy_to_matrix((0.0, np.pi, 0.0))
+"""tool0's orientation with its z axis pointing down (REP-103 base_link)."""
+PICK = (1.45, -0.45)
+"""The part's centre (x, y; m) on the table scene's table."""
+PLACE = (1.45, 0.50)
+"""The bin's centre (x, y; m)."""
+PICK_Z, PLACE_Z, CLEAR_Z = 0.82, 0.95, 1.10
+"""tool0 heights (m): at the part (its top is at 0.80), in the bin (its rim is at 0.90), and
+clear of both."""
+
+
+@dataclass(frozen=True)
+class Move:
+    """One move of a cycle: a tool0 ``pose`` (4x4) or joint values ``joints``."""
+
+    name: str
+    motion: str
+    pose: Array | None = None
+    joints: Array | None = None
+
+
+def pick_and_place(home: Array) -> list[Move]:
+    """The table scene's cycle, ending at ``home`` (joint values)."""
+    def at(xy: tuple[float, float], z: float) -> Array:
+        return transform(TOOL_DOWN, (xy[0], xy[1], z))
+
+    return [Move("approach", "ptp", at(PICK, CLEAR_Z)),
+            Move("pick", "lin", at(PICK, PICK_Z)),
+            Move("lift", "lin", at(PICK, CLEAR_Z)),
+            Move("transfer", "ptp", at(PLACE, CLEAR_Z)),
+            Move("place", "lin", at(PLACE, PLACE_Z)),
+            Move("retreat", "lin", at(PLACE, CLEAR_Z)),
+            Move("home", "ptp", joints=np.asarray(home, float))]
+
+
+@dataclass
+class MoveResult:
+    """What one move did: its plan, its execution report, and the wall time it took (s)."""
+
+    move: Move
+    plan: MotionPlan
+    report: ExecutionReport
+    seconds: float
+
+    def row(self) -> dict[str, Any]:
+        """The figures the demo's table and the benchmark print (SI units)."""
+        tip = self.report.tip
+        return {"move": self.move.name, "motion": self.move.motion,
+                "planning_s": self.plan.planning_seconds,
+                "duration_s": self.plan.trajectory.duration,
+                "max_tracking_error_rad": self.report.max_tracking_error_rad,
+                "final_joint_error_rad": float(np.max(self.report.final_joint_error_rad)),
+                "rate_hz": self.report.rate_hz, "jitter_p99_ms": self.report.jitter_p99_ms,
+                "tip_source": tip.get("tip_source"),
+                "tip_error_m": tip.get("tip_error_m"), "tip_error_rad": tip.get("tip_error_rad"),
+                "tip_error_before_correction_m": tip.get("tip_error_before_correction_m"),
+                "tip_error_before_correction_rad": tip.get("tip_error_before_correction_rad"),
+                "true_tip_error_m": tip.get("true_tip_error_m"),
+                "true_tip_error_rad": tip.get("true_tip_error_rad"),
+                "wall_s": self.seconds}
+
+
+@dataclass
+class CycleResult:
+    """Every move's result, in order."""
+
+    moves: list[MoveResult] = field(default_factory=list)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One :meth:`MoveResult.row` per move."""
+        return [m.row() for m in self.moves]
+
+    def timeline(self) -> tuple[Trajectory, ExecutedSamples]:
+        """The whole cycle as one trajectory (holding still between the moves, while the next
+        one was planned and the arm settled) and its ASTA samples, from the first move's
+        start (s)."""
+        starts = [m.report.started_at for m in self.moves]
+        planned = join_trajectories([(s, m.plan.trajectory)
+                                     for s, m in zip(starts, self.moves, strict=True)])
+        executed = join_executed([(s, m.report.executed)
+                                  for s, m in zip(starts, self.moves, strict=True)], starts[0])
+        return planned, executed
+
+
+def run_cycle(arm: Arm, moves: list[Move], scene: str = "table",
+              motion: MotionOptions | None = None, execution: ExecutionOptions | None = None,
+              tip_correction: bool = False,
+              progress: Callable[[int, MoveResult], None] | None = None) -> CycleResult:
+    """Plan each move from the arm's current joints, execute it, and measure it.
+
+    Pose moves are measured against their pose, joint moves against the model's tool0 at
+    their goal; with ``tip_correction`` the real tool is brought to that pose (see
+    :meth:`Arm.execute`).
+
+    Raises:
+        the planning errors of :func:`usar_arm.motion.plan_motion` and
+        :class:`~usar_arm.errors.ExecutionAbortedError`, naming the move in a note.
+    """
+    result = CycleResult()
+    for i, move in enumerate(moves):
+        begin = time.perf_counter()
+        try:
+            plan = arm.plan(joints=move.joints, pose=move.pose, motion=move.motion,
+                            scene=scene, options=motion)
+            report = arm.execute(plan.trajectory, goal_pose=move.pose, options=execution,
+                                 tip_correction=tip_correction)
+        except Exception as exc:
+            exc.add_note(f"during move {i + 1} ({move.name}, {move.motion.upper()})")
+            raise
+        done = MoveResult(move, plan, report, time.perf_counter() - begin)
+        result.moves.append(done)
+        if progress is not None:
+            progress(i, done)
+    return result
