@@ -10,7 +10,9 @@ from hypothesis import strategies as st
 from usar_arm.control.tip_correction import (
     DITHERS,
     LOCK_MARGIN,
+    ZERO_MARGIN,
     away_from_lock,
+    away_from_zero,
     dither_pose,
     model_tolerance,
 )
@@ -43,6 +45,18 @@ def test_poses_away_from_gimbal_lock_are_left_alone() -> None:
     turned = np.linalg.norm(log_so3(tilted[:3, :3] @ down[:3, :3].T))
     assert turned == pytest.approx(LOCK_MARGIN)
     assert np.array_equal(tilted[:3, 3], down[:3, 3])
+
+
+def test_numbers_near_zero_are_moved_off_it_and_others_are_kept() -> None:
+    step = 1e-3
+    base = transform(rpy_to_matrix((0.0004, -0.0015, 0.7)), (1.6, -0.0003, -1.9))
+    moved = away_from_zero(base, step, step)
+    rpy = matrix_to_rpy(moved[:3, :3])
+    assert rpy[0] == pytest.approx(0.0004 + (ZERO_MARGIN + 1) * step)
+    assert rpy[1] == pytest.approx(-0.0015 - (ZERO_MARGIN + 1) * step)
+    assert rpy[2] == pytest.approx(0.7)
+    assert moved[:3, 3] == pytest.approx([1.6, -0.0003 - (ZERO_MARGIN + 1) * step, -1.9])
+    assert np.array_equal(away_from_zero(base, 0.0, 0.0), base)  # full precision: no need
 
 
 def test_the_model_tolerance_follows_the_joint_resolution() -> None:

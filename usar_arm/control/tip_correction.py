@@ -10,8 +10,9 @@ target minus the bias.
 
 Near gimbal lock (the sensor's x axis vertical, as for a tool pointing down) roll and yaw
 separately are not smooth functions of the pose, so the readings are taken with the sensor
-tilted :data:`LOCK_MARGIN` away from it; the bias changes by far less than a step over that
-tilt.
+tilted :data:`LOCK_MARGIN` away from it; numbers near zero print as 0 over two steps, so they
+are moved off zero first (:func:`reading_base`). The bias changes by far less than a step over
+such small moves.
 """
 
 from __future__ import annotations
@@ -73,6 +74,37 @@ def away_from_lock(world: Array, margin: float = LOCK_MARGIN) -> Array:
     if abs(pitch) <= limit:
         return world.copy()
     return transform(rpy_to_matrix((roll, float(np.copysign(limit, pitch)), yaw)), world[:3, 3])
+
+
+ZERO_MARGIN = 2.0
+"""Printed steps: numbers closer to zero than this are moved off it before the readings."""
+
+
+def away_from_zero(world: Array, step_m: float, step_rad: float,
+                   margin: float = ZERO_MARGIN) -> Array:
+    """``world`` (a z-down world pose) with every location number and roll-pitch-yaw angle
+    within ``margin`` steps of zero moved ``margin + 1`` steps further from it.
+
+    A number truncated toward zero prints 0 anywhere in (-step, step): that box is two steps
+    wide, and the dithers (under a step) cannot split it.
+    """
+    def off(value: float, step: float) -> float:
+        if step <= 0 or abs(value) >= margin * step:
+            return value
+        return value + (margin + 1) * step * (1.0 if value >= 0 else -1.0)
+
+    rpy = matrix_to_rpy(world[:3, :3])
+    moved_rpy = tuple(off(a, step_rad) for a in rpy)
+    out = world.copy()
+    if moved_rpy != rpy:
+        out[:3, :3] = rpy_to_matrix(moved_rpy)
+    out[:3, 3] = [off(v, step_m) for v in world[:3, 3]]
+    return out
+
+
+def reading_base(world: Array, step_m: float, step_rad: float) -> Array:
+    """Where the readings are taken: ``world`` away from gimbal lock and from zero."""
+    return away_from_zero(away_from_lock(world), step_m, step_rad)
 
 
 def dither_pose(world: Array, k: int, step_m: float, step_rad: float) -> Array:
@@ -161,9 +193,9 @@ def correct_tip(sensor: TipSensor, model_sensor_pose: Callable[[Array], Array],
         readings = [reading(latest, measure())]
         if latest.step_m > 0 or latest.step_rad > 0:
             base = model_sensor_pose(goal)
-            tilted = away_from_lock(base)
+            tilted = reading_base(base, latest.step_m, latest.step_rad)
             if not np.allclose(tilted, base):
-                readings = []  # near gimbal lock: every reading is taken tilted
+                readings = []  # near gimbal lock or zero: every reading is taken moved
             for k in range(len(readings), DITHERS):
                 world = dither_pose(tilted, k, latest.step_m, latest.step_rad)
                 settle(solve(sensor.tool0_from_world(world), goal))
