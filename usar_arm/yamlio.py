@@ -38,6 +38,12 @@ def _mapping(loader: _Loader, node: yaml.MappingNode) -> LineDict:
     out.lines = {}
     for key_node, value_node in node.value:
         key = loader.construct_object(key_node, deep=True)
+        try:
+            hash(key)
+        except TypeError:
+            raise yaml.constructor.ConstructorError(
+                None, None, "a key must be a plain value, not a mapping or a list",
+                key_node.start_mark) from None
         out[key] = loader.construct_object(value_node, deep=True)
         out.lines[key] = key_node.start_mark.line + 1
     return out
@@ -58,9 +64,13 @@ def load_yaml(path: str | Path) -> Any:
     """Parse a YAML file; syntax errors become FileFormatError with the line."""
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        line = p.read_bytes()[:exc.start].count(b"\n") + 1
+        raise FileFormatError(str(path), f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} "
+                              f"at offset {exc.start})", line=line) from None
     return loads_yaml(text, str(path))
 
 
@@ -68,6 +78,15 @@ def loads_yaml(text: str, name: str = "<string>") -> Any:
     """Parse YAML text; syntax errors become FileFormatError with the line."""
     try:
         return yaml.load(text, Loader=_Loader)
+    except yaml.constructor.ConstructorError as exc:  # e.g. a mapping used as a key
+        mark = exc.problem_mark or exc.context_mark
+        raise FileFormatError(name, f"not valid YAML: {exc.problem or exc}",
+                              line=None if mark is None else mark.line + 1) from None
+    except (ValueError, TypeError, AttributeError, IndexError, KeyError, OverflowError,
+            RecursionError) as exc:
+        # PyYAML's constructors fail this way on values such as 2001-02-30 or "-_" as a float
+        raise FileFormatError(name, f"not valid YAML: a value could not be read ({exc})"
+                              ) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = None if mark is None else mark.line + 1

@@ -1,6 +1,17 @@
-"""Hypothesis strategies for every USARSim message type."""
+"""Hypothesis strategies for every USARSim message type.
+
+:func:`build` makes one strategy per message type from strategies for its parts, so the same
+message shapes can be drawn over different domains:
+
+* ``ALL`` (and ``messages``): the everyday domain (ASCII names, numbers within +-1e6).
+* ``WIDE``: everything the grammar can carry: every finite float64 (subnormals, -0.0, +-1.8e308),
+  integers up to +-2**128, Unicode text in values and names.
+* ``UDK_EXACT``: numbers UDK's formats print exactly (see :func:`build`'s arguments).
+"""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 from hypothesis import strategies as st
 
@@ -23,47 +34,108 @@ RESERVED = {"name", "type", "link", "value", "time", "location", "orientation", 
             "maxvalue", "maxspeed", "gripper", "sequence", "seq", "battery", "classname",
             "start", "rotation", "opcode", "params", "left", "right", "normalized", "light",
             "gametype", "level", "timelimit", "startposes"}
-extra_keys = names.filter(lambda k: k.lower() not in RESERVED)
-extras = st.lists(st.tuples(extra_keys, values), max_size=3).map(tuple)
-
-game_info = st.builds(m.GameInfo, names, names, st.none() | floats, extras)
-start_poses = st.builds(m.StartPoses, st.lists(st.builds(m.StartPose, names, vectors, vectors),
-                                               max_size=4).map(tuple))
-inits = st.builds(m.Init, names, st.none() | names, st.none() | names, st.none() | vectors,
-                  st.none() | vectors, extras)
-get_confs = st.builds(m.GetConf, names, st.none() | names)
-get_geos = st.builds(m.GetGeo, names, st.none() | names)
-acts = st.builds(m.Act, names, st.lists(st.tuples(ints, floats), max_size=8).map(tuple),
-                 st.none() | ints, st.none() | ints, extras)
-sets = st.builds(m.Set, names, names, names, st.none() | values)
-drives = st.builds(m.Drive, st.none() | floats, st.none() | floats, st.none() | st.booleans(),
-                   st.none() | st.booleans(), extras)
-link_confs = st.builds(m.LinkConf, ints, names, st.none() | floats, st.none() | floats,
-                       st.none() | floats, st.none() | floats, extras)
-conf_items = st.builds(m.ConfItem, names, extras, st.lists(link_confs, max_size=4).map(tuple))
-confs = st.builds(m.Conf, names.filter(lambda t: t.lower() != "name"),
-                  st.lists(conf_items, min_size=1, max_size=3).map(tuple))
-platform_confs = st.builds(m.PlatformConf, names, names, extras)
-link_geos = st.builds(m.LinkGeo, ints, ints, vectors, vectors, extras)
-geo_items = st.builds(m.GeoItem, names, st.none() | vectors, st.none() | vectors,
-                      st.none() | names, st.none() | ints,
-                      st.lists(link_geos, max_size=4).map(tuple), st.none() | vectors, extras)
-geos = st.builds(m.Geo, names, st.lists(geo_items, min_size=1, max_size=3).map(tuple))
-astas = st.builds(m.Asta, floats, names, st.lists(st.tuples(ints, floats), max_size=8).map(tuple),
-                  extras)
-stas = st.builds(m.Sta, floats, st.none() | ints, st.none() | names, extras)
-sens = st.builds(m.Sen, names, names, st.none() | floats, st.none() | vectors,
-                 st.none() | vectors, extras)
-effs = st.builds(m.Eff, names, names, st.none() | floats, extras)
 HEADS = {"NFO", "GETSTARTPOSES", "INIT", "GETCONF", "GETGEO", "ACT", "SET", "DRIVE", "CONF",
          "GEO", "ASTA", "STA", "SEN", "EFF"}
-unknowns = st.builds(m.Unknown, names.filter(lambda h: h.upper() not in HEADS),
-                     st.lists(st.tuples(names, values), max_size=4).map(tuple))
 
-ALL = {
-    "GameInfo": game_info, "StartPoses": start_poses, "GetStartPoses": st.just(m.GetStartPoses()),
-    "Init": inits, "GetConf": get_confs, "GetGeo": get_geos, "Act": acts, "Set": sets,
-    "Drive": drives, "Conf": confs, "PlatformConf": platform_confs, "Geo": geos, "Asta": astas,
-    "Sta": stas, "Sen": sens, "Eff": effs, "Unknown": unknowns,
-}
+# ------------------------------------------------------------------------ the wide domain
+# Any character a decoded line can hold except the two the grammar reserves ('{', '}'), the line
+# terminators, and surrogates (no UTF-8 decoder produces them).
+_wide_char = st.characters(blacklist_categories=("Cs",), blacklist_characters="{}\r\n")
+wide_tokens = st.text(alphabet=_wide_char.filter(lambda c: not c.isspace()), min_size=1,
+                      max_size=12)
+"""Text without whitespace: keys, command words, start-pose names (they are split at spaces)."""
+wide_values = st.text(alphabet=_wide_char, max_size=20).map(str.strip)
+"""Any value text, possibly empty (``{On}``); UDK trims values, so these come trimmed."""
+finite = st.floats(allow_nan=False, allow_infinity=False)
+wide_ints = st.integers(min_value=-(2**128), max_value=2**128)
+
+# --------------------------------------------------------------------- the UDK-exact domain
+udk_scalars = st.integers(-(10**11), 10**11).map(lambda k: k / 10**4)
+"""4-decimal numbers (Time, ASTA/ACT Value, CONF limits): UDK prints them with %.4f."""
+udk_raw = st.integers(-(10**13), 10**13).map(lambda k: k / 100)
+"""2-decimal numbers (start poses, INIT vectors, GEO link orientations, Tip): printed %.2f."""
+udk_fixed = st.integers(-(2**23), 2**23).map(lambda k: k / 8)
+"""Multiples of 1/8 m within +-2**20 (FloatString fields: GEO locations, GroundTruth poses):
+exact in float32 and in 3 decimals, so the float32 truncation UDK applies loses nothing."""
+udk_float32_range = st.floats(min_value=-1e38, max_value=1e38, allow_nan=False)
+"""Any float that FloatString's float32 arithmetic can hold (+-3.4e38)."""
+
+
+@dataclass(frozen=True)
+class Domain:
+    """The parts messages are built from.
+
+    Attributes:
+        scalar: raw engine floats (Time, Value, CONF limits, TimeLimit, DRIVE speeds).
+        raw: components of raw vectors (start poses, INIT Location/Rotation, GEO link
+            Orientation, Tip).
+        fixed: components of FloatString vectors (GEO item and link Location, item Orientation,
+            SEN Location/Orientation).
+        ints: link numbers, parents, Gripper, Sequence, MountLink, Battery.
+        names: single-word text (start-pose names, extra keys, command words of unknown lines).
+        values: text in a value position (names of components, types, opcodes...).
+    """
+
+    scalar: st.SearchStrategy[float]
+    raw: st.SearchStrategy[float]
+    fixed: st.SearchStrategy[float]
+    ints: st.SearchStrategy[int]
+    names: st.SearchStrategy[str]
+    values: st.SearchStrategy[str]
+
+
+def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
+    """One strategy per message type (keyed by class name) over the domain ``d``."""
+    raw_v = st.tuples(d.raw, d.raw, d.raw)
+    fixed_v = st.tuples(d.fixed, d.fixed, d.fixed)
+    extra_keys = d.names.filter(lambda k: k.lower() not in RESERVED)
+    extras = st.lists(st.tuples(extra_keys, d.values), max_size=3).map(tuple)
+    opt = st.none
+
+    link_confs = st.builds(m.LinkConf, d.ints, d.values, opt() | d.scalar, opt() | d.scalar,
+                           opt() | d.scalar, opt() | d.scalar, extras)
+    conf_items = st.builds(m.ConfItem, d.values, extras,
+                           st.lists(link_confs, max_size=4).map(tuple))
+    link_geos = st.builds(m.LinkGeo, d.ints, d.ints, fixed_v, raw_v, extras)
+    geo_items = st.builds(m.GeoItem, d.values, opt() | fixed_v, opt() | fixed_v,
+                          opt() | d.values, opt() | d.ints,
+                          st.lists(link_geos, max_size=4).map(tuple), opt() | raw_v, extras)
+    pairs = st.lists(st.tuples(d.ints, d.scalar), max_size=8).map(tuple)
+    return {
+        "GameInfo": st.builds(m.GameInfo, d.values, d.values, opt() | d.scalar, extras),
+        "StartPoses": st.builds(m.StartPoses, st.lists(
+            st.builds(m.StartPose, d.names, raw_v, raw_v), max_size=4).map(tuple)),
+        "GetStartPoses": st.just(m.GetStartPoses()),
+        "Init": st.builds(m.Init, d.values, opt() | d.values, opt() | d.values, opt() | raw_v,
+                          opt() | raw_v, extras),
+        "GetConf": st.builds(m.GetConf, d.values, opt() | d.values),
+        "GetGeo": st.builds(m.GetGeo, d.values, opt() | d.values),
+        "Act": st.builds(m.Act, d.values, pairs, opt() | d.ints, opt() | d.ints, extras),
+        "Set": st.builds(m.Set, d.values, d.values, d.values, opt() | d.values),
+        "Drive": st.builds(m.Drive, opt() | d.scalar, opt() | d.scalar, opt() | st.booleans(),
+                           opt() | st.booleans(), extras),
+        "Conf": st.builds(m.Conf, d.values, st.lists(conf_items, min_size=1, max_size=3)
+                          .map(tuple)),
+        "PlatformConf": st.builds(m.PlatformConf, d.values, d.values, extras),
+        "Geo": st.builds(m.Geo, d.values, st.lists(geo_items, min_size=1, max_size=3).map(tuple)),
+        "Asta": st.builds(m.Asta, d.scalar, d.values, pairs, extras),
+        "Sta": st.builds(m.Sta, d.scalar, opt() | d.ints, opt() | d.values, extras),
+        "Sen": st.builds(m.Sen, d.values, d.values, opt() | d.scalar, opt() | fixed_v,
+                         opt() | fixed_v, extras),
+        "Eff": st.builds(m.Eff, d.values, d.values, opt() | d.scalar, extras),
+        "Unknown": st.builds(m.Unknown, d.names.filter(lambda h: h.upper() not in HEADS),
+                             st.lists(st.tuples(d.names, d.values), max_size=4).map(tuple)),
+    }
+
+
+EVERYDAY = Domain(floats, floats, floats, ints, names, values)
+WIDE_DOMAIN = Domain(finite, finite, finite, wide_ints, wide_tokens, wide_values)
+UDK_EXACT_DOMAIN = Domain(udk_scalars, udk_raw, udk_fixed, wide_ints, wide_tokens, wide_values)
+UDK_ANY_DOMAIN = Domain(udk_float32_range, udk_float32_range, udk_float32_range, wide_ints,
+                        wide_tokens, wide_values)
+
+ALL = build(EVERYDAY)
+WIDE = build(WIDE_DOMAIN)
+UDK_EXACT = build(UDK_EXACT_DOMAIN)
+UDK_ANY = build(UDK_ANY_DOMAIN)
 messages = st.one_of(*ALL.values())

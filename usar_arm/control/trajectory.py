@@ -115,42 +115,56 @@ class Trajectory:
 
     @classmethod
     def from_json(cls, doc: Any, path: str = "<trajectory>") -> Trajectory:
-        """Read a trajectory document, naming the field of any error."""
+        """Read a trajectory document, naming the field of any error.
+
+        Checks what the other methods rely on: joint names are distinct strings; ``t`` starts at
+        0 s and is uniform (``at`` indexes it by ``time / dt``); q, qd, qdd are one finite row
+        per sample; ``limits`` gives lower <= upper and positive velocity, acceleration and
+        jerk for every joint; ``waypoints`` (optional) are rows of joint values.
+
+        Raises:
+            FileFormatError: the first problem found, with its field.
+        """
         if not isinstance(doc, dict):
             raise FileFormatError(path, "expected a JSON object")
         for key in ("joint_names", "t", "q", "qd", "qdd", "limits"):
             if key not in doc:
                 raise FileFormatError(path, f"missing '{key}'", field=key)
-        names = tuple(doc["joint_names"])
+        names = _joint_names(doc["joint_names"], path)
         n = len(names)
-        arrays = {}
-        for key in ("t", "q", "qd", "qdd"):
-            try:
-                arrays[key] = np.asarray(doc[key], dtype=float)
-            except (TypeError, ValueError):
-                raise FileFormatError(path, "expected numbers", field=key) from None
-        m = len(arrays["t"])
-        if m < 2 or arrays["t"].ndim != 1:
-            raise FileFormatError(path, "needs at least 2 sample times", field="t")
-        if np.any(np.diff(arrays["t"]) <= 0):
-            raise FileFormatError(path, "sample times must increase", field="t")
+        arrays = {key: _numbers(doc[key], path, key) for key in ("t", "q", "qd", "qdd")}
+        t = arrays["t"]
+        m = t.size
+        if t.ndim != 1 or m < 2:
+            raise FileFormatError(path, f"expected a list of at least 2 sample times (s), got "
+                                  f"shape {t.shape}", field="t")
         for key in ("q", "qd", "qdd"):
             if arrays[key].shape != (m, n):
                 raise FileFormatError(path, f"expected {m} rows of {n} values (one per joint "
                                       f"and sample), got shape {arrays[key].shape}", field=key)
-        if not all(np.all(np.isfinite(a)) for a in arrays.values()):
-            raise FileFormatError(path, "contains NaN or infinite values")
-        lim = doc["limits"]
-        try:
-            limits = MotionLimits(*(np.array([float(lim[j][k]) for j in names]) for k in (
-                "lower", "upper", "velocity", "acceleration", "jerk")))
-        except (KeyError, TypeError, ValueError):
-            raise FileFormatError(path, "expected lower, upper, velocity, acceleration, jerk "
-                                  "for every joint", field="limits") from None
-        waypoints = np.asarray(doc.get("waypoints") or arrays["q"][[0, -1]], dtype=float)
-        return cls(names, arrays["t"], arrays["q"], arrays["qd"], arrays["qdd"],
-                   waypoints.reshape(-1, n), limits, doc.get("motion", "ptp"),
-                   doc.get("mode", "stop"), dict(doc.get("info", {})))
+        for key, a in arrays.items():
+            if not np.all(np.isfinite(a)):
+                raise FileFormatError(path, "contains NaN or infinite values", field=key)
+        _check_uniform(t, path)
+        limits = _limits(doc["limits"], names, path)
+        raw = doc.get("waypoints")
+        waypoints = arrays["q"][[0, -1]] if raw is None or raw == [] else \
+            _numbers(raw, path, "waypoints")
+        if waypoints.ndim != 2 or waypoints.shape[1:] != (n,) or not np.all(
+                np.isfinite(waypoints)):
+            raise FileFormatError(path, f"expected rows of {n} finite joint values, got shape "
+                                  f"{waypoints.shape}", field="waypoints")
+        texts = {}
+        for key, default in (("motion", "ptp"), ("mode", "stop")):
+            texts[key] = doc.get(key, default)
+            if not isinstance(texts[key], str):
+                raise FileFormatError(path, f"expected text (such as '{default}'), got "
+                                      f"{_show(texts[key])}", field=key)
+        info = doc.get("info", {})
+        if not isinstance(info, dict):
+            raise FileFormatError(path, f"expected an object, got {_show(info)}", field="info")
+        return cls(names, t, arrays["q"], arrays["qd"], arrays["qdd"], waypoints, limits,
+                   texts["motion"], texts["mode"], dict(info))
 
     def save(self, path: str | Path, executed: ExecutedSamples | None = None) -> None:
         """Write the JSON file atomically (with the ASTA samples of its execution, if any,
@@ -168,12 +182,87 @@ class Trajectory:
 
 def _read_json(path: str | Path) -> Any:
     try:
-        return json.loads(Path(path).read_text())
+        return json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(str(path), f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} "
+                              f"at offset {exc.start}") from None
     except json.JSONDecodeError as exc:
         raise FileFormatError(str(path), f"not valid JSON: {exc.msg}", line=exc.lineno) \
             from None
+    except ValueError as exc:  # an integer literal of more than 4300 digits
+        raise FileFormatError(str(path), f"not valid JSON: {exc}") from None
+    except RecursionError:
+        raise FileFormatError(str(path), "not valid JSON: nested too deeply") from None
+
+
+def _show(value: Any, width: int = 60) -> str:
+    """``repr(value)``, cut to ``width`` characters for an error message."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _numbers(value: Any, path: str, field: str) -> Array:
+    """A (possibly nested) list of numbers as a float array; anything else is a FileFormatError."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise FileFormatError(path, "expected numbers (lists of equal length)", field=field) \
+            from None
+
+
+def _joint_names(value: Any, path: str) -> tuple[str, ...]:
+    """The ``joint_names`` list: at least one name, each a distinct non-empty string."""
+    if not isinstance(value, list) or not value or not all(
+            isinstance(v, str) and v for v in value):
+        raise FileFormatError(path, f"expected a list of joint names, got {_show(value)}",
+                              field="joint_names")
+    if len(set(value)) != len(value):
+        twice = next(v for v in value if value.count(v) > 1)
+        raise FileFormatError(path, f"joint '{twice}' is listed twice", field="joint_names")
+    return tuple(value)
+
+
+def _check_uniform(t: Array, path: str) -> None:
+    """Sample times must start at 0 and step uniformly (to 1e-6 of a step), as ``at`` assumes."""
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        raise FileFormatError(path, "sample times must increase", field="t")
+    step = (t[-1] - t[0]) / (t.size - 1)
+    if abs(t[0]) > 1e-6 * step or np.max(np.abs(dt - step)) > 1e-6 * step:
+        raise FileFormatError(path, f"sample times must start at 0 s and be uniform (a step of "
+                              f"{step:g} s expected; found t[0] = {t[0]:g} s and steps from "
+                              f"{dt.min():g} to {dt.max():g} s)", field="t")
+
+
+def _limits(value: Any, names: tuple[str, ...], path: str) -> MotionLimits:
+    """``limits``: joint name -> {lower, upper, velocity, acceleration, jerk}."""
+    keys = ("lower", "upper", "velocity", "acceleration", "jerk")
+    expected = "expected lower, upper, velocity, acceleration, jerk for every joint"
+    if not isinstance(value, dict):
+        raise FileFormatError(path, expected, field="limits")
+    table: dict[str, list[float]] = {k: [] for k in keys}
+    for j in names:
+        entry = value.get(j)
+        if not isinstance(entry, dict) or any(k not in entry for k in keys):
+            raise FileFormatError(path, expected, field=f"limits.{j}")
+        for k in keys:
+            v = entry[k]
+            bounds = k in ("lower", "upper")
+            try:
+                number = math.nan if isinstance(v, bool) else float(v)
+            except (TypeError, ValueError, OverflowError):
+                number = math.nan
+            if isinstance(v, str) or math.isnan(number) or not (bounds or number > 0):
+                kind = "a number (rad or m)" if bounds else "a positive number (per s^k)"
+                raise FileFormatError(path, f"expected {kind}, got {_show(v)}",
+                                      field=f"limits.{j}.{k}")
+            table[k].append(number)
+        if table["lower"][-1] > table["upper"][-1]:
+            raise FileFormatError(path, f"lower {table['lower'][-1]:g} is above upper "
+                                  f"{table['upper'][-1]:g}", field=f"limits.{j}")
+    return MotionLimits(*(np.array(table[k]) for k in keys))
 
 
 def load_with_executed(path: str | Path) -> tuple[Trajectory, ExecutedSamples | None]:
@@ -186,9 +275,12 @@ def load_with_executed(path: str | Path) -> tuple[Trajectory, ExecutedSamples | 
     try:
         t = np.asarray(done["t"], dtype=float)
         q = np.asarray(done["q"], dtype=float).reshape(len(t), len(traj.joint_names))
-    except (KeyError, TypeError, ValueError):
-        raise FileFormatError(str(path), "expected t (times) and q (one row of joint values "
-                              "per time)", field="executed") from None
+        ok = t.ndim == 1 and bool(np.all(np.isfinite(t))) and bool(np.all(np.isfinite(q)))
+    except (KeyError, TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise FileFormatError(str(path), "expected t (finite times) and q (one row of finite "
+                              "joint values per time)", field="executed")
     return traj, ExecutedSamples(t, q)
 
 

@@ -10,6 +10,7 @@ hard-coded 1.0 rad/s.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -111,8 +112,9 @@ def load_limits_file(path: str | Path, n_joints: int, joint_names: list[str]
             if key not in KEYS:
                 raise FileFormatError(p, f"unknown key '{key}' (expected {', '.join(KEYS)})",
                                       line=line_of(entry, key), field=f"joints[{idx}].{key}")
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or value <= 0:
-                raise FileFormatError(p, f"must be a positive number, got {value!r}",
+            if not isinstance(value, (int, float)) or isinstance(value, bool) \
+                    or not math.isfinite(value) or value <= 0:
+                raise FileFormatError(p, f"must be a positive finite number, got {value!r}",
                                       line=line_of(entry, key), field=f"joints[{idx}].{key}")
             out[idx][key] = float(value)
     return out

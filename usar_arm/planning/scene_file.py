@@ -23,7 +23,9 @@ Format (lengths in m, angles in rad)::
         xyz: [0, 0, -0.025]
         allow: [base_link]               # links allowed to touch it
 
-Every error names the file, the line and the field, and says what was expected.
+Every error names the file, the line and the field, and says what was expected. Keys are checked
+at every level (a misspelt ``objetcs:`` or ``raduis:`` is an error, never silently ignored), and
+every number must be finite.
 """
 
 from __future__ import annotations
@@ -42,7 +44,25 @@ from usar_arm.yamlio import line_of, load_yaml
 
 SHAPES = ("box", "cylinder", "sphere", "mesh")
 KEYS = {"name", "xyz", "rpy", "allow", *SHAPES}
+TOP_KEYS = {"name", "description", "objects"}
+SHAPE_KEYS = {"cylinder": ("radius", "length"), "sphere": ("radius",), "mesh": ("file", "scale")}
+"""The keys of each shape given as a mapping (a box is a list of edge lengths)."""
 BUILTIN = ("empty", "table", "shelf", "cage")
+
+
+def _finite(value: Any) -> bool:
+    """True for an int or float (not a bool) that is a finite float64."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int beyond float64
+        return False
+
+
+def _unknown_keys(mapping: dict[Any, Any], known: Any) -> list[Any]:
+    """The keys of ``mapping`` not in ``known``, sorted as text (YAML keys may be any type)."""
+    return sorted((k for k in mapping if k not in known), key=str)
 
 
 class _Ctx:
@@ -55,11 +75,10 @@ class _Ctx:
     def numbers(self, container: Any, key: Any, field: str, count: int,
                 positive: bool = False) -> list[float]:
         value = container[key]
-        ok = isinstance(value, list) and len(value) == count and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-            for v in value)
+        ok = isinstance(value, list) and len(value) == count and all(_finite(v) for v in value)
         if not ok:
-            raise self.fail(f"expected {count} numbers, got {value!r}", container, key, field)
+            raise self.fail(f"expected {count} finite numbers, got {value!r}", container, key,
+                            field)
         if positive and any(v <= 0 for v in value):
             raise self.fail(f"expected positive numbers, got {value!r}", container, key, field)
         return [float(v) for v in value]
@@ -68,10 +87,21 @@ class _Ctx:
         if not isinstance(container, dict) or key not in container:
             raise self.fail(f"missing '{key}'", container, None, field)
         value = container[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-            raise self.fail(f"expected a positive number, got {value!r}", container, key,
+        if not _finite(value) or not value > 0:
+            raise self.fail(f"expected a positive finite number, got {value!r}", container, key,
                             f"{field}.{key}")
         return float(value)
+
+    def keys(self, spec: Any, container: Any, kind: str, field: str) -> None:
+        """A shape given as a mapping must use exactly the keys of its kind."""
+        known = SHAPE_KEYS[kind]
+        example = "{" + ", ".join(f"{k}: .." for k in known) + "}"
+        if not isinstance(spec, dict):
+            raise self.fail(f"expected a mapping {example}, got {spec!r}", container, kind, field)
+        unknown = _unknown_keys(spec, known)
+        if unknown:
+            raise self.fail(f"unknown key '{unknown[0]}' (expected: {', '.join(known)})", spec,
+                            unknown[0], f"{field}.{unknown[0]}")
 
 
 def _shape(ctx: _Ctx, obj: dict[str, Any], kind: str, field: str, base: Path) -> Shape:
@@ -79,15 +109,18 @@ def _shape(ctx: _Ctx, obj: dict[str, Any], kind: str, field: str, base: Path) ->
     where = f"{field}.{kind}"
     if kind == "box":
         return Box(tuple(ctx.numbers(obj, kind, where, 3, positive=True)))  # type: ignore[arg-type]
+    ctx.keys(spec, obj, kind, where)
     if kind == "sphere":
         return Sphere(ctx.positive(spec, "radius", where))
     if kind == "cylinder":
         return CylinderShape(ctx.positive(spec, "radius", where),
                              ctx.positive(spec, "length", where))
-    if not isinstance(spec, dict) or "file" not in spec:
-        raise ctx.fail("expected {file: PATH, scale: S}", obj, kind, where)
+    if not isinstance(spec.get("file"), str) or not spec["file"]:
+        raise ctx.fail(f"expected the mesh file name (STL/OBJ, relative to the scene file), got "
+                       f"{spec.get('file')!r}", spec, "file" if "file" in spec else None,
+                       f"{where}.file")
     scale = ctx.positive(spec, "scale", where) if "scale" in spec else 1.0
-    file = Path(str(spec["file"]))
+    file = Path(spec["file"])
     full = file if file.is_absolute() else base / file
     try:
         import trimesh
@@ -107,6 +140,16 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
     if not isinstance(data, dict):
         raise FileFormatError(path, "expected a mapping with 'name' and 'objects'",
                               line=line_of(data))
+    unknown_top = _unknown_keys(data, TOP_KEYS)
+    if unknown_top:
+        raise ctx.fail(f"unknown key '{unknown_top[0]}' (expected: "
+                       f"{', '.join(sorted(TOP_KEYS))})", data, unknown_top[0],
+                       str(unknown_top[0]))
+    name = data.get("name")
+    if name is None:
+        name = Path(path).stem
+    elif not isinstance(name, str):
+        raise ctx.fail(f"expected the scene's name as text, got {name!r}", data, "name", "name")
     objects_raw = data.get("objects", [])
     if objects_raw is None:
         objects_raw = []
@@ -118,25 +161,25 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
         field = f"objects[{i}]"
         if not isinstance(obj, dict):
             raise ctx.fail("expected a mapping (name, one shape, xyz, ...)", objects_raw, i, field)
-        unknown = sorted(set(obj) - KEYS)
+        unknown = _unknown_keys(obj, KEYS)
         if unknown:
             raise ctx.fail(f"unknown key '{unknown[0]}' (expected: {', '.join(sorted(KEYS))})",
                            obj, unknown[0], f"{field}.{unknown[0]}")
-        name = obj.get("name")
-        if not isinstance(name, str) or not name:
+        label = obj.get("name")
+        if not isinstance(label, str) or not label:
             raise ctx.fail("every object needs a 'name'", obj, "name" if "name" in obj else None,
                            f"{field}.name")
-        if name in seen:
-            raise ctx.fail(f"duplicate object name '{name}' (first at line {seen[name]})", obj,
+        if label in seen:
+            raise ctx.fail(f"duplicate object name '{label}' (first at line {seen[label]})", obj,
                            "name", f"{field}.name")
-        seen[name] = line_of(obj, "name") or 0
+        seen[label] = line_of(obj, "name") or 0
         kinds = [k for k in SHAPES if k in obj]
         if len(kinds) != 1:
-            raise ctx.fail(f"object '{name}' needs exactly one shape of: {', '.join(SHAPES)} "
+            raise ctx.fail(f"object '{label}' needs exactly one shape of: {', '.join(SHAPES)} "
                            f"(found {kinds or 'none'})", obj, None, field)
         shape = _shape(ctx, obj, kinds[0], field, base)
         if "xyz" not in obj:
-            raise ctx.fail(f"object '{name}' needs 'xyz' (its centre in base_link, m)", obj,
+            raise ctx.fail(f"object '{label}' needs 'xyz' (its centre in base_link, m)", obj,
                            None, f"{field}.xyz")
         xyz = ctx.numbers(obj, "xyz", f"{field}.xyz", 3)
         rpy = ctx.numbers(obj, "rpy", f"{field}.rpy", 3) if "rpy" in obj else [0.0, 0.0, 0.0]
@@ -144,23 +187,43 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
         if not isinstance(allow, list) or not all(isinstance(a, str) for a in allow):
             raise ctx.fail("'allow' must be a list of link names", obj, "allow",
                            f"{field}.allow")
-        objects.append(SceneObject(name, shape, transform_from_xyz_rpy(xyz, rpy), tuple(allow)))
-    name = data.get("name", Path(path).stem)
-    return Scene(str(name), tuple(objects))
+        objects.append(SceneObject(label, shape, transform_from_xyz_rpy(xyz, rpy), tuple(allow)))
+    return Scene(name, tuple(objects))
 
 
 def load_scene(path_or_name: str | Path) -> Scene:
     """A scene from a YAML file, or one of the shipped scenes by name (empty, table, shelf,
     cage)."""
     text = str(path_or_name)
-    if text in BUILTIN and not Path(text).exists():
+    path = Path(text)
+    try:
+        exists = path.exists()
+    except OSError as exc:  # e.g. a name longer than the file system allows
+        raise FileFormatError(text, f"not a usable file name: {exc.strerror or exc}") from None
+    if text in BUILTIN and not exists:
         with resources.as_file(resources.files("usar_arm") / "data" / "scenes"
                                / f"{text}.yaml") as fp:
             return load_scene(fp)
-    path = Path(text)
-    if not path.exists():
+    if not exists:
         raise FileFormatError(text, f"no such scene file (shipped scenes: {', '.join(BUILTIN)})")
-    return parse_scene(load_yaml(path), text, path.parent)
+    return parse_scene(_read_yaml(path, text), text, path.parent)
+
+
+def _read_yaml(path: Path, name: str) -> Any:
+    """:func:`load_yaml`, with the failures PyYAML raises outside ``YAMLError`` (and that
+    ``load_yaml`` lets through) turned into FileFormatError as well."""
+    try:
+        return load_yaml(path)
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(name, f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at "
+                              f"offset {exc.start}") from None
+    except RecursionError:
+        raise FileFormatError(name, "not valid YAML: nested too deeply") from None
+    except TypeError as exc:  # a list or mapping used as a mapping key: unhashable
+        raise FileFormatError(name, f"not valid YAML: a list or mapping used as a key ({exc})") \
+            from None
+    except ValueError as exc:  # a tagged or implicit scalar PyYAML cannot convert
+        raise FileFormatError(name, f"not valid YAML: {exc}") from None
 
 
 def validate_allow(scene: Scene, links: set[str], path: str = "") -> None:

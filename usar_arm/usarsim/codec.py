@@ -4,7 +4,9 @@ Grammar (usarsim-protocol.md section 2): ``COMMAND {Key value} {Key value} ...``
 command word is the text before the first ``{`` and is matched case-insensitively. Each block is
 split at its first whitespace into key and value; the value may contain spaces and commas and is
 trimmed. Blocks may touch (``}{Mount``). Keys are matched case-insensitively, except ``Link`` and
-``Value`` in ACT, which UDK compares case-sensitively. Vectors are ``x,y,z``.
+``Value`` in ACT, which UDK compares case-sensitively. Vectors are ``x,y,z``. Numbers must be
+finite: ``nan`` and ``inf``, which Python's ``float`` accepts, are refused (no USARSim server
+prints them, and they would poison joint values and limits downstream).
 
 :func:`parse_line` raises :class:`~usar_arm.errors.ProtocolError` quoting the line and the column
 of the problem. :func:`format_message` prints numbers in a :class:`NumberStyle` (default: full
@@ -13,6 +15,7 @@ float64 precision, so ``parse_line(format_message(m)) == m``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -98,9 +101,12 @@ class _Reader:
 
     def float(self, b: RawBlock) -> float:
         try:
-            return float(b.value)
+            value = float(b.value)
         except ValueError:
             raise self.error(b, f"expected a number in {{{b.key} ...}}, got '{b.value}'") from None
+        if not math.isfinite(value):
+            raise self.error(b, f"expected a finite number in {{{b.key} ...}}, got '{b.value}'")
+        return value
 
     def int(self, b: RawBlock) -> int:
         try:
@@ -119,6 +125,9 @@ class _Reader:
         except ValueError:
             raise self.error(b, f"expected three numbers x,y,z in {{{b.key} ...}}, got '{raw}'") \
                 from None
+        if not all(math.isfinite(v) for v in (x, y, z)):
+            raise self.error(b, f"expected three finite numbers x,y,z in {{{b.key} ...}}, "
+                                f"got '{raw}'")
         return (x, y, z)
 
     def opt_float(self, key: str) -> float | None:
@@ -349,6 +358,8 @@ def _parse_geo(r: _Reader) -> m.Geo:
         elif k == "tip" and "tip" not in item:
             close_link()
             item["tip"] = r.vector(b)
+        elif k == "tip":  # a second Tip is kept with the item, never with a link
+            item_extra.append((b.key, b.value))
         elif link is not None and k in ("parent", "parentlink") and "parent" not in link:
             link["parent"] = b
         elif link is not None and k in ("location", "orientation") and k not in link:
@@ -376,11 +387,19 @@ def _parse_asta(r: _Reader) -> m.Asta:
     return m.Asta(r.float(time), name.value, tuple(pairs), tuple((b.key, b.value) for b in rest))
 
 
+def _battery(r: _Reader, b: RawBlock) -> int:
+    """The battery life: an integer as UDK prints it, or a number truncated toward zero."""
+    try:
+        return int(b.value)
+    except ValueError:
+        return int(r.float(b))
+
+
 def _parse_sta(r: _Reader) -> m.Sta:
     battery = r.find("Battery")
     return m.Sta(
         time=r.float(r.require("Time", "12.5")),
-        battery=None if battery is None else int(r.float(battery)),
+        battery=None if battery is None else _battery(r, battery),
         type=r.opt_str("Type"),
         extra=r.extra("Time", "Battery", "Type"),
     )
@@ -448,6 +467,24 @@ def _blocks(pairs: list[tuple[str, str]] | tuple[m.Block, ...]) -> list[str]:
     return [_block(k, v) for k, v in pairs]
 
 
+def _same_key(a: str, b: str) -> bool:
+    return a.lower() == b.lower()
+
+
+def _unpaired(extra: tuple[m.Block, ...], same: Callable[[str, str], bool]) -> list[str]:
+    """The extra blocks of an ACT or ASTA line, printed so that they cannot pair up.
+
+    A ``{Link}`` or ``{Value}`` block lands in ``extra`` when it was not part of a Link/Value
+    pair on input; printed in order, a stray Link followed by a stray Value would become a pair
+    (with a Link that may not even be an integer). Value blocks go first and Link blocks last,
+    so no Link is ever followed by a Value; the other blocks keep their order.
+    """
+    def rank(block: m.Block) -> int:
+        return 0 if same(block[0], "Value") else 2 if same(block[0], "Link") else 1
+
+    return _blocks(sorted(extra, key=rank))
+
+
 def _line(head: str, parts: list[str], glue: str = " ") -> str:
     return (head + (" " + glue.join(parts) if parts else "")) + CRLF
 
@@ -491,7 +528,7 @@ def format_message(msg: m.Message, style: NumberStyle = FULL) -> str:
             parts += [_block("Link", str(link)), _block("Value", sc(value))]
         _opt(parts, "Gripper", msg.gripper)
         _opt(parts, "Sequence", msg.sequence)
-        return _line("ACT", parts + _blocks(msg.extra))
+        return _line("ACT", parts + _unpaired(msg.extra, str.__eq__))
     if isinstance(msg, m.Set):
         parts = [_block("Type", msg.type), _block("Name", msg.name), _block("Opcode", msg.opcode)]
         _opt(parts, "Params", msg.params)
@@ -515,7 +552,7 @@ def format_message(msg: m.Message, style: NumberStyle = FULL) -> str:
         parts = [_block("Time", sc(msg.time)), _block("Name", msg.name)]
         for link, value in msg.values:
             parts += [_block("Link", str(link)), _block("Value", sc(value))]
-        return _line("ASTA", parts + _blocks(msg.extra))
+        return _line("ASTA", parts + _unpaired(msg.extra, _same_key))
     if isinstance(msg, m.Sta):
         parts = [_block("Time", sc(msg.time))]
         _opt(parts, "Battery", msg.battery)
@@ -560,8 +597,11 @@ def _geo_item(item: m.GeoItem, s: NumberStyle) -> str:
         text += _block("Mount", item.mount)  # UDK: no space before {Mount
     if item.mount_link is not None:
         text += _block("MountLink", str(item.mount_link))
+    # Extra Tip blocks go after the item's Tip: printed first, one would become the Tip.
+    late = [(k, v) for k, v in item.extra if k.lower() == "tip"]
     for key, value in item.extra:
-        text += " " + _block(key, value)
+        if key.lower() != "tip":
+            text += " " + _block(key, value)
     for ln in item.links:
         text += " " + " ".join([
             _block("Link", str(ln.link)), _block("Parent", str(ln.parent)),
@@ -569,4 +609,6 @@ def _geo_item(item: m.GeoItem, s: NumberStyle) -> str:
             _block("Orientation", s.raw_vector(ln.orientation)), *_blocks(ln.extra)])
     if item.tip is not None:
         text += _block("Tip", s.raw_vector(item.tip))  # UDK: no space before {Tip
+    for key, value in late:
+        text += " " + _block(key, value)
     return text

@@ -24,15 +24,30 @@ import numpy as np
 
 Vector3 = tuple[float, float, float]
 
+_F32_SAFE = 3.0e38
+"""Below this magnitude a float64 always converts to a finite float32."""
+
 
 def udk_float_string(value: float, precision: int) -> str:
     """UnrealScript ``UnitsConverter.FloatString(value, precision)``, in float32 arithmetic.
 
+    A value that is not finite in float32 (NaN, +-inf, or beyond +-3.4e38 m) has no UDK form
+    (UnrealScript's ``int()`` of it is undefined): it prints as ``nan``, ``inf`` or ``-inf``,
+    which :func:`usar_arm.usarsim.codec.parse_line` refuses, instead of failing the sender.
+
     >>> udk_float_string(-1.0049, 3)
     '-1.004'
+    >>> udk_float_string(1e39, 3)
+    'inf'
     """
     f32 = np.float32
-    v = f32(value)
+    if math.isfinite(value) and abs(value) < _F32_SAFE:  # the common case, without errstate
+        v = f32(value)
+    else:
+        with np.errstate(over="ignore", invalid="ignore"):
+            v = f32(value)
+        if not np.isfinite(v):
+            return str(float(v))
     sign = ""
     if v < 0:
         sign = "-"
