@@ -64,7 +64,8 @@ class FileFormatError(InvalidInputError):
 
 
 class ProtocolError(UsarArmError):
-    """A line does not follow the USARSim grammar.
+    """A line is not USARSim: not UTF-8 text, control characters, longer than the line limit,
+    or not following the grammar.
 
     Attributes:
         line: the offending line, without its terminator.
@@ -78,8 +79,13 @@ class ProtocolError(UsarArmError):
         self.line = line
         self.position = position
         self.reason = reason
-        shown = line if len(line) <= 200 else line[:200] + "..."
-        pointer = " " * min(position, 200) + "^"
+        start = 0 if position < 150 else position - 100  # show the text around the problem
+        shown = line[start:start + 200]
+        pointer = " " * (position - start) + "^"
+        if start > 0:
+            shown, pointer = "..." + shown, "   " + pointer
+        if start + 200 < len(line):
+            shown += "..."
         super().__init__(f"{reason} at column {position + 1}:\n  {shown}\n  {pointer}")
 
 

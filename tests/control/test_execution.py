@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from usar_arm import Arm
-from usar_arm.control.executor import ExecutionOptions
+from usar_arm.control.executor import ExecutionOptions, Executor
 from usar_arm.errors import ExecutionAbortedError, InvalidInputError
 from usar_arm.spatial import rpy_to_matrix, transform
 
@@ -116,3 +116,28 @@ def test_an_offline_arm_refuses_to_execute() -> None:
     plan = offline.plan(joints=offline.home + 0.1)
     with pytest.raises(InvalidInputError, match="no connection"):
         offline.execute(plan.trajectory)
+
+
+class _RecordingClient:
+    """Stands in for a UsarClient: records the ACT targets sent."""
+
+    def __init__(self) -> None:
+        self.sent: list[dict[int, float]] = []
+        self.bad_line_count = 0
+        self.bad_lines: list[object] = []
+
+    def act(self, actuator: str, targets: dict[int, float]) -> None:
+        self.sent.append(dict(targets))
+
+
+def test_a_non_finite_target_is_never_sent_and_a_hold_goes_where_it_is_told() -> None:
+    client = _RecordingClient()
+    executor = Executor(client, "Arm", (1, 2), ("j1", "j2"), np.array([-1.0, -1.0]),  # type: ignore[arg-type]
+                        np.array([1.0, 1.0]))
+    with pytest.raises(ExecutionAbortedError, match="non-finite"):
+        executor.send(np.array([0.1, np.nan]))
+    assert client.sent == []
+    executor.hold(np.array([0.2, 5.0]))  # clamped into the limits
+    assert client.sent == [{0: 0.2, 1: 1.0}]
+    executor.hold(np.array([np.inf, 0.0]))  # refused, logged, nothing sent
+    assert len(client.sent) == 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import socket
 import time
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from tests.discover.fake_usarsim import CONF, GEO, fake_usarsim
+from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm import errors
 from usar_arm.cli.main import main
 from usar_arm.pipeline import DescribeOptions, describe
@@ -96,6 +98,26 @@ def test_geo_parents_that_are_not_a_chain(tmp_path: Path,
         code, _ = _cli(tmp_path, "--host", "127.0.0.1", "--port", str(srv.port))
     assert code == errors.EXIT_BAD_DESCRIPTION
     assert "Parent 0" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_server_that_closes_right_after_the_spawn_is_a_lost_connection(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Not 'reports no actuator' after the timeout: the connection is gone, say so at once."""
+    def script(conn: socket.socket) -> None:
+        conn.sendall(b"NFO {Gametype BotDeathMatch} {Level fake} {TimeLimit 0}\r\n")
+        read_line(conn)  # GETSTARTPOSES
+        conn.sendall(b"NFO {StartPoses 1} {Start1 0.00,0.00,0.00 0.00,0.00,0.00}\r\n")
+        read_line(conn)  # INIT
+        conn.sendall(b"STA {Time 0.1} {Battery 99999} {Type StaticPlatform}\r\n")
+        time.sleep(0.1)
+        conn.shutdown(socket.SHUT_RDWR)
+
+    with FakeServer(script) as srv:
+        code, seconds = _cli(tmp_path, "--host", "127.0.0.1", "--port", str(srv.port),
+                             "--timeout", "3")
+    assert code == errors.EXIT_CONNECTION_LOST and seconds < 2.5
+    assert "listening to the status lines of USARBot.KR60" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
 

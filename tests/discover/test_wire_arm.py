@@ -43,6 +43,25 @@ def test_conf_and_geo_must_describe_the_same_links() -> None:
     assert "links [1, 2]" in str(info.value) and "[1]" in str(info.value)
 
 
+@pytest.mark.parametrize(("where", "bad"), [
+    ("conf", m.LinkConf(1, "Revolute", 10.0, -float("inf"), float("inf"))),
+    ("conf", m.LinkConf(1, "Revolute", float("nan"), -1.0, 1.0)),
+    ("geo", m.LinkGeo(1, 0, (0.1, float("nan"), 0.0), (0.0, 0.0, 0.0))),
+    ("tip", (float("inf"), 0.0, 0.0)),
+])
+def test_numbers_that_are_not_finite_are_rejected_by_name(where: str, bad: object) -> None:
+    """Even when a parser lets NaN or inf through, no description is built from them."""
+    conf = m.ConfItem("A", (), (bad if where == "conf" else  # type: ignore[arg-type]
+                                m.LinkConf(1, "Revolute", 10.0, -1.0, 1.0),))
+    link = bad if where == "geo" else m.LinkGeo(1, 0, (0.1, 0.0, 0.0), (0.0, 0.0, 0.0))
+    geo = m.GeoItem("A", links=(link,),  # type: ignore[arg-type]
+                    tip=bad if where == "tip" else None)  # type: ignore[arg-type]
+    with pytest.raises(DescriptionError) as info:
+        arm_from_replies(PLATFORM, conf, geo, [])
+    assert "expected finite numbers" in str(info.value)
+    assert ("nan" in str(info.value)) or ("inf" in str(info.value))
+
+
 def test_printed_resolution_reads_the_decimals_sent() -> None:
     line = "GEO {Link 1} {Parent 0} {Location 0.070,0.010,-0.413} {Orientation 3.14,0.00,0.00}"
     assert printed_resolution(line, "Location") == pytest.approx(0.001)

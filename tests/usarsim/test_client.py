@@ -5,18 +5,22 @@ from __future__ import annotations
 import socket
 import threading
 import time
+from collections.abc import Callable
 
 import pytest
 
 from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm.errors import (
+    EXIT_BAD_DESCRIPTION,
     ConnectionFailedError,
     ConnectionLostError,
+    ProtocolError,
     ResponseTimeoutError,
     UnknownComponentError,
 )
 from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.client import Received, UsarClient
+from usar_arm.usarsim.client import BadLine, LineSplitter, Received, UsarClient
+from usar_arm.usarsim.codec import MAX_LINE_BYTES
 
 NFO = b"NFO {Gametype BotDeathMatch} {Level test} {TimeLimit 0}\r\n"
 
@@ -116,16 +120,122 @@ def test_a_late_reply_is_not_mistaken_for_the_answer_to_the_next_request() -> No
     assert isinstance(conf, m.Conf) and conf.items[0].name == "New"
 
 
-def test_malformed_and_oversized_server_lines_are_skipped() -> None:
+def _wait_until(condition: Callable[[], bool], timeout: float = 3.0) -> None:
+    end = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < end, "condition not met in time"
+        time.sleep(0.01)
+
+
+def test_malformed_status_lines_and_overlong_lines_are_counted_skipped_and_named() -> None:
     def script(conn: socket.socket) -> None:
         conn.sendall(NFO)
         conn.sendall(b"ASTA {Time 0.1 {Name broken}\r\n")
-        conn.sendall(b"X" * 70000 + b"\r\n")
+        # Past the 64 KiB limit the rest of a line is skipped, even text that looks like a line.
+        conn.sendall(b"X" * 70000 + b"ASTA {Time 0.2} {Name Arm} {Link 1} {Value 9}\r\n")
         conn.sendall(b"ASTA {Time 0.3} {Name Arm} {Link 1} {Value 1.5}\r\n")
         time.sleep(1)
 
     with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client:
+        _wait_until(lambda: client.latest_asta("Arm") is not None)
         assert client.wait_asta("Arm").values == ((1, 1.5),)
+        assert client.bad_line_count == 2
+        first, second = client.bad_lines
+        assert first.head == "ASTA" and "'{' inside a block" in first.error.reason
+        assert second.head == "" and "longer than 65536 bytes" in second.error.reason
+
+
+def test_the_line_buffer_stays_bounded_on_ten_megabytes_without_a_line_end() -> None:
+    splitter = LineSplitter()
+    found = []
+    for _ in range(160):  # 10 MiB in 64 KiB reads
+        found += splitter.feed(b"y" * 65536)
+        assert splitter.partial <= MAX_LINE_BYTES
+    assert len(found) == 1 and isinstance(found[0], BadLine)
+    assert splitter.feed(b"yyy\nSTA {Time 1}\r\n") == [b"STA {Time 1}"]
+
+
+def _reply_with(reply: bytes) -> Callable[[socket.socket], None]:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        read_line(conn)
+        conn.sendall(reply)
+        time.sleep(3)
+    return script
+
+
+@pytest.mark.parametrize(("reply", "reason"), [
+    (bytes(range(1, 10)) + b"\xff\xfe garbage\r\n", "is not UTF-8 text"),
+    (b"CONF {Type Actuator} {Name A\x01} {Link 1}\r\n", "control character 0x01"),
+    (b"CONF {Type Actuator} {Name A} {Link 1} {MinValue nan}\r\n", "finite"),
+    (b"\x1b[2J%%%%\r\n", "control character 0x1b"),
+    (b"%%%% !!!\r\n", "single word"),
+    (b"CONF {Type Actuator} {Name " + b"z" * 10_000_000, "longer than 65536 bytes"),
+])
+def test_a_reply_that_is_not_usarsim_fails_the_request_at_once(reply: bytes, reason: str) -> None:
+    with FakeServer(_reply_with(reply)) as srv, UsarClient(port=srv.port, timeout=5.0) as client:
+        start = time.monotonic()
+        with pytest.raises(ProtocolError) as info:
+            client.get_conf("Actuator", "A")
+        assert time.monotonic() - start < 2.0  # not the 5 s timeout
+    assert "the reply to `GETCONF {Type Actuator} {Name A}` is not USARSim" in str(info.value)
+    assert reason in str(info.value)
+    assert info.value.exit_code == EXIT_BAD_DESCRIPTION
+
+
+def test_a_malformed_asta_fails_a_wait_for_asta_at_once() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        time.sleep(0.3)
+        conn.sendall(b"ASTA {Time 0.1} {Name Arm} {Link 1} {Value inf}\r\n")
+        time.sleep(3)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=5.0) as client:
+        start = time.monotonic()
+        with pytest.raises(ProtocolError, match="while waiting for ASTA from actuator Arm"):
+            client.wait_asta("Arm")
+        assert time.monotonic() - start < 2.0
+
+
+def test_the_greeting_wait_follows_the_timeout_and_names_silence_slowness_and_garbage() -> None:
+    with FakeServer(lambda conn: time.sleep(3)) as srv:
+        start = time.monotonic()
+        with pytest.raises(ResponseTimeoutError, match="has sent nothing"):
+            UsarClient(port=srv.port, timeout=0.5).connect()  # no connect_timeout given
+        assert time.monotonic() - start < 1.0
+
+    def slow(conn: socket.socket) -> None:
+        for byte in NFO:
+            conn.sendall(bytes([byte]))
+            time.sleep(0.1)
+
+    with FakeServer(slow) as srv, pytest.raises(ResponseTimeoutError, match="too slowly"):
+        UsarClient(port=srv.port, timeout=0.5).connect()
+
+    def http(conn: socket.socket) -> None:
+        conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n")
+        time.sleep(3)
+
+    with FakeServer(http) as srv:
+        start = time.monotonic()
+        with pytest.raises(ProtocolError, match="instead of the NFO greeting"):
+            UsarClient(port=srv.port, timeout=2.0).connect()
+        assert time.monotonic() - start < 1.0
+
+
+def test_a_reply_too_slow_to_finish_is_called_slow_not_missing() -> None:
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        read_line(conn)
+        for byte in b"CONF {Type Actuator} {Name A} {Link 1}\r\n":
+            conn.sendall(bytes([byte]))
+            time.sleep(0.1)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=0.5) as client:
+        with pytest.raises(ResponseTimeoutError) as info:
+            client.get_conf("Actuator", "A")
+    assert not isinstance(info.value, UnknownComponentError)
+    assert "answering too slowly" in str(info.value) and "unfinished" in str(info.value)
 
 
 def test_act_sends_zero_based_links_in_one_line() -> None:

@@ -107,7 +107,9 @@ EXIT_CODES_HELP = f"""exit codes:
   {errors.EXIT_UNKNOWN_ROBOT}   the server spawned no robot of that class
   {errors.EXIT_UNKNOWN_START}   unknown start position
   {errors.EXIT_CONNECTION_LOST}   the server closed the connection mid-way
-  {errors.EXIT_BAD_DESCRIPTION}   invalid arm description (from the server, or failing its checks)
+  {errors.EXIT_BAD_DESCRIPTION}   invalid data from the server: a line that is not USARSim (garbage,
+       not UTF-8, too long, malformed), or an arm description failing its checks
   {errors.EXIT_INVALID_INPUT}   invalid input (file or value)
-  {errors.EXIT_UNAVAILABLE}   simulator unreachable or not answering
+  {errors.EXIT_UNAVAILABLE}   simulator unreachable, not answering, or answering too slowly
+       (within --timeout)
   {errors.EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""

@@ -8,9 +8,12 @@
 * **Settling**: after the last point the final target is held and nudged (a bounded integral
   correction) until every joint is within the tolerance: a stiffness-only drive sags under
   gravity, and the correction removes that.
-* **Safety**: too large a tracking error, feedback that stops, a dropped connection or Ctrl-C
-  stop the motion: the arm is told to hold where it is (when the connection still allows) and
-  :class:`~usar_arm.errors.ExecutionAbortedError` says which joint, by how much, and when.
+* **Safety**: too large a tracking error, feedback that stops (or comes too slowly, or is not
+  finite), a line from the server that is not USARSim, a dropped connection or Ctrl-C stop the
+  motion: the arm is told to hold where it is (when the connection still allows: at its measured
+  position, or, when the feedback cannot be trusted, where the plan says it is now) and
+  :class:`~usar_arm.errors.ExecutionAbortedError` says what happened, which joint, by how much,
+  and when. Every wait for feedback is bounded by ``feedback_timeout``.
 """
 
 from __future__ import annotations
@@ -26,7 +29,13 @@ import numpy as np
 
 from usar_arm.control.drive import DriveModel, excitation, fit
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.errors import ConnectionLostError, ExecutionAbortedError, ResponseTimeoutError
+from usar_arm.errors import (
+    ConnectionLostError,
+    ExecutionAbortedError,
+    ProtocolError,
+    ResponseTimeoutError,
+    UsarArmError,
+)
 from usar_arm.spatial import Array
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import Received, UsarClient
@@ -116,13 +125,19 @@ class _Feedback:
         self.times: list[float] = []
         self.values: list[Array] = []
         self.sim_times: list[float] = []
+        self.invalid: str | None = None
+        """The first ASTA line whose values were not finite numbers (skipped)."""
 
     def __call__(self, rec: Received) -> None:
         msg = rec.message
         if isinstance(msg, m.Asta) and msg.name.lower() == self.actuator.lower():
             values = dict(msg.values)
             if all(k in values for k in self.links):
-                self.values.append(np.array([values[k] for k in self.links]))
+                q = np.array([values[k] for k in self.links])
+                if not (np.all(np.isfinite(q)) and np.isfinite(msg.time)):
+                    self.invalid = self.invalid or rec.line
+                    return
+                self.values.append(q)
                 self.times.append(rec.wall_time)
                 self.sim_times.append(msg.time)
 
@@ -158,32 +173,80 @@ class Executor:
         self.options = options or ExecutionOptions()
         self.drive: DriveModel | None = None
         self._act_index = [k - 1 for k in links]
+        self._holding: Array | None = None
+        """The command that holds the arm where the plan has it now (updated while streaming)."""
+        self._bad_lines = 0
+        """The client's count of non-USARSim lines when the current execution began."""
+        self._t0 = 0.0
+        """When the current execution began, then when its motion began (perf_counter s)."""
 
     # ------------------------------------------------------------------ low level
     def send(self, targets: Array) -> None:
-        """One full ACT line (targets clamped into the limits)."""
+        """One full ACT line (targets clamped into the limits; never a non-finite one)."""
+        if not np.all(np.isfinite(targets)):  # before clipping, which would turn inf into a limit
+            raise ExecutionAbortedError(f"refusing to command non-finite joint targets "
+                                        f"{np.round(targets, 4).tolist()}")
         u = np.clip(targets, self.lower, self.upper)
         self.client.act(self.actuator, dict(zip(self._act_index, u.tolist(), strict=True)))
 
     def measure(self, timeout: float = 2.0, after: float | None = None) -> tuple[Array, float]:
-        """The joints of the next ASTA (newer than simulated time ``after``) and its time."""
+        """The joints of the next ASTA (newer than simulated time ``after``) and its time.
+
+        Raises:
+            ResponseTimeoutError, ConnectionLostError: no such ASTA within ``timeout`` s.
+            ProtocolError: the ASTA is unreadable, lacks a joint, or holds non-finite values.
+        """
         asta = self.client.wait_asta(self.actuator, after_time=after, timeout=timeout)
         values = dict(asta.values)
-        return np.array([values[k] for k in self.links]), asta.time
+        missing = [k for k in self.links if k not in values]
+        q = np.array([values.get(k, np.nan) for k in self.links])
+        if missing or not np.all(np.isfinite(q)):
+            line = self.client.latest_line("ASTA", self.actuator) or str(asta)
+            raise ProtocolError(line, 0, f"expected a finite {{Value}} for each of links "
+                                         f"{list(self.links)} of {self.actuator}" +
+                                (f"; links {missing} are missing" if missing else ""))
+        return q, asta.time
 
-    def hold(self) -> None:
-        """Tell the arm to stay where it is now (best effort)."""
+    def hold(self, command: Array | None = None) -> None:
+        """Tell the arm to stay where it is now (best effort): send ``command``, or, without
+        one, the measured joints of the latest ASTA (plus the drive's sag compensation)."""
         try:
-            q, _ = self.measure(timeout=0.3)
-            self.send(q)
-        except (ConnectionLostError, ResponseTimeoutError, OSError) as exc:
+            if command is None:
+                q, _ = self.measure(timeout=0.3)
+                command = self.drive.command(q, np.zeros_like(q)) if self.drive else q
+            self.send(command)
+            log.info("holding at %s", np.round(command, 4).tolist())
+        except (UsarArmError, OSError) as exc:
             log.warning("could not command a hold: %s", exc)
+
+    def _check_feedback(self, feedback: _Feedback, t0: float) -> None:
+        """Abort (holding where the plan has the arm now) when the feedback is older than
+        ``feedback_timeout`` s, was not finite, or the server sent a line that is not
+        USARSim since the execution began."""
+        now = time.perf_counter()
+        problem = None
+        new = self.client.bad_line_count - self._bad_lines
+        if new > 0:
+            bad = self.client.bad_lines[-new:][0]
+            problem = f"the server sent a line that is not USARSim: {bad.error}"
+        elif feedback.invalid is not None:
+            problem = f"ASTA feedback is not finite: {feedback.invalid[:300]}"
+        else:
+            last = feedback.times[-1] if feedback.times else t0
+            if now - last > self.options.feedback_timeout \
+                    and now - t0 > self.options.feedback_timeout:
+                problem = (f"no ASTA feedback for {now - last:.2f} s (bound "
+                           f"{self.options.feedback_timeout} s)")
+        if problem is not None:
+            self.hold(self._holding)
+            raise ExecutionAbortedError(problem, at_time_s=now - t0)
 
     # ------------------------------------------------------------------ identification
     def identify(self, duration: float = 2.0) -> DriveModel:
         """Learn each drive's lag and sag from a small swing around the current position
         (about 0.03 rad / 0.01 m), streamed like a trajectory."""
         start, _ = self.measure()
+        self._bad_lines = self.client.bad_line_count
         amplitude = np.where(self.upper - self.lower > 0.5, 0.03, 0.01)
         _, commands = excitation(start, self.lower, self.upper, amplitude, duration)
         feedback = _Feedback(self.actuator, self.links)
@@ -212,6 +275,8 @@ class Executor:
                 _sleep_until(t0 + k * dt)
                 sent[k] = time.perf_counter()
                 self.send(u)
+                self._holding = u
+                self._check_feedback(feedback, t0)
         finally:
             gc.enable()
             sys.setswitchinterval(old)
@@ -224,11 +289,30 @@ class Executor:
 
         Raises:
             ExecutionAbortedError: the arm is not at the start, the tracking error or the
-                feedback age passed its bound, the connection dropped, or Ctrl-C; the arm was
-                told to hold where it is.
+                feedback age passed its bound, the feedback was unreadable or not finite, the
+                server sent a line that is not USARSim, the connection dropped, or Ctrl-C; the
+                arm was told to hold where it is (when the connection still allows).
         """
+        self._bad_lines = self.client.bad_line_count
+        self._holding = None
+        self._t0 = time.perf_counter()  # until the motion starts: identification, settling
+        try:
+            return self._execute(trajectory, goal)
+        except KeyboardInterrupt:
+            self.hold(self._holding)
+            raise ExecutionAbortedError("interrupted (Ctrl-C)",
+                                        at_time_s=time.perf_counter() - self._t0) from None
+        except ConnectionLostError as exc:
+            raise ExecutionAbortedError(f"the connection dropped: {exc}",
+                                        at_time_s=time.perf_counter() - self._t0) from exc
+        except (ResponseTimeoutError, ProtocolError) as exc:
+            self.hold(self._holding)
+            raise ExecutionAbortedError(f"the feedback failed: {exc}",
+                                        at_time_s=time.perf_counter() - self._t0) from exc
+
+    def _execute(self, trajectory: Trajectory, goal: Array | None) -> ExecutionReport:
         opts = self.options
-        q_now, _ = self.measure()
+        q_now, _ = self.measure(timeout=opts.feedback_timeout + 0.5)
         gap = np.abs(q_now - trajectory.q[0])
         if np.max(gap) > opts.start_tolerance:
             j = int(np.argmax(gap))
@@ -249,7 +333,7 @@ class Executor:
         old = sys.getswitchinterval()
         sys.setswitchinterval(0.0005)
         gc.disable()
-        t0 = time.perf_counter()
+        t0 = self._t0 = time.perf_counter()
         try:
             for k in range(count):
                 deadlines[k] = t0 + k * dt
@@ -258,14 +342,8 @@ class Executor:
                 q, v = trajectory.at(k * dt + dt / 2)
                 sends[k] = time.perf_counter()
                 self.send(drive.command(q, v))
+                self._holding = drive.command(q, np.zeros_like(v))
                 checked = self._watch(trajectory, feedback, t0, checked, worst)
-        except KeyboardInterrupt:
-            self.hold()
-            raise ExecutionAbortedError("interrupted (Ctrl-C)",
-                                        at_time_s=time.perf_counter() - t0) from None
-        except ConnectionLostError as exc:
-            raise ExecutionAbortedError(f"the connection dropped: {exc}",
-                                        at_time_s=time.perf_counter() - t0) from exc
         finally:
             gc.enable()
             sys.setswitchinterval(old)
@@ -276,7 +354,7 @@ class Executor:
             self._watch(trajectory, feedback, t0, checked, worst)
         finally:
             unsubscribe()
-        final, _ = self.measure()
+        final, _ = self.measure(timeout=opts.feedback_timeout + 0.5)
         jitter = np.abs(sends - deadlines) * 1000
         sample_t = np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) - t0
         after_start = sample_t >= 0  # an ASTA taken just before the first command
@@ -291,14 +369,9 @@ class Executor:
 
     def _watch(self, trajectory: Trajectory, feedback: _Feedback, t0: float, checked: int,
                worst: Array) -> int:
-        """Check the ASTA samples that arrived since ``checked``; abort on a bound."""
-        now = time.perf_counter()
-        last = feedback.times[-1] if feedback.times else t0
-        if now - last > self.options.feedback_timeout and now - t0 > self.options.feedback_timeout:
-            self.hold()
-            raise ExecutionAbortedError(
-                f"no ASTA feedback for {now - last:.2f} s (bound "
-                f"{self.options.feedback_timeout} s)", at_time_s=now - t0)
+        """Check the feedback and the ASTA samples that arrived since ``checked``; abort on a
+        bound."""
+        self._check_feedback(feedback, t0)
         for i in range(checked, len(feedback.times)):
             t = feedback.sampled_at(i) - t0
             if t < 0 or t > trajectory.duration:
@@ -320,10 +393,13 @@ class Executor:
         tol = self.options.settle_tolerance
         target = goal.copy() if start is None else start.copy()
         self.send(target)
+        self._holding = target
         begin = time.perf_counter()
         good = 0
         after: float | None = None
         while time.perf_counter() - begin < settle_timeout:
+            if feedback is not None:
+                self._check_feedback(feedback, begin)
             q, after = self.measure(timeout=self.options.feedback_timeout + 0.5, after=after)
             error = q - goal
             good = good + 1 if np.max(np.abs(error)) <= tol else 0
@@ -332,6 +408,7 @@ class Executor:
             target = np.clip(target - 0.5 * error, goal - self.options.correction_limit,
                              goal + self.options.correction_limit)
             self.send(target)
+            self._holding = target
         return False, time.perf_counter() - begin
 
     def settle(self, goal: Array) -> tuple[bool, float]:

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from usar_arm.discover.wire_arm import WireArm, arm_from_replies
-from usar_arm.errors import DescriptionError, UnknownStartError
+from usar_arm.errors import ConnectionLostError, DescriptionError, UnknownStartError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.codec import format_message
@@ -108,13 +108,18 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
     while time.monotonic() < deadline or not actuators:
         actuators = [c.split(" ", 1)[1] for c in client.known_components()
                      if c.startswith("Actuator ")]
+        if client.closed_reason is not None:
+            raise ConnectionLostError(f"listening to the status lines of {robot_class} after "
+                                      "it spawned", client.closed_reason)
         if time.monotonic() > deadline + (timeout or client.timeout):
             break
         time.sleep(0.02)
     record.components = client.known_components()
     if not actuators:
-        raise DescriptionError(f"{robot_class} reports no actuator (no ASTA line arrived); "
-                               f"components seen: {', '.join(record.components) or 'none'}")
+        raise DescriptionError(f"{robot_class} reports no actuator (no ASTA line arrived within "
+                               f"{LISTEN_S + (timeout or client.timeout):g} s of its spawn; "
+                               "expected an arm); components seen: "
+                               f"{', '.join(record.components) or 'none'}")
     platform = ask(m.GetConf("Robot"), m.PlatformConf)
     assert isinstance(platform, m.PlatformConf)
     ask(m.GetGeo("Robot"), m.Geo)

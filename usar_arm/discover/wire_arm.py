@@ -7,6 +7,7 @@ relative to the parent joint). Nothing is converted or rounded; see :mod:`.frame
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from usar_arm.errors import DescriptionError
@@ -127,6 +128,28 @@ def serial_order(parents: dict[int, int]) -> list[int]:
     return order
 
 
+def _not_finite(conf_item: m.ConfItem, geo_item: m.GeoItem, sensors: list[m.GeoItem]
+                ) -> list[str]:
+    """Each number of the replies that is NaN or infinite, as 'where key value'."""
+    found: list[str] = []
+
+    def check(where: str, key: str, value: float | tuple[float, ...] | None) -> None:
+        values = (value,) if isinstance(value, float | int) else value or ()
+        if not all(math.isfinite(v) for v in values):
+            found.append(f"{where} {key} {value}")
+
+    for c in conf_item.links:
+        for key in ("min_value", "max_value", "max_torque", "max_speed"):
+            check(f"CONF link {c.link}", key, getattr(c, key))
+    for g in geo_item.links:
+        check(f"GEO link {g.link}", "Location", g.location)
+        check(f"GEO link {g.link}", "Orientation", g.orientation)
+    for item in (geo_item, *sensors):
+        for key in ("location", "orientation", "tip"):
+            check(f"GEO {item.name}", key, getattr(item, key))
+    return found
+
+
 def arm_from_replies(platform: m.PlatformConf, conf_item: m.ConfItem, geo_item: m.GeoItem,
                      sensors: list[m.GeoItem], geo_line: str = "") -> WireArm:
     """Combine the platform CONF, one actuator's CONF and GEO, and the GroundTruth GEOs.
@@ -142,6 +165,10 @@ def arm_from_replies(platform: m.PlatformConf, conf_item: m.ConfItem, geo_item: 
     geo_links = {ln.link: ln for ln in geo_item.links}
     if not geo_links:
         raise DescriptionError(f"actuator {geo_item.name}: its GEO lists no links")
+    not_finite = _not_finite(conf_item, geo_item, sensors)
+    if not_finite:
+        raise DescriptionError(f"actuator {geo_item.name}: expected finite numbers, got "
+                               + "; ".join(not_finite))
     if set(conf_links) != set(geo_links):
         problems.append(f"CONF describes links {sorted(conf_links)} but GEO describes "
                         f"{sorted(geo_links)}")
