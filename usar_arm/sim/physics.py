@@ -11,7 +11,8 @@ This is the only module that imports ``mujoco``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import contextlib
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -24,6 +25,9 @@ GRAVITY = 9.81
 """Gravitational acceleration (m/s²), along +z of the z-down world."""
 LINK_RADIUS = 0.05
 """Radius (m) of the capsules that carry each part's mass."""
+FRESH_SPEC_AFTER = 50
+"""Robot removals after which the MuJoCo spec is built anew: an ``MjSpec`` keeps about 2 KiB
+for every robot ever deleted from it (mujoco 3.x), which a long-running server must not."""
 
 
 @dataclass
@@ -37,12 +41,16 @@ class _ActuatorIndex:
     ctrl_idx: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
     tip_site: str = ""
     tip_site_id: int = -1
+    drives: list[tuple[int, float, float, float]] = field(default_factory=list)
+    """Per joint: ctrl index, sign, low and high limit (USARSim sign), for :meth:`set_targets`."""
 
 
 @dataclass
 class _RobotEntry:
     key: str
     spec: RobotSpec
+    location: tuple[float, ...]
+    rotation: tuple[float, ...]
     platform_pose: Array
     actuators: dict[str, _ActuatorIndex]
 
@@ -62,15 +70,22 @@ class PhysicsWorld:
     def __init__(self, timestep: float = 0.001, gravity: bool = True):
         self.timestep = timestep
         self.gravity = gravity
-        self._spec = mujoco.MjSpec()
-        self._spec.compiler.degree = False
-        self._spec.option.timestep = timestep
-        self._spec.option.gravity = [0.0, 0.0, GRAVITY if gravity else 0.0]
-        self._spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-        self._spec.modelname = "usar_arm_world"
+        self._spec = self._new_spec()
         self._robots: dict[str, _RobotEntry] = {}
+        self._batching = False
+        self._dirty = False
+        self._removals = 0
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
+
+    def _new_spec(self) -> mujoco.MjSpec:
+        spec = mujoco.MjSpec()
+        spec.compiler.degree = False
+        spec.option.timestep = self.timestep
+        spec.option.gravity = [0.0, 0.0, GRAVITY if self.gravity else 0.0]
+        spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        spec.modelname = "usar_arm_world"
+        return spec
 
     # ------------------------------------------------------------------ robots
     def add_robot(self, key: str, spec: RobotSpec, location: Sequence[float],
@@ -78,16 +93,23 @@ class PhysicsWorld:
         """Spawn ``spec`` at a world pose (m, roll/pitch/yaw rad); ``key`` must be unique."""
         if key in self._robots:
             raise ValueError(f"robot key {key} already in use")
-        pose = transform(rpy_to_matrix(rotation), location)
+        entry = _RobotEntry(key, spec, tuple(float(v) for v in location),
+                            tuple(float(v) for v in rotation),
+                            transform(rpy_to_matrix(rotation), location), {})
+        self._build(entry)
+        self._robots[key] = entry
+        self._changed()
+
+    def _build(self, entry: _RobotEntry) -> None:
+        """Add a robot's bodies, joints and drives to the spec (its indices are set on the next
+        rebuild of the model)."""
         platform = self._spec.worldbody.add_body(
-            name=f"{key}/platform", pos=[float(v) for v in location], quat=_quat(pose[:3, :3]))
+            name=f"{entry.key}/platform", pos=list(entry.location),
+            quat=_quat(entry.platform_pose[:3, :3]))
         platform.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.05, 0, 0], mass=1.0,
                           contype=0, conaffinity=0)
-        actuators = {}
-        for act in spec.actuators:
-            actuators[act.name] = self._add_actuator(key, platform, act)
-        self._robots[key] = _RobotEntry(key, spec, pose, actuators)
-        self._recompile()
+        entry.actuators = {act.name: self._add_actuator(entry.key, platform, act)
+                           for act in entry.spec.actuators}
 
     def _add_actuator(self, key: str, platform: mujoco.MjsBody, act: ActuatorSpec
                       ) -> _ActuatorIndex:
@@ -153,11 +175,40 @@ class PhysicsWorld:
         """Destroy a robot (when its connection closes); unknown keys are ignored."""
         if self._robots.pop(key, None) is None:
             return
-        self._spec.delete(self._spec.body(f"{key}/platform"))
-        self._recompile()
+        self._removals += 1
+        if self._removals >= FRESH_SPEC_AFTER:
+            self._removals = 0
+            self._spec = self._new_spec()
+            for entry in self._robots.values():
+                self._build(entry)
+        else:
+            self._spec.delete(self._spec.body(f"{key}/platform"))
+        self._changed()
+
+    @contextlib.contextmanager
+    def batch(self) -> Iterator[None]:
+        """Add and remove several robots with one model rebuild (a rebuild takes about 0.5 ms
+        per robot in the world); their state is not readable until the block ends."""
+        if self._batching:
+            yield
+            return
+        self._batching = True
+        try:
+            yield
+        finally:
+            self._batching = False
+            if self._dirty:
+                self._recompile()
+
+    def _changed(self) -> None:
+        if self._batching:
+            self._dirty = True
+        else:
+            self._recompile()
 
     def _recompile(self) -> None:
         """Rebuild the model, carrying every remaining robot's state over by name."""
+        self._dirty = False
         old_m, old_d = self._model, self._data
         qpos = {}
         for j in range(old_m.njnt):
@@ -177,6 +228,8 @@ class PhysicsWorld:
                 idx.ctrl_idx = np.array([mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, n)
                                          for n in idx.actuator_names], dtype=int)
                 idx.tip_site_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, idx.tip_site)
+                idx.drives = [(int(c), float(sign), jt.limit_low, jt.limit_high) for c, sign, jt
+                              in zip(idx.ctrl_idx, idx.signs, idx.spec.joints, strict=True)]
                 for k, name in enumerate(idx.joint_names):
                     if name in qpos:
                         d.qpos[idx.qpos_adr[k]], d.qvel[idx.dof_adr[k]] = qpos[name]
@@ -199,10 +252,10 @@ class PhysicsWorld:
 
     def set_targets(self, key: str, actuator: str, targets: Sequence[float]) -> None:
         """Set every joint's drive target (rad or m, USARSim sign), clamped to its limits."""
-        idx = self._index(key, actuator)
-        for k, (jt, value) in enumerate(zip(idx.spec.joints, targets, strict=True)):
-            clamped = min(jt.limit_high, max(jt.limit_low, float(value)))
-            self._data.ctrl[idx.ctrl_idx[k]] = idx.signs[k] * clamped
+        ctrl = self._data.ctrl
+        for (c, sign, low, high), value in zip(self._index(key, actuator).drives, targets,
+                                               strict=True):
+            ctrl[c] = sign * min(high, max(low, float(value)))
 
     def joint_values(self, key: str, actuator: str) -> Array:
         """Measured joint values (rad or m), positive right-handed about each joint's z axis."""

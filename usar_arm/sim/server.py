@@ -1,41 +1,45 @@
 """The embedded USARSim-compatible server: TCP on an asyncio loop, MuJoCo physics in step with it.
 
 One asyncio loop (in the caller's thread for ``usar-arm sim``, or in a background thread when
-embedded) owns everything: the listening socket, every connection, and the physics, which it
-advances in frames of :data:`FRAME_S` simulated seconds, paced against the wall clock by
-``speed``. Bad input from one client (malformed or oversized lines, a client vanishing mid-line)
-is logged and never disturbs the others.
+embedded) owns everything: the listening socket, every connection (:mod:`usar_arm.sim.connection`),
+and the physics, which it advances in frames of :data:`FRAME_S` simulated seconds, paced against
+the wall clock by ``speed``. Bad input from one client (malformed, oversized or binary lines, a
+flood of lines, a client vanishing mid-line) is counted, logged and never disturbs the others.
 """
 
 from __future__ import annotations
 
 import asyncio
+import heapq
 import logging
+import math
 import threading
 import time
 from dataclasses import dataclass
 
-from usar_arm.errors import ProtocolError
+from usar_arm.sim.connection import MAX_WRITE_BUFFER, Connection
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import RobotSpec, builtin_robots
 from usar_arm.sim.session import Session
 from usar_arm.sim.world_spec import WorldSpec, load_world
-from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.codec import MAX_LINE_BYTES, format_message, parse_line
 from usar_arm.usarsim.numbers import STYLES, NumberStyle
 
+__all__ = ["MAX_CONNECTIONS", "MAX_WRITE_BUFFER", "SimOptions", "SimServer", "wait_for_port"]
+
 log = logging.getLogger("usar_arm.sim")
-wire_log = logging.getLogger("usar_arm.sim.wire")
 
 FRAME_S = 0.002
 """Simulated seconds per physics frame (commands are applied at frame boundaries)."""
 CATCH_UP_FRAMES = 100
-"""Frames (0.2 s of simulated time) the physics may run back to back to catch up with the
-clock; further behind, simulated time is re-anchored (and runs slower than asked)."""
+"""Frames (0.2 s of simulated time) the physics may fall behind the clock and catch up; further
+behind, simulated time is re-anchored (and runs slower than asked)."""
+PHYSICS_TURN_S = 0.005
+"""Wall seconds of frames the physics runs back to back (when catching up) before it lets the
+connections have a turn."""
+BEHIND_LOG_INTERVAL_S = 30.0
+"""Wall seconds between repeated "physics cannot keep up" warnings."""
 MAX_CONNECTIONS = 64
 """As UDK's ``[USARBotAPI.BotServer] MaxConnections``."""
-MAX_WRITE_BUFFER = 4 * 1024 * 1024
-"""A client that lets this many bytes pile up unread is disconnected."""
 
 
 @dataclass(frozen=True)
@@ -67,98 +71,6 @@ class SimOptions:
             raise ValueError(f"physics_hz must be >= 500, got {self.physics_hz}")
 
 
-class _Connection(asyncio.Protocol):
-    """Line framing for one client: any of CR, LF, CRLF; partial reads; 64 KiB line cap."""
-
-    def __init__(self, server: SimServer):
-        self.server = server
-        self.buffer = bytearray()
-        self.skipping = False
-        self.transport: asyncio.Transport | None = None
-        self.session: Session | None = None
-
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.Transport)
-        self.transport = transport
-        peer = transport.get_extra_info("peername")
-        peer_text = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
-        if len(self.server.sessions) >= MAX_CONNECTIONS:
-            log.warning("%s: refused: %d connections already (the limit)", peer_text,
-                        MAX_CONNECTIONS)
-            transport.close()
-            return
-        self.server.counter += 1
-        self.server.connections.add(self)
-        self.session = Session(f"c{self.server.counter}", peer_text, self.send)
-        self.server.sessions[self.session.key] = self.session
-        log.info("%s: connected", peer_text)
-        self.send(m.GameInfo(self.server.world_spec.gametype, self.server.world_spec.level,
-                             self.server.world_spec.time_limit))
-
-    def send(self, msg: m.Message) -> None:
-        if self.transport is None or self.transport.is_closing():
-            return
-        text = format_message(msg, self.server.style)
-        wire_log.debug("-> %s %s", self.session.peer if self.session else "?", text.rstrip())
-        self.transport.write(text.encode("ascii", "replace"))
-        if self.transport.get_write_buffer_size() > MAX_WRITE_BUFFER:
-            log.warning("%s: not reading its messages (%d bytes queued); disconnected",
-                        self.session.peer if self.session else "?",
-                        self.transport.get_write_buffer_size())
-            self.transport.abort()
-
-    def data_received(self, data: bytes) -> None:
-        if self.session is None:
-            return
-        self.buffer.extend(data)
-        while True:
-            cut = min((i for i in (self.buffer.find(b"\n"), self.buffer.find(b"\r")) if i >= 0),
-                      default=-1)
-            if cut < 0:
-                break
-            raw = bytes(self.buffer[:cut])
-            del self.buffer[: cut + 1]
-            if self.skipping:
-                self.skipping = False
-                continue
-            if raw.strip():
-                self._line(raw)
-        if len(self.buffer) > MAX_LINE_BYTES:
-            log.warning("%s: line longer than %d bytes discarded", self.session.peer,
-                        MAX_LINE_BYTES)
-            self.buffer.clear()
-            self.skipping = True
-
-    def _line(self, raw: bytes) -> None:
-        assert self.session is not None
-        text = raw.decode("utf-8", "replace")
-        wire_log.debug("<- %s %s", self.session.peer, text)
-        try:
-            msg = parse_line(text)
-        except ProtocolError as exc:
-            log.warning("%s: malformed line ignored: %s", self.session.peer, exc)
-            return
-        try:
-            self.session.handle(msg, self.server.world, self.server.world_spec,
-                                self.server.robots, self.server.style)
-        except Exception:  # a bug must not take the server down for everyone
-            log.exception("%s: error while handling %r", self.session.peer, text)
-
-    def connection_lost(self, exc: Exception | None) -> None:
-        self.server.connections.discard(self)
-        if self.session is None:
-            return
-        if self.buffer:
-            log.info("%s: left mid-line (%d bytes unterminated)", self.session.peer,
-                     len(self.buffer))
-        self.server.sessions.pop(self.session.key, None)
-        if self.session.robot is not None:
-            self.server.world.remove_robot(self.session.key)
-        log.info("%s: disconnected%s", self.session.peer, "; robot destroyed"
-                 if self.session.robot is not None else "")
-        self.session = None
-
-
 class SimServer:
     """The simulator. Use :meth:`start` (background thread) or :meth:`run` (this thread).
 
@@ -178,8 +90,15 @@ class SimServer:
         self.world = PhysicsWorld(timestep=1.0 / self.options.physics_hz,
                                   gravity=self.options.gravity)
         self.sessions: dict[str, Session] = {}
-        self.connections: set[_Connection] = set()
+        self.connections: dict[str, Connection] = {}
+        self.max_connections = MAX_CONNECTIONS
         self.counter = 0
+        self.leaving: list[str] = []
+        """Keys of robots whose connection closed, destroyed at the next physics frame."""
+        self._status_due: list[tuple[float, str]] = []
+        """(simulated time, session key) of the next status of every robot (a heap)."""
+        self.behind_count = 0
+        """How often the physics fell so far behind the clock that simulated time slowed."""
         self.port: int | None = None
         self._steps_per_frame = max(1, round(FRAME_S * self.options.physics_hz))
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -193,7 +112,7 @@ class SimServer:
         """Listen and simulate until :meth:`stop` is called."""
         self._loop = asyncio.get_running_loop()
         self._stop = asyncio.Event()
-        server = await self._loop.create_server(lambda: _Connection(self), self.options.host,
+        server = await self._loop.create_server(lambda: Connection(self), self.options.host,
                                                 self.options.port, reuse_address=True)
         self.port = server.sockets[0].getsockname()[1]
         log.info("listening on %s:%d", self.options.host, self.port)
@@ -204,7 +123,7 @@ class SimServer:
         finally:
             physics.cancel()
             server.close()
-            for conn in list(self.connections):
+            for conn in list(self.connections.values()):
                 if conn.transport is not None:
                     conn.transport.abort()
             await server.wait_closed()
@@ -260,33 +179,69 @@ class SimServer:
     async def _physics(self) -> None:
         loop = asyncio.get_running_loop()
         speed = self.options.speed
-        wall0, sim0 = loop.time(), self.world.time
-        behind_logged = False
+        world = self.world
+        wall0, sim0 = loop.time(), world.time
+        logged_wall, logged_sim = -math.inf, 0.0
         while True:
-            target = sim0 + (loop.time() - wall0) * speed
-            frames = 0
-            while self.world.time + FRAME_S / 2 <= target and frames < CATCH_UP_FRAMES:
+            now = loop.time()
+            target = sim0 + (now - wall0) * speed
+            if target - world.time > CATCH_UP_FRAMES * FRAME_S:  # far behind: re-anchor
+                self.behind_count += 1
+                if now - logged_wall >= BEHIND_LOG_INTERVAL_S:
+                    ratio = "" if logged_wall == -math.inf else (
+                        f" (simulated time ran at "
+                        f"{(world.time - logged_sim) / (now - logged_wall):.2f}x the wall "
+                        f"clock over the last {now - logged_wall:.0f} s)")
+                    log.warning("physics cannot keep up with --speed %g with %d robot(s); "
+                                "simulated time now runs slower than asked%s", speed,
+                                len(world.robot_keys), ratio)
+                    logged_wall, logged_sim = now, world.time
+                wall0, sim0 = now, world.time
+                target = sim0
+            turn_end = time.perf_counter() + PHYSICS_TURN_S
+            while world.time + FRAME_S / 2 <= target:
                 self._frame()
-                frames += 1
-            if frames == CATCH_UP_FRAMES:  # far behind: re-anchor rather than spiral
-                if not behind_logged:
-                    log.warning("physics cannot keep up with --speed %g; simulated time now "
-                                "runs slower than asked", speed)
-                    behind_logged = True
-                wall0, sim0 = loop.time(), self.world.time
-            wait = wall0 + (self.world.time + FRAME_S - sim0) / speed - loop.time()
+                if time.perf_counter() > turn_end:
+                    break  # behind: let the connections run, then go on
+            wait = wall0 + (world.time + FRAME_S - sim0) / speed - loop.time()
             await asyncio.sleep(max(0.0, wait))
 
     def _frame(self) -> None:
-        for session in list(self.sessions.values()):
-            if session.pending is not None:
-                session.spawn_pending(self.world)
-        self.world.step(self._steps_per_frame)
-        for session in list(self.sessions.values()):
+        world = self.world
+        spawning = [s for s in self.sessions.values() if s.pending is not None]
+        if spawning or self.leaving:
             try:
-                session.status(self.world, self.style)
+                with world.batch():  # one model rebuild for all of them
+                    for key in self.leaving:
+                        world.remove_robot(key)
+                    self.leaving.clear()
+                    for session in spawning:
+                        session.spawn_pending(world)
+            except Exception:  # the physics must go on for everyone else
+                log.exception("spawning %s failed", ", ".join(s.peer for s in spawning))
+                for session in spawning:
+                    session.pending = session.robot = None
+                self.leaving.clear()
+                spawning = []
+            for session in spawning:
+                heapq.heappush(self._status_due, (session.next_status, session.key))
+        world.step(self._steps_per_frame)
+        due = self._status_due
+        while due and due[0][0] <= world.time + 1e-9:
+            _, key = heapq.heappop(due)
+            conn = self.connections.get(key)
+            session = conn.session if conn is not None else None
+            if session is None or session.robot is None:
+                continue  # gone
+            try:
+                msgs = session.status(world)
+                conn.send_all(msgs)  # type: ignore[union-attr]
             except Exception:
                 log.exception("%s: error while sending status", session.peer)
+                msgs = []
+            heapq.heappush(due, (session.next_status, key))
+            if not msgs:
+                break  # not due after all (cannot happen; never spin)
 
 
 def wait_for_port(host: str, port: int, timeout: float = 5.0) -> None:

@@ -4,11 +4,18 @@ Behaviour follows UDK's ``BotConnection.uc`` (usarsim-protocol.md sections 3, 4 
 INIT (the robot appears at the next physics frame), commands other than INIT/GETSTARTPOSES are
 dropped until the robot exists, no reply to a GETCONF/GETGEO that matches nothing, ACT links are
 0-based and out-of-range links are ignored, targets are clamped to the joint limits.
+
+Everything refused or ignored is counted per connection (:class:`Rejections`) and logged: the
+first few of each kind in full, the rest as a count every :data:`SUMMARY_INTERVAL_S` and at
+disconnect, so that a client flooding junk cannot flood the log.
 """
 
 from __future__ import annotations
 
 import logging
+import math
+import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -16,7 +23,7 @@ import numpy as np
 
 from usar_arm.sim import describe
 from usar_arm.sim.physics import PhysicsWorld
-from usar_arm.sim.robot_spec import RobotSpec
+from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
 from usar_arm.sim.world_spec import WorldSpec
 from usar_arm.spatial import matrix_to_rpy
 from usar_arm.usarsim import messages as m
@@ -25,6 +32,68 @@ from usar_arm.usarsim.numbers import NumberStyle
 log = logging.getLogger("usar_arm.sim")
 
 Send = Callable[[m.Message], None]
+
+LOG_FIRST = 3
+"""Refusals of each kind per connection that are logged one by one."""
+SUMMARY_INTERVAL_S = 10.0
+"""Wall seconds between the counts of refusals that were not logged one by one."""
+MAX_CACHED_REPLIES = 64
+"""CONF/GEO replies a session remembers (they depend only on the robot and the request)."""
+
+
+@dataclass
+class Rejections:
+    """What one connection sent and what of it was refused, with a throttled log.
+
+    Attributes:
+        peer: client address, for logs.
+        received: complete lines received (including refused ones).
+        served: lines handled without any refusal.
+        bytes_in: bytes received.
+        counts: refusals by kind (``malformed``, ``oversized``, ``binary``, ``unknown command``...).
+    """
+
+    peer: str
+    received: int = 0
+    served: int = 0
+    bytes_in: int = 0
+    total: int = 0
+    """Refusals of every kind."""
+    counts: Counter[str] = field(default_factory=Counter)
+    _unlogged: Counter[str] = field(default_factory=Counter)
+    _last_summary: float = field(default_factory=time.monotonic)
+
+    def count(self, kind: str, n: int = 1) -> None:
+        """Count refusals without logging them (the disconnect summary reports them)."""
+        self.counts[kind] += n
+        self.total += n
+
+    def reject(self, kind: str, fmt: str, *args: object, level: int = logging.WARNING) -> None:
+        """Count a refusal of ``kind``; log it in full if it is one of the first few."""
+        n = self.counts[kind] = self.counts[kind] + 1
+        self.total += 1
+        if n <= LOG_FIRST:
+            more = (f" (further '{kind}' refusals are only counted)" if n == LOG_FIRST else "")
+            log.log(level, "%s: " + fmt + more, self.peer, *args)
+            return
+        self._unlogged[kind] += 1
+        now = time.monotonic()
+        if now - self._last_summary >= SUMMARY_INTERVAL_S:
+            log.warning("%s: %d more refused in the last %.0f s, not logged one by one (%s)",
+                        self.peer, sum(self._unlogged.values()), now - self._last_summary,
+                        _kinds(self._unlogged))
+            self._unlogged.clear()
+            self._last_summary = now
+
+    def summary(self) -> str:
+        """One line for the disconnect log: lines, served, refused by kind, bytes."""
+        refused = f", refused {self.total} ({_kinds(self.counts)})" if self.counts else ""
+        return (f"{self.received} lines, served {self.served}{refused}; "
+                f"{self.bytes_in} bytes in")
+
+
+def _kinds(counts: Counter[str]) -> str:
+    return ", ".join(f"{kind} {n}" for kind, n in counts.most_common())
 
 
 @dataclass
@@ -55,44 +124,53 @@ class Session:
     pending: PendingSpawn | None = None
     targets: dict[str, list[float]] = field(default_factory=dict)
     next_status: float = 0.0
+    rejections: Rejections = field(init=False)
+    _actuators: dict[str, ActuatorSpec] = field(default_factory=dict)
+    _replies: dict[tuple[bool, str, str | None], m.Message | None] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.rejections = Rejections(self.peer)
 
     # ------------------------------------------------------------------ commands
     def handle(self, msg: m.Message, world: PhysicsWorld, world_spec: WorldSpec,
                robots: dict[str, RobotSpec], style: NumberStyle) -> None:
         """Act on one command from the client (replies go through ``send``)."""
-        if isinstance(msg, m.GetStartPoses):
+        reject = self.rejections.reject
+        if isinstance(msg, m.Act) and self.robot is not None:
+            self._act(msg, world)
+        elif isinstance(msg, m.GetStartPoses):
             self.send(m.StartPoses(world_spec.start_poses))
         elif isinstance(msg, m.Init):
             self._init(msg, world_spec, robots)
         elif self.robot is None:
-            log.warning("%s: %s before the robot exists (send INIT first); dropped, as UDK does",
-                        self.peer, type(msg).__name__.upper())
+            head = msg.head if isinstance(msg, m.Unknown) else type(msg).__name__.upper()
+            reject("before INIT", "%s before the robot exists (send INIT first); dropped, as "
+                   "UDK does", head[:40])
         elif isinstance(msg, (m.GetConf, m.GetGeo)):
             self._describe(msg, style)
-        elif isinstance(msg, m.Act):
-            self._act(msg, world)
         elif isinstance(msg, (m.Set, m.Drive)):
-            log.info("%s: %s ignored: a %s has no effectors or drive", self.peer,
-                     type(msg).__name__.upper(), self.robot.platform_type)
+            reject("no effector", "%s ignored: a %s has no effectors or drive",
+                   type(msg).__name__.upper(), self.robot.platform_type, level=logging.INFO)
         else:
             head = msg.head if isinstance(msg, m.Unknown) else type(msg).__name__.upper()
-            log.warning("%s: unknown or unsupported command %s ignored", self.peer, head)
+            reject("unknown command", "unknown or unsupported command %r ignored", head[:40])
 
     def _init(self, msg: m.Init, world_spec: WorldSpec, robots: dict[str, RobotSpec]) -> None:
+        reject = self.rejections.reject
         if self.robot is not None or self.pending is not None:
-            log.warning("%s: INIT ignored: this connection already has a robot (one per "
-                        "connection)", self.peer)
+            reject("second INIT", "INIT ignored: this connection already has a robot (one per "
+                   "connection)")
             return
         spec = next((r for c, r in robots.items() if c.lower() == msg.class_name.lower()), None)
         if spec is None:
-            log.warning("%s: INIT: unknown robot class '%s' (known: %s); nothing spawned",
-                        self.peer, msg.class_name, ", ".join(sorted(robots)))
+            reject("unknown class", "INIT: unknown robot class '%s' (known: %s); nothing spawned",
+                   msg.class_name[:80], ", ".join(sorted(robots)))
             return
         if msg.start is not None:
             pose = world_spec.find_start(msg.start)
             if pose is None:
-                log.warning("%s: INIT: unknown start '%s' (known: %s); nothing spawned",
-                            self.peer, msg.start, ", ".join(p.name for p in world_spec.start_poses))
+                reject("unknown start", "INIT: unknown start '%s' (known: %s); nothing spawned",
+                       msg.start[:80], ", ".join(p.name for p in world_spec.start_poses))
                 return
             location, rotation = pose.location, pose.rotation
         else:
@@ -109,6 +187,7 @@ class Session:
         world.add_robot(self.key, p.spec, p.location, p.rotation)
         self.robot, self.robot_name = p.spec, p.name
         self.targets = {a.name: [0.0] * len(a.joints) for a in p.spec.actuators}
+        self._actuators = {a.name.lower(): a for a in p.spec.actuators}
         self.next_status = world.time + describe.SCAN_INTERVAL
         log.info("%s: spawned %s '%s' at %s", self.peer, p.spec.class_name, p.name,
                  ",".join(f"{v:g}" for v in p.location))
@@ -116,60 +195,73 @@ class Session:
     def _describe(self, msg: m.GetConf | m.GetGeo, style: NumberStyle) -> None:
         assert self.robot is not None
         reply: m.Message | None
-        if isinstance(msg, m.GetConf):
-            reply = describe.conf_reply(self.robot, self.robot_name, msg.type, msg.name)
+        key = (isinstance(msg, m.GetConf), msg.type, msg.name)
+        if key in self._replies:  # the answers never change: compute each once
+            reply = self._replies[key]
         else:
-            reply = describe.geo_reply(self.robot, self.robot_name, msg.type, msg.name, style)
+            if isinstance(msg, m.GetConf):
+                reply = describe.conf_reply(self.robot, self.robot_name, msg.type, msg.name)
+            else:
+                reply = describe.geo_reply(self.robot, self.robot_name, msg.type, msg.name, style)
+            if len(self._replies) < MAX_CACHED_REPLIES:
+                self._replies[key] = reply
         if reply is None:
-            log.info("%s: %s {Type %s} {Name %s} matches nothing; no reply, as UDK does "
-                     "(components: %s)", self.peer, type(msg).__name__.upper(), msg.type,
-                     msg.name, ", ".join(describe.known_components(self.robot)))
+            self.rejections.reject(
+                "matches nothing", "%s {Type %s} {Name %s} matches nothing; no reply, as UDK "
+                "does (components: %s)", type(msg).__name__.upper(), msg.type[:80],
+                (msg.name or "")[:80], ", ".join(describe.known_components(self.robot)),
+                level=logging.INFO)
             return
         self.send(reply)
 
     def _act(self, msg: m.Act, world: PhysicsWorld) -> None:
         assert self.robot is not None
-        act = next((a for a in self.robot.actuators if a.name.lower() == msg.name.lower()), None)
+        reject = self.rejections.reject
+        act = self._actuators.get(msg.name.lower())
         if act is None:
-            log.warning("%s: ACT for unknown actuator '%s' (this robot has: %s)", self.peer,
-                        msg.name, ", ".join(a.name for a in self.robot.actuators))
+            reject("unknown actuator", "ACT for unknown actuator '%s' (this robot has: %s)",
+                   msg.name[:80], ", ".join(a.name for a in self.robot.actuators))
             return
         if not msg.targets:
-            log.warning("%s: ACT without any {Link i} {Value v} pair (both keys are "
-                        "case-sensitive)", self.peer)
+            reject("ACT without links", "ACT without any {Link i} {Value v} pair (both keys "
+                   "are case-sensitive)")
         cmd = self.targets[act.name]
+        joints = act.joints
         for link, value in msg.targets:
-            if 0 <= link < len(act.joints):
-                jt = act.joints[link]
-                if not np.isfinite(value):
-                    log.warning("%s: ACT link %d value %r is not finite; ignored", self.peer, link,
-                                value)
+            if 0 <= link < len(joints):
+                if not math.isfinite(value):
+                    reject("non-finite value", "ACT link %d value %r is not finite; ignored",
+                           link, value)
                     continue
+                jt = joints[link]
                 cmd[link] = min(jt.limit_high, max(jt.limit_low, value))
             else:
-                log.warning("%s: ACT link %d out of range 0..%d (ACT links are 0-based); "
-                            "ignored", self.peer, link, len(act.joints) - 1)
+                reject("link out of range", "ACT link %d out of range 0..%d (ACT links are "
+                       "0-based); ignored", link, len(joints) - 1)
         world.set_targets(self.key, act.name, cmd)
 
     # ------------------------------------------------------------------ streams
-    def status(self, world: PhysicsWorld, style: NumberStyle) -> None:
-        """Send STA, SEN (GroundTruth) and ASTA when the 10 Hz status timer is due."""
+    def status(self, world: PhysicsWorld) -> list[m.Message]:
+        """STA, SEN (GroundTruth) and ASTA when the 10 Hz status timer is due, else nothing.
+
+        The caller sends them (in one write)."""
         if self.robot is None or world.time + 1e-9 < self.next_status:
-            return
+            return []
         self.next_status += describe.SCAN_INTERVAL
         t = world.time
         spec = self.robot
-        self.send(m.Sta(t, spec.battery, spec.platform_type))
+        out: list[m.Message] = [m.Sta(t, spec.battery, spec.platform_type)]
         plat = world.platform_pose(self.key)
         for it in spec.items:
             if it.type.lower() == "groundtruth":
-                self.send(_pose_sen(t, it.name, plat))
+                out.append(_pose_sen(t, it.name, plat))
         for act in spec.actuators:
             if act.tip_sensor:
-                self.send(_pose_sen(t, act.tip_sensor, world.tip_pose(self.key, act.name)))
+                out.append(_pose_sen(t, act.tip_sensor, world.tip_pose(self.key, act.name)))
         for act in spec.actuators:
-            values = world.joint_values(self.key, act.name)
-            self.send(m.Asta(t, act.name, tuple((i + 1, float(v)) for i, v in enumerate(values))))
+            values = world.joint_values(self.key, act.name).tolist()
+            out.append(m.Asta(t, act.name, tuple(enumerate(values, start=1))))
+        return out
 
 
 def _pose_sen(t: float, name: str, pose: np.ndarray) -> m.Sen:

@@ -1,0 +1,178 @@
+#!/usr/bin/env python3
+"""Load test of ``usar-arm sim``: N clients, each spawning a KR60 and streaming ACT.
+
+The simulator runs in its own process (started here, or one already running with ``--port``);
+the clients share one asyncio loop in this process. Per client the tool measures the ASTA rate
+per wall second and per simulated second (from ``{Time t}``), the largest gap between ASTAs, the
+GETCONF round trip, and how closely joint 1 follows its commanded sine; of the server it samples
+RSS, thread count and CPU time. Optionally one more client floods the server.
+
+    python tools/load_sim.py --clients 64 --rate 100 --seconds 60 --json load.json
+
+Exit status: 0 when every client kept its connection and the server survived, 1 otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from simharness import (
+    FLOOD_KINDS,
+    Bot,
+    Flooder,
+    ProcSample,
+    ServerProcess,
+    log_counts,
+    machine_load,
+    process_summary,
+    summarise_bots,
+)
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None,
+                                epilog="Results: one JSON object (--json FILE, else stdout); "
+                                       "a short summary on stderr.")
+    p.add_argument("--clients", type=int, default=64, help="well-behaved clients (default 64)")
+    p.add_argument("--rate", type=float, default=100.0, help="ACT lines/s per client (100)")
+    p.add_argument("--seconds", type=float, default=60.0,
+                   help="streaming time once every robot exists (default 60)")
+    p.add_argument("--warmup", type=float, default=5.0,
+                   help="seconds at the start left out of rates and slopes (default 5)")
+    p.add_argument("--probe-every", type=float, default=1.0,
+                   help="seconds between GETCONF round-trip probes per client (0: none)")
+    p.add_argument("--sample-every", type=float, default=2.0,
+                   help="seconds between RSS/thread/CPU samples of the server (default 2)")
+    p.add_argument("--speed", type=float, default=1.0, help="--speed of the simulator")
+    p.add_argument("--port", type=int, default=0,
+                   help="use a simulator already listening on this port (no process figures)")
+    p.add_argument("--flood", type=float, default=0.0,
+                   help="one more client sends this many lines/s (e.g. 10000)")
+    p.add_argument("--flood-kind", choices=FLOOD_KINDS, default="act",
+                   help="what the flooding client sends (default act: valid ACT lines)")
+    p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
+    p.add_argument("--json", type=Path, help="write the results to this file")
+    return p.parse_args(argv)
+
+
+async def run_load(port: int, server: ServerProcess | None, args: argparse.Namespace
+                   ) -> dict[str, Any]:
+    stop = asyncio.Event()
+    bots = [Bot(i, rate=args.rate, probe_every=args.probe_every) for i in range(args.clients)]
+    samples: list[ProcSample] = []
+
+    async def sampler() -> None:
+        while not stop.is_set() and server is not None and server.alive():
+            samples.append(server.sample())
+            await asyncio.sleep(args.sample_every)
+
+    started = time.monotonic()
+    cpu0 = time.process_time()
+    sampling = asyncio.create_task(sampler())
+    tasks = [asyncio.create_task(b.run(port, stop)) for b in bots]
+    while (any(b.spawned_at is None and b.lost is None for b in bots)
+           and time.monotonic() - started < 120):
+        await asyncio.sleep(0.1)
+    ready = time.monotonic()
+    flooder = None
+    if args.flood > 0:
+        flooder = Flooder(args.flood_kind, args.flood)
+        tasks.append(asyncio.create_task(flooder.run(port, stop)))
+    await asyncio.sleep(args.seconds)
+    end = time.monotonic()
+    stop.set()
+    await asyncio.wait(tasks, timeout=15)
+    sampling.cancel()
+    t0 = ready + min(args.warmup, args.seconds / 2)
+    rows = [b.summary(t0, end) for b in bots]
+    result: dict[str, Any] = {
+        "clients": args.clients, "rate_hz": args.rate, "seconds": args.seconds,
+        "spawn_s": round(ready - started, 2), "window_s": round(end - t0, 2),
+        "load_before": args.load_before, "load_after": machine_load(),
+        "asta": summarise_bots(rows),
+        "server": process_summary(samples, t0),
+        "client_cpu_percent": round(100 * (time.process_time() - cpu0) / (end - started), 1),
+        "server_samples": [[round(s.t - started, 2), s.rss_kib, s.threads, round(s.cpu_s, 2)]
+                           for s in samples],
+        "per_client": rows,
+    }
+    speed = result["asta"]["sim_speed"].get("median")
+    if result["server"] and speed:
+        result["server"]["cpu_s_per_sim_s"] = round(
+            result["server"]["cpu_percent"] / 100 / speed, 3)
+    if flooder is not None:
+        result["flood"] = {"kind": flooder.kind, "rate": flooder.rate,
+                           "sent_lines": flooder.sent_lines, "sent_bytes": flooder.sent_bytes,
+                           "lost": flooder.lost}
+    return result
+
+
+def print_summary(result: dict[str, Any]) -> None:
+    a, s = result["asta"], result.get("server", {})
+
+    def q(k: str) -> str:
+        v = a[k]
+        return f"{v['min']:.3f} / {v['median']:.3f} / {v['max']:.3f}" if v.get("n") else "-"
+
+    lines = [
+        f"{result['clients']} clients x {result['rate_hz']:g} Hz ACT, window "
+        f"{result['window_s']} s (spawn took {result['spawn_s']} s); load {result['load_after']}",
+        f"  ASTA per wall s   min/med/max {q('asta_per_wall_s')}",
+        f"  ASTA per sim s    min/med/max {q('asta_per_sim_s')}",
+        f"  sim speed         min/med/max {q('sim_speed')}",
+        f"  ASTA max gap (s)  min/med/max {q('max_gap_wall_s')}",
+        f"  ACT sent per s    min/med/max {q('act_per_s')}",
+        f"  GETCONF rtt p50ms min/med/max {q('rtt_ms_median')}",
+        f"  GETCONF rtt max   min/med/max {q('rtt_ms_max')}",
+        f"  joint-1 track rms min/med/max {q('track_rms_mrad')} mrad",
+        f"  lost connections  {len(a['lost'])} {a['lost'][:3]}",
+    ]
+    if s:
+        lines.append(f"  server CPU {s['cpu_percent']} % ({s.get('cpu_s_per_sim_s')} CPU s per "
+                     f"simulated s; waited for a CPU {s['runqueue_wait_percent']} % of the time)"
+                     f"; client CPU {result['client_cpu_percent']} %")
+        lines.append(f"  server RSS {s['rss_kib_first']}->"
+                     f"{s['rss_kib_last']} KiB (slope {s['rss_slope_kib_per_min']} KiB/min), "
+                     f"threads {s['threads_first']}->{s['threads_last']}")
+    if "server_log" in result:
+        lines.append(f"  server log: {result['server_log']}")
+    sys.stderr.write("\n".join(lines) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    args.load_before = machine_load()
+    server = None
+    log_path = args.server_log or Path(tempfile.mkdtemp(prefix="load_sim_")) / "sim.log"
+    if not args.port:
+        server = ServerProcess(log_path, speed=args.speed)
+    port = args.port or server.port  # type: ignore[union-attr]
+    try:
+        result = asyncio.run(run_load(port, server, args))
+        result["server_alive"] = server.alive() if server else None
+    finally:
+        code = server.stop() if server else None
+    if server is not None:
+        text = server.log_text()
+        result["server_exit"] = code
+        result["server_log"] = str(log_path)
+        result["server_log_counts"] = log_counts(text)
+    text_out = json.dumps(result, indent=1)
+    if args.json:
+        args.json.write_text(text_out + "\n")
+    else:
+        sys.stdout.write(text_out + "\n")
+    print_summary(result)
+    ok = not result["asta"]["lost"] and result.get("server_alive") is not False
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,477 @@
+"""Shared machinery of the simulator load, abuse and soak tools (not part of the package).
+
+* :class:`ServerProcess`: ``usar-arm sim`` in its own process, its log in a file, its RSS, thread
+  count and CPU time read from ``/proc/<pid>``.
+* :class:`Bot`: one well-behaved client on raw asyncio streams. It spawns a robot, streams full
+  ``ACT`` lines at a fixed rate on drift-free deadlines (joint 1 follows a slow sine), probes the
+  request round trip with ``GETCONF {Type Robot}`` and records every ``ASTA`` (wall and simulated
+  time) and the tracking error of joint 1, so that any time window can be summarised afterwards.
+* :class:`Flooder`: one abusive client sending a fixed number of lines per second (valid ACT,
+  malformed lines, binary junk or oversized lines).
+
+Wall times are ``time.monotonic()`` seconds; simulated times are the ``{Time t}`` of the server.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import math
+import os
+import re
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from array import array
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+ACTUATOR = "KR60Arm"
+ROBOT_CLASS = "USARBot.KR60"
+_LISTENING = re.compile(r"listening on [^:\s]+:(\d+)")
+_TIME = re.compile(rb"\{Time ([^}]*)\}")
+_VALUE = re.compile(rb"\{Value ([^}]*)\}")
+
+
+# ---------------------------------------------------------------------------------- the server
+
+
+@dataclass(frozen=True)
+class ProcSample:
+    """One reading of the server process: wall time (s), RSS (KiB), threads, CPU time (s), and
+    how long its main thread has waited for a CPU while runnable (s; high on a busy machine)."""
+
+    t: float
+    rss_kib: int
+    threads: int
+    cpu_s: float
+    wait_s: float = 0.0
+
+
+class ServerProcess:
+    """``usar-arm sim`` in a child process on a free port, logging to ``log_path``.
+
+    Args:
+        log_path: file that receives the server's stderr (its log).
+        speed: ``--speed`` of the simulator.
+        extra_args: more ``usar-arm sim`` arguments.
+        start_timeout: seconds to wait for the "listening on" log line.
+    """
+
+    def __init__(self, log_path: Path, speed: float = 1.0, extra_args: tuple[str, ...] = (),
+                 start_timeout: float = 60.0):
+        self.log_path = log_path
+        code = "import sys; from usar_arm.cli import main; sys.exit(main(sys.argv[1:]))"
+        cmd = [sys.executable, "-c", code, "sim", "--port", "0", "--speed", str(speed),
+               *extra_args]
+        self._log = open(log_path, "w")  # closed in stop()
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=self._log,
+                                     stderr=subprocess.STDOUT)
+        self.pid = self.proc.pid
+        deadline = time.monotonic() + start_timeout
+        self.port = 0
+        while not self.port:
+            match = _LISTENING.search(log_path.read_text(errors="replace"))
+            if match:
+                self.port = int(match.group(1))
+            elif self.proc.poll() is not None or time.monotonic() > deadline:
+                self.stop()
+                raise RuntimeError(f"the simulator did not start; its log:\n"
+                                   f"{log_path.read_text(errors='replace')[-2000:]}")
+            else:
+                time.sleep(0.05)
+
+    def sample(self) -> ProcSample:
+        """RSS, thread count and CPU time of the server now."""
+        status = Path(f"/proc/{self.pid}/status").read_text()
+        rss = int(re.search(r"VmRSS:\s+(\d+)", status).group(1))  # type: ignore[union-attr]
+        threads = int(re.search(r"Threads:\s+(\d+)", status).group(1))  # type: ignore[union-attr]
+        stat = Path(f"/proc/{self.pid}/stat").read_text()
+        fields = stat[stat.rindex(")") + 2:].split()
+        cpu = (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
+        wait = int(Path(f"/proc/{self.pid}/schedstat").read_text().split()[1]) / 1e9
+        return ProcSample(time.monotonic(), rss, threads, cpu, wait)
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self, timeout: float = 20.0) -> int:
+        """SIGTERM (a clean shutdown), SIGKILL after ``timeout``; returns the exit code."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5)
+        self._log.close()
+        return int(self.proc.returncode)
+
+    def log_text(self) -> str:
+        return self.log_path.read_text(errors="replace")
+
+
+def slope_per_min(samples: list[ProcSample], attr: str, after: float) -> float:
+    """Least-squares slope of ``attr`` over the samples taken at or after wall time ``after``,
+    in units per minute (0 with fewer than 3 samples)."""
+    pts = [(s.t, float(getattr(s, attr))) for s in samples if s.t >= after]
+    if len(pts) < 3:
+        return 0.0
+    mt = statistics.fmean(p[0] for p in pts)
+    mv = statistics.fmean(p[1] for p in pts)
+    den = sum((p[0] - mt) ** 2 for p in pts)
+    return 60.0 * sum((p[0] - mt) * (p[1] - mv) for p in pts) / den if den else 0.0
+
+
+def process_summary(samples: list[ProcSample], after: float) -> dict[str, Any]:
+    """RSS/thread levels and slopes, and CPU use, of the samples after wall time ``after``."""
+    window = [s for s in samples if s.t >= after]
+    if len(window) < 2:
+        return {}
+    first, last = window[0], window[-1]
+    return {
+        "samples": len(window),
+        "rss_kib_first": first.rss_kib, "rss_kib_last": last.rss_kib,
+        "rss_kib_max": max(s.rss_kib for s in window),
+        "rss_slope_kib_per_min": round(slope_per_min(samples, "rss_kib", after), 1),
+        "threads_first": first.threads, "threads_last": last.threads,
+        "threads_max": max(s.threads for s in window),
+        "threads_slope_per_min": round(slope_per_min(samples, "threads", after), 3),
+        "cpu_percent": round(100.0 * (last.cpu_s - first.cpu_s) / (last.t - first.t), 1),
+        "runqueue_wait_percent": round(100.0 * (last.wait_s - first.wait_s) / (last.t - first.t),
+                                       1),
+    }
+
+
+def log_counts(text: str) -> dict[str, int]:
+    """How often the server logged the things the tools look for."""
+    return {
+        "warnings": text.count(" WARNING "),
+        "errors": text.count(" ERROR "),
+        "cannot_keep_up": text.count("cannot keep up"),
+        "tracebacks": text.count("Traceback"),
+        "connected": text.count(": connected"),
+        "disconnected": text.count(": disconnected"),
+    }
+
+
+# ---------------------------------------------------------------------------------- clients
+
+
+def quantiles(values: list[float]) -> dict[str, float]:
+    """min / median / max (and count) of a list of numbers, rounded for reports."""
+    if not values:
+        return {"n": 0}
+    return {"n": len(values), "min": round(min(values), 4),
+            "median": round(statistics.median(values), 4), "max": round(max(values), 4)}
+
+
+@dataclass
+class Bot:
+    """A well-behaved client: spawn, stream ACT at ``rate`` Hz, probe, record ASTA.
+
+    Attributes:
+        index: number of the bot (phase of its sine, robot name).
+        rate: ACT lines per second (0: none).
+        probe_every: seconds between GETCONF probes (0: none).
+    """
+
+    index: int
+    rate: float = 100.0
+    probe_every: float = 1.0
+    amplitude: float = 0.3
+    frequency: float = 0.2
+    asta_wall: array = field(default_factory=lambda: array("d"))
+    asta_sim: array = field(default_factory=lambda: array("d"))
+    track_err: array = field(default_factory=lambda: array("d"))
+    rtt_wall: array = field(default_factory=lambda: array("d"))
+    rtt: array = field(default_factory=lambda: array("d"))
+    act_wall: array = field(default_factory=lambda: array("d"))
+    spawned_at: float | None = None
+    lost: str | None = None
+    _writer: asyncio.StreamWriter | None = None
+    _probe: asyncio.Future | None = None
+    _t0: float = 0.0
+
+    def command(self, t: float) -> float:
+        """Joint-1 target (rad) at wall time ``t``."""
+        return self.amplitude * math.sin(2 * math.pi * self.frequency * (t - self._t0)
+                                         + self.index)
+
+    async def run(self, port: int, stop: asyncio.Event, spawn_timeout: float = 60.0) -> None:
+        """Connect, spawn and stream until ``stop`` is set; records a lost connection."""
+        try:
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+        except OSError as exc:
+            self.lost = f"connect failed: {exc}"
+            return
+        writer.transport.get_extra_info("socket").setsockopt(
+            socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._writer = writer
+        self._t0 = time.monotonic()
+        spawned = asyncio.get_running_loop().create_future()
+        read = asyncio.create_task(self._read(reader, spawned, stop))
+        writer.write(f"INIT {{ClassName {ROBOT_CLASS}}} {{Name R{self.index}}} "
+                     f"{{Location {3.0 * (self.index % 8)},{3.0 * (self.index // 8)},0}}\r\n"
+                     .encode())
+        try:
+            await asyncio.wait_for(asyncio.shield(spawned), spawn_timeout)
+            self.spawned_at = time.monotonic()
+            tasks = [asyncio.create_task(self._act(stop))]
+            if self.probe_every > 0:
+                tasks.append(asyncio.create_task(self._probes(stop)))
+            await asyncio.wait([read, *tasks], return_when=asyncio.FIRST_COMPLETED)
+            for t in tasks:
+                t.cancel()
+        except (TimeoutError, asyncio.TimeoutError):
+            self.lost = self.lost or f"no ASTA within {spawn_timeout} s of INIT"
+        finally:
+            if not stop.is_set() and self.lost is None:
+                self.lost = "the connection ended early"
+            read.cancel()
+            writer.close()
+            with contextlib.suppress(Exception):
+                await writer.wait_closed()
+
+    async def _read(self, reader: asyncio.StreamReader, spawned: asyncio.Future,
+                    stop: asyncio.Event) -> None:
+        try:
+            while True:
+                line = await reader.readline()
+                if not line:
+                    if not stop.is_set():
+                        self.lost = "the server closed the connection"
+                    return
+                now = time.monotonic()
+                if line.startswith(b"ASTA"):
+                    tm = _TIME.search(line)
+                    vals = _VALUE.findall(line)
+                    if tm is None or len(vals) != 6:
+                        self.lost = f"malformed ASTA: {line[:80]!r}"
+                        return
+                    self.asta_wall.append(now)
+                    self.asta_sim.append(float(tm.group(1)))
+                    self.track_err.append(abs(float(vals[0]) - self.command(now)))
+                    if not spawned.done():
+                        spawned.set_result(None)
+                elif line.startswith(b"CONF") and self._probe is not None \
+                        and not self._probe.done():
+                    self._probe.set_result(now)
+        except (ConnectionError, OSError) as exc:
+            if not stop.is_set():
+                self.lost = f"connection error: {exc}"
+
+    async def _act(self, stop: asyncio.Event) -> None:
+        if self.rate <= 0:
+            await stop.wait()
+            return
+        assert self._writer is not None
+        period = 1.0 / self.rate
+        due = time.monotonic()
+        while not stop.is_set():
+            now = time.monotonic()
+            q = self.command(now)
+            self._writer.write(f"ACT {{Name {ACTUATOR}}} {{Link 0}} {{Value {q:.4f}}} "
+                               "{Link 1} {Value -0.5000} {Link 2} {Value 0.3000} "
+                               "{Link 3} {Value 0.0000} {Link 4} {Value 0.2000} "
+                               "{Link 5} {Value 0.0000}\r\n".encode())
+            self.act_wall.append(now)
+            due += period
+            if due < now - period:  # far behind (a stalled client): skip, do not burst
+                due = now
+            await asyncio.sleep(max(0.0, due - time.monotonic()))
+
+    async def _probes(self, stop: asyncio.Event) -> None:
+        assert self._writer is not None
+        loop = asyncio.get_running_loop()
+        await asyncio.sleep(self.probe_every * ((self.index * 0.37) % 1.0))
+        while not stop.is_set():
+            self._probe = loop.create_future()
+            sent = time.monotonic()
+            self._writer.write(b"GETCONF {Type Robot}\r\n")
+            try:
+                got = await asyncio.wait_for(self._probe, 10.0)
+                self.rtt_wall.append(sent)
+                self.rtt.append(got - sent)
+            except (TimeoutError, asyncio.TimeoutError):
+                self.rtt_wall.append(sent)
+                self.rtt.append(math.inf)
+            await asyncio.sleep(self.probe_every)
+
+    def summary(self, t0: float, t1: float) -> dict[str, Any]:
+        """What this bot saw in the wall-time window [t0, t1]."""
+        idx = [i for i, w in enumerate(self.asta_wall) if t0 <= w <= t1]
+        out: dict[str, Any] = {"bot": self.index, "lost": self.lost}
+        n = len(idx)
+        out["asta"] = n
+        if n >= 2:
+            sims = [self.asta_sim[i] for i in idx]
+            walls = [self.asta_wall[i] for i in idx]
+            span = sims[-1] - sims[0]
+            out["asta_per_wall_s"] = (n - 1) / (walls[-1] - walls[0])
+            out["asta_per_sim_s"] = (n - 1) / span if span > 0 else 0.0
+            out["sim_speed"] = span / (walls[-1] - walls[0])
+            out["max_gap_wall_s"] = max(b - a for a, b in itertools.pairwise(walls))
+            out["max_gap_sim_s"] = max(b - a for a, b in itertools.pairwise(sims))
+            errs = [self.track_err[i] for i in idx]
+            out["track_rms_mrad"] = 1e3 * math.sqrt(statistics.fmean(e * e for e in errs))
+        acts = [w for w in self.act_wall if t0 <= w <= t1]
+        out["act_per_s"] = len(acts) / (t1 - t0)
+        rtts = [r for w, r in zip(self.rtt_wall, self.rtt, strict=True) if t0 <= w <= t1]
+        out["probes"] = len(rtts)
+        out["probe_timeouts"] = sum(1 for r in rtts if math.isinf(r))
+        finite = sorted(r for r in rtts if math.isfinite(r))
+        if finite:
+            out["rtt_ms_median"] = 1e3 * statistics.median(finite)
+            out["rtt_ms_max"] = 1e3 * finite[-1]
+        return out
+
+
+def summarise_bots(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """min/median/max over bots of each per-bot figure."""
+    keys = ("asta_per_wall_s", "asta_per_sim_s", "sim_speed", "max_gap_wall_s",
+            "max_gap_sim_s", "track_rms_mrad", "act_per_s", "rtt_ms_median", "rtt_ms_max")
+    out: dict[str, Any] = {k: quantiles([r[k] for r in rows if k in r]) for k in keys}
+    out["bots"] = len(rows)
+    out["lost"] = [f"bot {r['bot']}: {r['lost']}" for r in rows if r["lost"]]
+    out["probe_timeouts"] = sum(r.get("probe_timeouts", 0) for r in rows)
+    return out
+
+
+# ---------------------------------------------------------------------------------- abuse
+
+FLOOD_KINDS = ("act", "malformed", "unknown", "binary", "oversized")
+
+
+@dataclass
+class Flooder:
+    """One client sending ``rate`` lines per second of one ``kind`` (see FLOOD_KINDS).
+
+    ``act`` spawns a robot first and floods valid ACT lines for it; the other kinds flood junk.
+    """
+
+    kind: str
+    rate: float = 10_000.0
+    sent_lines: int = 0
+    sent_bytes: int = 0
+    lost: str | None = None
+    local_port: int = 0
+    started: float = 0.0
+    stopped: float = 0.0
+
+    @property
+    def achieved_rate(self) -> float:
+        """Lines per second actually sent (TCP back-pressure may hold the flooder back)."""
+        span = (self.stopped or time.monotonic()) - self.started
+        return self.sent_lines / span if self.started and span > 0 else 0.0
+
+    def _line(self, i: int) -> bytes:
+        if self.kind == "act":
+            return (f"ACT {{Name {ACTUATOR}}} {{Link 0}} {{Value {0.1 * math.sin(i / 500):.4f}}}"
+                    " {Link 1} {Value -0.5}\r\n").encode()
+        if self.kind == "malformed":
+            return [b"ASTA {Time {broken}}\r\n", b"ACT {Name KR60Arm} {Link x} {Value 1}\r\n",
+                    b"GETCONF {Type Actuator\r\n", b"}}}{{{\r\n"][i % 4]
+        if self.kind == "unknown":
+            return f"FROB{i % 7} {{Key {i}}}\r\n".encode()
+        if self.kind == "binary":
+            return os.urandom(60).replace(b"\n", b"x").replace(b"\r", b"y") + b"\n"
+        if self.kind == "oversized":
+            return b"ACT {Name KR60Arm} " + b"{Link 0} {Value 0.1} " * 4000 + b"\r\n"
+        raise ValueError(f"unknown flood kind {self.kind!r}; known: {', '.join(FLOOD_KINDS)}")
+
+    async def run(self, port: int, stop: asyncio.Event) -> None:
+        try:
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+        except OSError as exc:
+            self.lost = f"connect failed: {exc}"
+            return
+        self.local_port = int(writer.get_extra_info("sockname")[1])
+        drain_reads = asyncio.create_task(self._discard(reader))
+        if self.kind == "act":
+            writer.write(f"INIT {{ClassName {ROBOT_CLASS}}} {{Name Flood}} "
+                         "{Start RobotStart1}\r\n".encode())
+            await asyncio.sleep(0.5)
+        self.started = time.monotonic()
+        owed, last = 0.0, self.started
+        try:
+            while not stop.is_set():
+                now = time.monotonic()
+                owed = min(owed + self.rate * (now - last), max(1.0, self.rate * 0.05))
+                last = now
+                n = int(owed)
+                if n:
+                    owed -= n
+                    lines = b"".join(self._line(self.sent_lines + k) for k in range(n))
+                    writer.write(lines)
+                    self.sent_lines += n
+                    self.sent_bytes += len(lines)
+                    await writer.drain()  # TCP back-pressure limits what we can push
+                await asyncio.sleep(0.01)
+            self.stopped = time.monotonic()
+        except (ConnectionError, OSError) as exc:
+            self.lost = f"connection error: {exc}"
+        finally:
+            drain_reads.cancel()
+            writer.close()
+            with contextlib.suppress(Exception):
+                await writer.wait_closed()
+
+    @staticmethod
+    async def _discard(reader: asyncio.StreamReader) -> None:
+        with contextlib.suppress(Exception):
+            while await reader.read(65536):
+                pass
+
+
+async def midline_disconnects(port: int, count: int) -> list[int]:
+    """``count`` clients that connect, send part of a line (some after a full INIT) and vanish;
+    returns their local ports."""
+    ports = []
+    for i in range(count):
+        with contextlib.suppress(OSError):
+            _, writer = await asyncio.open_connection("127.0.0.1", port)
+            ports.append(int(writer.get_extra_info("sockname")[1]))
+            if i % 2:
+                writer.write(b"INIT {ClassName USARBot.KR60} {Start RobotStart1}\r\n")
+                await asyncio.sleep(0.05)
+            writer.write(b"GETCONF {Type Actua")
+            await writer.drain()
+            if i % 3 == 0:
+                writer.transport.abort()  # RST instead of FIN
+            else:
+                writer.close()
+            await asyncio.sleep(0.02)
+    return ports
+
+
+_SUMMARY = re.compile(r"127\.0\.0\.1:(\d+): disconnected after [0-9.]+ s(?:; robot destroyed)?; "
+                      r"(\d+) lines, served (\d+)(?:, refused (\d+) \(([^)]*)\))?; "
+                      r"(\d+) bytes in")
+
+
+def disconnect_summaries(log: str) -> dict[int, dict[str, Any]]:
+    """The server's per-connection summaries, by client port: lines, served, refused by kind."""
+    out: dict[int, dict[str, Any]] = {}
+    for match in _SUMMARY.finditer(log):
+        kinds = {}
+        for part in (match.group(5) or "").split(", "):
+            if part:
+                kind, _, n = part.rpartition(" ")
+                kinds[kind] = int(n)
+        out[int(match.group(1))] = {"lines": int(match.group(2)), "served": int(match.group(3)),
+                                    "refused": int(match.group(4) or 0), "refused_by_kind": kinds,
+                                    "bytes_in": int(match.group(6))}
+    return out
+
+
+def machine_load() -> str:
+    """The load averages (1, 5, 15 min) and CPU count, for reports."""
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f} {five:.2f} {fifteen:.2f} on {os.cpu_count()} CPUs"
