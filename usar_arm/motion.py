@@ -97,6 +97,43 @@ class MotionPlan:
                 "mode": self.trajectory.mode, **self.details}
 
 
+RIGID_TOLERANCE = 1e-6
+"""Largest |R^T R - I| entry of a goal pose's rotation (and error of its bottom row)."""
+
+
+def _numbers(values: Any, what: str) -> Array:
+    try:
+        return np.asarray(values, float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"the {what} must be numbers, got {values!r}") from None
+
+
+def check_pose(pose: Any) -> Array:
+    """``pose`` as a 4x4 float array, checked to be a finite rigid transform.
+
+    Raises:
+        InvalidInputError: not 4x4, NaN or infinite entries, or no rotation (not orthonormal,
+            a reflection) or a bottom row other than (0, 0, 0, 1).
+    """
+    t = _numbers(pose, "goal pose")
+    if t.shape != (4, 4):
+        raise InvalidInputError(f"a goal pose is a 4x4 homogeneous transform (m), got an array "
+                                f"of shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise InvalidInputError("the goal pose contains NaN or infinite values")
+    rot = t[:3, :3]
+    off = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
+    det = float(np.linalg.det(rot))
+    if off > RIGID_TOLERANCE or det < 0:
+        raise InvalidInputError(f"the goal pose's rotation is not a rotation matrix "
+                                f"(|R^T R - I| up to {off:.2g}, det {det:.4f}; expected "
+                                f"orthonormal, det +1)")
+    if float(np.max(np.abs(t[3] - (0.0, 0.0, 0.0, 1.0)))) > RIGID_TOLERANCE:
+        raise InvalidInputError(f"the goal pose's bottom row is {t[3].tolist()}, expected "
+                                "[0, 0, 0, 1]")
+    return t
+
+
 def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
                 goal: Array | None = None, pose: Array | None = None,
                 options: MotionOptions = MotionOptions()) -> MotionPlan:
@@ -111,14 +148,16 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
         raise InvalidInputError("give exactly one of a goal configuration or a goal pose")
     chain = robot.chain
     names = chain.joint_names
-    start = np.asarray(start, float)
+    start = _numbers(start, "start")
     if start.shape != (chain.dof,):
         raise InvalidInputError(f"the start needs {chain.dof} joint values, got {start.size}")
     if goal is not None:
-        goal = np.asarray(goal, float)
+        goal = _numbers(goal, "goal")
         if goal.shape != (chain.dof,):
             raise InvalidInputError(f"the goal needs {chain.dof} joint values ({', '.join(names)})"
                                     f", got {goal.size}")
+    if pose is not None:
+        pose = check_pose(pose)
     limits = MotionLimits.from_chain(chain, options.speed_scale)
     ik = robot.ik_solver()
     begin = time.perf_counter()
@@ -133,7 +172,8 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
         if plan.ompl is not None:
             details.update(planner=plan.ompl.planner, simplify_seconds=plan.ompl.simplify_seconds,
                            states_checked=plan.ompl.states_checked,
-                           edges_checked=plan.ompl.edges_checked)
+                           edges_checked=plan.ompl.edges_checked,
+                           dense_replans=plan.dense_replans)
         else:
             details["planner"] = "direct (the straight joint-space segment is free)"
         planning = time.perf_counter() - begin
@@ -153,6 +193,8 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
                            options.cartesian_acceleration * scale)
         details["line_length_m"] = path.length
     trajectory = timed.sample(options.rate, options.motion)
+    if not trajectory.duration > 0:
+        trajectory = _holding(trajectory, options.rate)
     if pose is not None:
         final = robot.kinematics.frame_pose(trajectory.q[-1], "tool0")
         details["final_position_error_m"] = float(np.linalg.norm(final[:3, 3] - pose[:3, 3]))
@@ -165,3 +207,14 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
                             trajectory.motion, trajectory.mode, info)
     return MotionPlan(trajectory, waypoints, goal_q, pose, planning, timed.seconds, length,
                       options.motion, details, timed)
+
+
+def _holding(trajectory: Trajectory, rate: float) -> Trajectory:
+    """A motion that does not move (the goal is the start) as two samples one period apart at
+    rest: a trajectory's sample times must increase (a file with t = [0, 0] could not be read
+    back, and its rate would be infinite)."""
+    q = np.vstack([trajectory.q[0], trajectory.q[0]])
+    zero = np.zeros_like(q)
+    return Trajectory(trajectory.joint_names, np.array([0.0, 1.0 / rate]), q, zero, zero.copy(),
+                      trajectory.waypoints, trajectory.limits, trajectory.motion,
+                      trajectory.mode, trajectory.info)

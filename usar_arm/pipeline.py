@@ -191,11 +191,18 @@ def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Descripti
 
 
 def write_description(desc: Description, out_dir: str | Path) -> dict[str, Path]:
-    """Write the four files into ``out_dir`` atomically; returns kind -> path."""
-    files = desc.files()
-    paths = write_tree_atomic(out_dir, files)
-    kinds = ("urdf", "srdf", "joint_limits", "discovery")
-    return dict(zip(kinds, paths, strict=True))
+    """Write the four files into ``out_dir``, each atomically; returns kind -> path.
+
+    The URDF is renamed into place last, so a URDF beside its SRDF, joint limits and discovery
+    notes means they are all there: a run killed while writing never leaves a URDF whose SRDF
+    (the disabled collision pairs) is missing. The description cache relies on this.
+    """
+    kinds = dict(zip(("urdf", "srdf", "joint_limits", "discovery"), desc.files().items(),
+                     strict=True))
+    order = ("srdf", "joint_limits", "discovery", "urdf")
+    paths = write_tree_atomic(out_dir, dict(kinds[k] for k in order))
+    written = dict(zip(order, paths, strict=True))
+    return {k: written[k] for k in kinds}
 
 
 # ------------------------------------------------------------------------------ reports

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import subprocess
 import sys
@@ -10,41 +11,27 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.planning.recheck import assert_rechecked
 from usar_arm.control.timing import blended, stop_at_waypoints
-from usar_arm.control.trajectory import MotionLimits, Trajectory, check_limits
+from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.errors import (
     FileFormatError,
     GoalInCollisionError,
     IKError,
+    InvalidInputError,
     LinBlockedError,
     NoPathError,
     OutOfLimitsError,
     StartInCollisionError,
 )
-from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
+from usar_arm.motion import MotionOptions, plan_motion
 from usar_arm.planning.ompl_adapter import OmplOptions, edge_configurations
+from usar_arm.planning.scene import Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot
-from usar_arm.spatial import rotation_distance, transform
+from usar_arm.spatial import transform
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # tool0 pointing down
-
-
-def _recheck(robot: Robot, world, plan: MotionPlan) -> None:  # type: ignore[no-untyped-def]
-    """The continuous motion, re-evaluated at 1 kHz: no collision, every limit kept."""
-    timed = plan.timed
-    assert timed is not None
-    t = np.arange(0.0, timed.duration, 0.001)
-    q, qd, qdd = timed.evaluate(t)
-    report = check_limits(t, q, qd, qdd, plan.trajectory.limits, robot.chain.joint_names)
-    assert report.within(1e-6), report
-    assert not np.any(world.in_collision_many(q)), "collision along the trajectory"
-    assert plan.trajectory.rate >= 250
-    assert np.allclose(plan.trajectory.q[-1], plan.goal, atol=1e-9)
-    if plan.goal_pose is not None:
-        final = robot.kinematics.frame_pose(plan.trajectory.q[-1], "tool0")
-        assert np.linalg.norm(final[:3, 3] - plan.goal_pose[:3, 3]) < 1e-3
-        assert rotation_distance(final[:3, :3], plan.goal_pose[:3, :3]) < 1e-3
 
 
 def _problems(robot: Robot, scene: str, count: int, seed: int) -> list[tuple[np.ndarray, ...]]:
@@ -69,7 +56,7 @@ def test_ptp_plans_around_obstacles_within_every_limit(kr60: Robot, scene: str,
     for a, b in _problems(kr60, scene, 3, seed=11 + blend):
         plan = plan_motion(kr60, world, a, goal=b, options=MotionOptions(blend=blend))
         assert plan.details["planner"] == "RRTConnect"
-        _recheck(kr60, world, plan)
+        assert_rechecked(kr60, world, plan)
 
 
 def test_blending_is_never_slower_than_stopping_on_the_same_path(kr60: Robot) -> None:
@@ -95,7 +82,7 @@ def test_ptp_to_a_pose_reaches_it(kr60: Robot) -> None:
     target = transform(DOWN, (1.45, 0.50, 1.10))  # above the bin, the tower in between
     start = np.array(kr60.ik_solver().solve(transform(DOWN, (1.45, -0.45, 1.0))).best.q)
     plan = plan_motion(kr60, world, start, pose=target)
-    _recheck(kr60, world, plan)
+    assert_rechecked(kr60, world, plan)
 
 
 def test_lin_follows_a_straight_line(kr60: Robot) -> None:
@@ -104,7 +91,7 @@ def test_lin_follows_a_straight_line(kr60: Robot) -> None:
     start = np.array(kr60.ik_solver().solve(above).best.q)
     down = transform(DOWN, (1.45, -0.45, 0.82))
     plan = plan_motion(kr60, world, start, pose=down, options=MotionOptions(motion="lin"))
-    _recheck(kr60, world, plan)
+    assert_rechecked(kr60, world, plan)
     tips = np.array([kr60.kinematics.frame_pose(q, "tool0")[:3, 3]
                      for q in plan.trajectory.q[:: 20]])
     off_line = np.linalg.norm(tips[:, :2] - [1.45, -0.45], axis=1)
@@ -172,3 +159,114 @@ def test_plans_are_reproducible_with_a_seed(tmp_path: Path) -> None:
                         "--out", str(out), "-q"], check=True, timeout=120)
         outs.append(json.loads(out.read_text())["waypoints"])
     assert outs[0] == outs[1] and len(outs[0]) > 2
+
+
+# ------------------------------------------------------------------ regressions (issue 8)
+
+
+def test_a_pose_no_ik_solution_can_be_reached_for_is_a_no_path_error(kr60: Robot) -> None:
+    # (raised AttributeError: NoPathError has time_limit_s, not time_limit)
+    world = kr60.collision_world(load_scene("cage"))
+    a, b = _problems(kr60, "cage", 1, seed=3)[0]
+    with pytest.raises(NoPathError) as info:
+        plan_motion(kr60, world, a, pose=kr60.kinematics.frame_pose(b, "tool0"),
+                    options=MotionOptions(ompl=OmplOptions(time_limit=1e-4)))
+    assert "IK solution(s) could be reached" in str(info.value)
+    assert info.value.time_limit_s == 1e-4
+
+
+@pytest.mark.parametrize("how", ["joints", "pose-ptp", "pose-lin"])
+def test_a_motion_to_where_the_arm_is_holds_still_and_can_be_saved(kr60: Robot, how: str,
+                                                                   tmp_path: Path) -> None:
+    # (returned t = [0, 0]: zero rate, and a file Trajectory.load refused)
+    world = kr60.collision_world(load_scene("table"))
+    q = np.array([0.3, -1.2, 1.0, 0.2, 0.6, 0.1])
+    pose = kr60.kinematics.frame_pose(q, "tool0")
+    plan = (plan_motion(kr60, world, q, goal=q) if how == "joints" else
+            plan_motion(kr60, world, q, pose=pose, options=MotionOptions(motion=how[5:])))
+    traj = plan.trajectory
+    assert np.all(np.diff(traj.t) > 0) and traj.rate >= 250
+    assert_rechecked(kr60, world, plan, start=q)
+    traj.save(tmp_path / "hold.json")
+    assert np.allclose(Trajectory.load(tmp_path / "hold.json").q[-1], traj.q[-1])
+
+
+@pytest.mark.parametrize("motion", ["ptp", "lin"])
+def test_a_goal_pose_that_is_no_rigid_transform_is_invalid_input(kr60: Robot,
+                                                                 motion: str) -> None:
+    # (NaN: ValueError from LIN; 3x3: IndexError; a scaled rotation: "unreachable")
+    world = kr60.collision_world(load_scene("empty"))
+    q = np.array([0.3, -1.2, 1.0, 0.2, 0.6, 0.1])
+    good = kr60.kinematics.frame_pose(q, "tool0")
+    nan = good.copy()
+    nan[0, 3] = np.nan
+    scaled = good.copy()
+    scaled[:3, :3] *= 1.5
+    mirrored = good.copy()
+    mirrored[:3, 0] *= -1
+    for pose, words in ((nan, "NaN"), (good[:3], "4x4"), (scaled, "rotation"),
+                        (mirrored, "det"), ([[1, 2], [3]], "numbers")):
+        with pytest.raises(InvalidInputError, match=words):
+            plan_motion(kr60, world, q, pose=pose, options=MotionOptions(motion=motion))
+
+
+def _pin_grazing(robot: Robot, q: np.ndarray, link: str, depth: float) -> Scene:
+    """A 5 mm sphere overlapping ``link``'s cylinder by ``depth`` m at ``q``, on the side of it
+    that moves parallel to its surface when the first joint turns."""
+    geom = robot.chain.link(link).geometry
+    assert geom is not None
+    cyl = robot.chain.link_poses(q)[link] @ geom.origin.matrix()
+    axis, centre = cyl[:3, 2], cyl[:3, 3]
+    moving = np.cross([0.0, 0.0, 1.0], centre)
+    normal = np.cross(axis, moving)
+    normal *= np.sign(normal[2]) / np.linalg.norm(normal)
+    pin = centre + normal * (geom.radius + 0.005 - depth)
+    return Scene("pin", (SceneObject("pin", Sphere(0.005), transform(pos=pin)),))
+
+
+def test_a_path_never_clips_an_obstacle_between_the_planners_checks(kr60: Robot) -> None:
+    # (a free-pair plan in the shelf grazed board_top by 1 mm between two checks 0.01 rad
+    # apart: 1 of 8482 samples of the 1 kHz re-check collided)
+    a = np.array([-0.15, -0.6, 0.3, 0.0, 0.4, 0.0])
+    b = np.array([0.15, -0.6, 0.3, 0.0, 0.4, 0.0])
+    halfway = np.array([-0.145, -0.6, 0.3, 0.0, 0.4, 0.0])  # between two 0.01-rad checks
+    world = kr60.collision_world(_pin_grazing(kr60, halfway, "link_4", depth=0.0005))
+    assert world.in_collision(halfway)
+    assert not world.in_collision_many(edge_configurations(a, b, 0.01)).any()  # missed so
+    levers = world.lever_arms()
+    assert world.in_collision_many(edge_configurations(a, b, 0.01, levers, 0.005)).any()
+    plan = plan_motion(kr60, world, a, goal=b)
+    assert len(plan.waypoints) > 2, "the straight segment through the pin was kept"
+    for p, q in itertools.pairwise(plan.waypoints):
+        assert not world.in_collision_many(edge_configurations(p, q, 0.01, levers, 0.001)).any()
+    assert_rechecked(kr60, world, plan, start=a)
+
+
+def _rims(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """Points on both end circles of every collision cylinder at ``q`` (world, m)."""
+    poses = robot.chain.link_poses(q)
+    out = []
+    for lk in robot.chain.links:
+        g = lk.geometry
+        if g is None:
+            continue
+        t = poses[lk.name] @ g.origin.matrix()
+        for z in (-g.length / 2, g.length / 2):
+            for ang in np.linspace(0, 2 * np.pi, 12, endpoint=False):
+                out.append(t[:3, :3] @ (g.radius * np.cos(ang), g.radius * np.sin(ang), z)
+                           + t[:3, 3])
+    return np.array(out)
+
+
+def test_lever_arms_bound_how_far_any_point_of_the_robot_moves(kr60: Robot,
+                                                               fanuc: Robot) -> None:
+    rng = np.random.default_rng(4)
+    for robot in (kr60, fanuc):
+        levers = robot.collision_world().lever_arms()
+        chain = robot.chain
+        for _ in range(40):
+            q = rng.uniform(chain.lower(), chain.upper())
+            dq = rng.normal(size=chain.dof) * 0.01
+            moved = np.linalg.norm(_rims(robot, q + dq) - _rims(robot, q), axis=1).max()
+            assert moved <= levers @ np.abs(dq) + 1e-9
+        assert levers[1] > 1.0  # (a bound that means something: the shoulder moves the tip)

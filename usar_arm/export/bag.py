@@ -63,6 +63,7 @@ from rosbags.typesys import Stores, get_typestore
 # executor's result type; re-exported here so that it passes straight into write_bag.
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
 from usar_arm.errors import InvalidInputError
+from usar_arm.fileio import exchange, remove_leftovers, temporary_prefix
 from usar_arm.model import KinematicChain
 from usar_arm.spatial import Array, quat_from_matrix
 
@@ -310,7 +311,12 @@ def _write(bag: Path, version: Literal[8, 9], build: _Messages,
 
 
 def _move_into_place(bag: Path, target: Path, staging: Path) -> None:
-    """Rename ``bag`` to ``target``; a bag already there is moved aside first, then deleted."""
+    """Rename ``bag`` to ``target``. A bag already there is swapped with the new one in one
+    atomic step (the old one then lies in ``staging``, which the caller deletes), so ``target``
+    always holds a complete bag; where the system cannot swap folders, the old bag is moved
+    aside first (a kill between the two renames then leaves it in ``staging``)."""
+    if target.exists() and exchange(bag, target):
+        return
     old = staging / "replaced"
     if target.exists():
         os.rename(target, old)
@@ -352,7 +358,9 @@ def write_bag(path: str | Path, chain: KinematicChain, urdf: str, planned: Traje
     build = _Messages(distro, int(start_ns))
     messages = _messages(chain, urdf, planned, executed, build, joint_state_rate, tf_rate)
     target.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    remove_leftovers(target)  # staging folders of writers that were killed
+    staging = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), suffix=".tmp",
+                                    dir=target.parent))
     try:
         bag = staging / target.name  # rosbags names the .mcap file after the folder
         _write(bag, DISTROS[distro][1], build, messages)

@@ -102,6 +102,7 @@ class CollisionWorld:
         self._poe: PoeModel | None = None
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
+        self._levers: Array | None = None
         self.set_disabled(disabled)
 
     @staticmethod
@@ -134,6 +135,44 @@ class CollisionWorld:
               if pair(self._links[i], o.name) not in self._skip]
         self._rr = np.array(rr, dtype=int).reshape(-1, 2)
         self._rs = np.array(rs, dtype=int).reshape(-1, 2)
+
+    def lever_arms(self) -> Array:
+        """Per actuated joint (configuration order), a bound on how far any point of the robot's
+        collision geometry moves per unit of that joint (m/rad; 1 for a prismatic joint).
+
+        For a revolute joint: the largest distance from the joint's origin to a point of a
+        cylinder downstream of it, bounded over every configuration by the lengths of the joint
+        offsets in between (plus the travel of prismatic joints among them) and the cylinder's
+        extent. Along a joint-space segment no point moves farther than the sum over joints of
+        lever arm times joint change (see :func:`~usar_arm.planning.ompl_adapter.
+        edge_configurations`).
+        """
+        if self._levers is None:
+            joints = self.chain.actuated_joints
+            levers = np.zeros(len(joints))
+            by_link = {lk.name: lk for lk in self.chain.links}
+            for i, jt in enumerate(joints):
+                if jt.type.value == "prismatic":
+                    levers[i] = 1.0
+                    continue
+                for name, radius, half in zip(self._links, self._radius, self._half,
+                                              strict=True):
+                    path = self.chain.path_to(name)
+                    if jt not in path:
+                        continue
+                    reach = 0.0
+                    for k in path[path.index(jt) + 1:]:
+                        reach += float(np.linalg.norm(k.origin.xyz))
+                        if k.type.value == "prismatic" and k.limits is not None:
+                            reach += max(abs(k.limits.lower), abs(k.limits.upper))
+                    geom = by_link[name].geometry
+                    assert geom is not None
+                    reach += float(np.linalg.norm(geom.origin.xyz)) + float(np.hypot(radius,
+                                                                                      half))
+                    levers[i] = max(levers[i], reach)
+            levers.setflags(write=False)
+            self._levers = levers
+        return self._levers
 
     @property
     def link_names(self) -> tuple[str, ...]:

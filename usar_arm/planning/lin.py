@@ -30,6 +30,8 @@ class LinOptions:
         max_joint_step: rad (or m); a larger change of any joint between neighbouring points
             is a branch flip and blocks the motion.
         resolution: joint resolution of the collision check between points.
+        max_step: largest distance (m) any point of the robot moves between checked
+            configurations (see :func:`~usar_arm.planning.ompl_adapter.edge_configurations`).
         rotation_length: m of path length counted per rad of turn (for the speed profile).
     """
 
@@ -37,6 +39,7 @@ class LinOptions:
     rotation_step: float = 0.01
     max_joint_step: float = 0.1
     resolution: float = 0.01
+    max_step: float = 0.005
     rotation_length: float = 0.2
 
 
@@ -84,8 +87,10 @@ def plan_lin(ik: IKSolver, world: CollisionWorld, start_q: Array, start_pose: Ar
                 "points (a branch flip near a singularity); the line cannot be followed")
         qs.append(q)
     path = np.array(qs)
+    levers = world.lever_arms()
     for k in range(len(path) - 1):
-        dense = edge_configurations(path[k], path[k + 1], options.resolution)
+        dense = edge_configurations(path[k], path[k + 1], options.resolution, levers,
+                                    options.max_step)
         hits = world.in_collision_many(dense)
         if np.any(hits):
             bad = dense[int(np.argmax(hits))]

@@ -21,6 +21,7 @@ from usar_arm.planning.ompl_adapter import (
     OmplResult,
     edge_configurations,
     plan_path,
+    stages,
 )
 from usar_arm.spatial import Array
 
@@ -36,6 +37,8 @@ class PtpPlan:
     ompl: OmplResult | None
     seconds: float
     goals_tried: int = 1
+    dense_replans: int = 0
+    """1 when the first path clipped an obstacle between checks and was planned again."""
 
 
 def check_state(world: CollisionWorld, names: tuple[str, ...], lower: Array, upper: Array,
@@ -53,6 +56,12 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
                    start: Array, goal: Array, options: OmplOptions) -> PtpPlan:
     """A path from ``start`` to the configuration ``goal``.
 
+    OMPL explores with edges checked every ``options.resolution`` of joint motion (fast, but a
+    point far from the base can move a few centimetres between two checks). The path it returns
+    is then checked so that no point of the robot moves more than ``options.max_step`` between
+    checked configurations; a path that clips an obstacle between the planner's checks is
+    planned again with every edge checked that densely.
+
     Raises:
         OutOfLimitsError, StartInCollisionError, GoalInCollisionError, NoPathError.
     """
@@ -60,11 +69,42 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     check_state(world, names, lower, upper, start, "start")
     check_state(world, names, lower, upper, goal, "goal")
-    if not np.any(world.in_collision_many(edge_configurations(start, goal, options.resolution))):
+    levers = world.lever_arms()
+    if _first_blocked(world, np.vstack([start, goal]), options, levers) is None:
         return PtpPlan(np.vstack([start, goal]), goal, None, time.perf_counter() - begin)
-    result = plan_path(lower, upper, start, goal, lambda q: not world.in_collision(q),
-                       lambda qs: ~world.in_collision_many(qs), options)
-    return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin)
+
+    def state_valid(q: Array) -> bool:
+        return not world.in_collision(q)
+
+    def states_valid(qs: Array) -> Array:
+        return ~world.in_collision_many(qs)
+
+    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options)
+    blocked = _first_blocked(world, result.waypoints, options, levers)
+    if blocked is None:
+        return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin)
+    log.info("the path clips an obstacle between the planner's checks on segment %d of %d; "
+             "planning again with edges checked every %g m", blocked + 1,
+             len(result.waypoints) - 1, options.max_step)
+    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options, levers)
+    blocked = _first_blocked(world, result.waypoints, options, levers)
+    if blocked is not None:  # (cannot happen: the planner checked every edge that densely)
+        raise NoPathError(options.planner, options.time_limit,
+                          f"segment {blocked + 1} of the path is in collision")
+    return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin, dense_replans=1)
+
+
+def _first_blocked(world: CollisionWorld, waypoints: Array, options: OmplOptions,
+                   levers: Array) -> int | None:
+    """Index of the first segment of ``waypoints`` in collision when checked every
+    ``options.resolution`` of joint motion and ``options.max_step`` m of robot motion."""
+    for k in range(len(waypoints) - 1):
+        qs = edge_configurations(waypoints[k], waypoints[k + 1], options.resolution, levers,
+                                 options.max_step)
+        for lo, hi in stages(len(qs)):  # coarse to fine: a blocked segment costs little
+            if np.any(world.in_collision_many(qs[lo:hi])):
+                return k
+    return None
 
 
 def plan_to_pose(world: CollisionWorld, ik: IKSolver, start: Array, target: Array,
@@ -90,8 +130,9 @@ def plan_to_pose(world: CollisionWorld, ik: IKSolver, start: Array, target: Arra
                      len(result.solutions))
             last = exc
             continue
-        return PtpPlan(plan.waypoints, plan.goal, plan.ompl, time.perf_counter() - begin, k + 1)
+        return PtpPlan(plan.waypoints, plan.goal, plan.ompl, time.perf_counter() - begin, k + 1,
+                       plan.dense_replans)
     assert last is not None
-    raise NoPathError(last.planner, last.time_limit,
+    raise NoPathError(last.planner, last.time_limit_s,
                       f"none of the {len(result.solutions)} IK solution(s) could be reached")
 
