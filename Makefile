@@ -14,14 +14,31 @@ $(DEMO_VENV)/.installed: pyproject.toml
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
-	$(TEST_VENV)/bin/pip install --quiet -e ".[test]"
+	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz]"
 	touch $@
 
 demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo
 
+# Three workers on two cores: one of them spends ten minutes mostly asleep in the soak test.
+# The peers' venvs (bench/.venvs) let the quick benchmark in the suite run them too; a peer that
+# cannot be installed is reported as skipped by the benchmark, not a failure here.
 test: $(TEST_VENV)/.installed
-	$(TEST_VENV)/bin/python -m pytest -n 2 tests
+	$(PYTHON) bench/peers/venvs.py || echo "note: some benchmark peers could not be installed"
+	$(TEST_VENV)/bin/python -m pytest -n 3 tests
+
+# Benchmarks (bench/README-peers.md, bench/results/README.md). Each peer gets its own venv in
+# bench/.venvs (created once by venvs.py; mplib needs numpy < 2); usar-arm runs in the test venv.
+BENCH_QUICK_OUT ?= build/bench-quick
+
+bench: $(TEST_VENV)/.installed
+	$(PYTHON) bench/peers/venvs.py
+	$(TEST_VENV)/bin/python bench/run.py --out bench/results
+
+bench-quick: $(TEST_VENV)/.installed
+	$(PYTHON) bench/peers/venvs.py
+	$(TEST_VENV)/bin/python bench/run.py --quick --out $(BENCH_QUICK_OUT) \
+		--problems $(BENCH_QUICK_OUT)/problems
 
 clean:
 	rm -rf $(DEMO_VENV) $(TEST_VENV) build *.egg-info

@@ -6,7 +6,7 @@ Runs in the development venv (pinocchio + coal), not in a peer venv:
     python3 bench/peers/run_peers.py DIR                                      # every runner
     /work/venv/bin/python bench/peers/make_test_problems.py check DIR        # verify results
 
-These are NOT the benchmark's problems (another generator writes those); they only exercise the
+These are NOT the benchmark's problems (bench/problems.py writes those); they only exercise the
 runners: IK targets are FK of random in-limit configurations (seed = mid-range), plans are
 start/goal pairs that are collision-free (self and scene, SRDF pairs disabled) with the straight
 line between them blocked where possible, TOPP waypoints are random in-limit configurations.

@@ -2,8 +2,9 @@
 
 Planner(urdf, move_group=tip_link, srdf=srdf, joint_vel_limits=vmax, joint_acc_limits=amax)
 (limits only when the problem file has them: mplib's default is 1 rad/s and 1 rad/s^2). Scene
-obstacles: planning_world.add_object(name, fcl.CollisionObject(fcl.Box/Cylinder/Sphere,
-Pose(xyz, quat_wxyz))), added once per scene and removed before the next scene.
+obstacles (mp_scene.py): planning_world.add_object(name, fcl.CollisionObject(fcl.Box/Cylinder/
+Sphere/BVH mesh, Pose(xyz, quat_wxyz))), added once per scene and removed before the next scene;
+an obstacle's "allow" links are allowed to touch it (allowed-collision matrix).
 
 Planner.plan_qpos() = OMPL RRTConnect + simplification (planner.planner.plan) followed by
 TOPP-RA (planner.TOPP); this runner makes those two calls itself, as plan_qpos does (start
@@ -12,11 +13,11 @@ planning + simplification alone; "topp_seconds" and "duration_s" come from the f
 planner.TOPP(path, step=0.01). RNG: mplib.set_global_seed(problem seed) before each problem.
 """
 
+import mp_scene
 import mplib
 import numpy as np
 import peerio
-from mplib import Planner, Pose
-from mplib.collision_detection import fcl
+from mplib import Planner
 
 spec, out = peerio.args()
 names = spec["joint_names"]
@@ -32,29 +33,7 @@ idx = planner.move_group_joint_indices
 mp_names = [planner.user_joint_names[i] for i in idx]
 if len(idx) != len(planner.user_joint_names):
     raise SystemExit("the robot has joints outside the move group; padding is not handled")
-present: list[str] = []
-
-
-def shape(ob):
-    if ob["type"] == "box":
-        return fcl.Box(np.array(ob["size"], float))
-    if ob["type"] == "cylinder":
-        return fcl.Cylinder(ob["radius"], ob["length"])
-    if ob["type"] == "sphere":
-        return fcl.Sphere(ob["radius"])
-    raise ValueError(f"unknown obstacle type {ob['type']!r}")
-
-
-def enter_scene(name):
-    while present:
-        planner.planning_world.remove_object(present.pop())
-    for i, ob in enumerate(spec["scenes"][name]):
-        key = f"{name}/{ob.get('name', i)}"
-        pose = Pose(
-            p=np.array(ob["xyz"], float), q=np.array(ob.get("quat_wxyz", [1, 0, 0, 0]), float)
-        )
-        planner.planning_world.add_object(key, fcl.CollisionObject(shape(ob), pose))
-        present.append(key)
+obstacles = mp_scene.Obstacles(planner, spec["scenes"])
 
 
 def solve(p):
@@ -91,7 +70,7 @@ peerio.write(
     peer="mplib",
     dist="mplib",
     stage="plan",
-    results=peerio.solve_by_scene(spec["problems"], enter_scene, solve),
+    results=peerio.solve_by_scene(spec["problems"], obstacles.enter, solve),
     notes="seconds = OMPL RRTConnect + path simplification (planner.planner.plan); "
     "duration_s from planner.TOPP (TOPP-RA on a spline through the path, "
     + ("problem vmax/amax" if limits else "mplib default limits 1 rad/s, 1 rad/s^2")

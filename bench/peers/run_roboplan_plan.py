@@ -1,10 +1,11 @@
 """Motion planning with roboplan 0.7.0: python run_roboplan_plan.py PROBLEMS.json RESULTS.json
 
 Scene("robot", loadUrdfSceneDescription(urdf)) + importSrdf(<problem "srdf", else the .srdf
-beside the URDF>) (see rp_scene.py). Obstacles:
-scene.addBoxGeometry / addCylinderGeometry / addSphereGeometry(name, base_link, shape, T, rgba),
-added once per scene, removed (removeGeometry) before the next; the RRT and the shortcutter are
-rebuilt after each scene change (untimed).
+beside the URDF>) (see rp_scene.py). Obstacles (rp_scene.Obstacles):
+scene.addBoxGeometry / addCylinderGeometry / addSphereGeometry / addMeshGeometry(name, "universe",
+shape, T, rgba), added once per scene, removed (removeGeometry) before the next, "allow" links
+exempted with setCollisions(name, link, False); the RRT and the shortcutter are rebuilt after
+each scene change (untimed).
 
 Timed ("seconds"): RRT(scene, RRTOptions(group_name, rrt_connect=True,
 max_planning_time=time_limit_s)).plan(start, goal) + PathShortcutter(scene,
@@ -29,7 +30,6 @@ from roboplan.toppra import PathParameterizerTOPPRA, TOPPRAOptions
 
 spec, out = peerio.args()
 names = spec["joint_names"]
-base = spec.get("base_link", "base_link")
 scene, group, rp_names, acm = rp_scene.load(spec)
 topp = None
 if spec.get("vmax") is not None and spec.get("amax") is not None:
@@ -38,30 +38,17 @@ if spec.get("vmax") is not None and spec.get("amax") is not None:
     scene.importJointLimitsFromConfig(core.loadJointLimitsConfig(f.name))
     Path(f.name).unlink()
     topp = PathParameterizerTOPPRA(scene, group)
-present: list[str] = []
 planner = {}
-RGBA = np.array([0.5, 0.5, 0.5, 1.0])
 
 
-def enter_scene(name):
-    while present:
-        scene.removeGeometry(present.pop())
-    for i, ob in enumerate(spec["scenes"][name]):
-        key = f"{name}/{ob.get('name', i)}"
-        T = peerio.pose_matrix(ob["xyz"], ob.get("quat_wxyz", [1, 0, 0, 0]))
-        if ob["type"] == "box":
-            scene.addBoxGeometry(key, base, core.Box(*ob["size"]), T, RGBA)
-        elif ob["type"] == "cylinder":
-            scene.addCylinderGeometry(key, base, core.Cylinder(ob["radius"], ob["length"]), T, RGBA)
-        elif ob["type"] == "sphere":
-            scene.addSphereGeometry(key, base, core.Sphere(ob["radius"]), T, RGBA)
-        else:
-            raise ValueError(f"unknown obstacle type {ob['type']!r}")
-        present.append(key)
+def rebuild(_name):
     planner["rrt"] = RRT(
         scene,
         RRTOptions(group_name=group, rrt_connect=True, max_planning_time=spec["time_limit_s"]),
     )
+
+
+obstacles = rp_scene.Obstacles(scene, spec["scenes"], on_change=rebuild)
 
 
 def solve(p):
@@ -107,7 +94,7 @@ peerio.write(
     peer="roboplan",
     dist="roboplan",
     stage="plan",
-    results=peerio.solve_by_scene(spec["problems"], enter_scene, solve),
+    results=peerio.solve_by_scene(spec["problems"], obstacles.enter, solve),
     notes="seconds = RRT-Connect + PathShortcutter.shortcut; duration_s from roboplan's "
     "TOPP-RA (Hermite mode, zero velocity at each waypoint), timed separately",
 )

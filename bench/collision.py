@@ -1,0 +1,140 @@
+"""Collision stage: is the KR60 in collision (itself, SRDF pairs disabled, and the scene) at a
+configuration? Uniformly random in-limit configurations in ``table`` and in the ``boxes_N``
+scenes (N = 1, 10, 100, 1000: how the cost grows with the number of obstacles); usar-arm beside
+mplib and roboplan.
+
+As a solver (our side)::
+
+    python bench/collision.py --api single|many PROBLEMS.json RESULTS.json
+
+``single``: ``CollisionWorld.in_collision(q)`` timed per configuration. ``many``:
+``CollisionWorld.in_collision_many(Q)`` over blocks of :data:`BATCH` configurations of a scene;
+a configuration's time is its block's time / the block size (s per configuration).
+
+Every answer is compared with the brute-force python-fcl judge (``verify.Judge``): an answer
+that differs from it (a missed or an invented contact) is not a success.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from typing import Any
+
+import common
+import numpy as np
+from common import Context, peerio
+from scenes import from_json as scene_from_json
+from verify import Judge
+
+from usar_arm.robot import robot_from_files
+
+BATCH = 100
+"""Configurations per ``in_collision_many`` call (an edge of ~1 rad at 0.01 rad steps)."""
+
+
+def _worlds(spec: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    return robot, {name: robot.collision_world(scene_from_json(name, items))
+                   for name, items in spec["scenes"].items()}
+
+
+def _by_scene(problems: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for p in problems:
+        groups.setdefault(p["scene"], []).append(p)
+    return groups
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--api", choices=("single", "many"), default="single")
+    ap.add_argument("problems")
+    ap.add_argument("results")
+    a = ap.parse_args(argv)
+    spec = common.read_json(common.Path(a.problems))
+    _, worlds = _worlds(spec)
+    results: list[dict[str, Any]] = []
+    for name, group in _by_scene(spec["problems"]).items():
+        world = worlds[name]
+        qs = np.array([p["q"] for p in group], float)
+        world.in_collision_many(qs[:BATCH])  # warm-up: lazy models, page faults
+        for q in qs[:3]:
+            world.in_collision(q)
+        if a.api == "single":
+            for p, q in zip(group, qs, strict=True):
+                hit, sec = peerio.timed(world.in_collision, q)
+                results.append({"id": p["id"], "success": True, "seconds": sec,
+                                "collision": bool(hit)})
+        else:
+            for lo in range(0, len(group), BATCH):
+                hits, sec = peerio.timed(world.in_collision_many, qs[lo:lo + BATCH])
+                for p, hit in zip(group[lo:lo + BATCH], hits, strict=True):
+                    results.append({"id": p["id"], "success": True,
+                                    "seconds": sec / len(hits), "collision": bool(hit)})
+    results.sort(key=lambda r: r["id"])
+    peerio.write(a.results, peer=f"usar-arm ({a.api})", dist="usar-arm", stage="collision",
+                 results=results,
+                 settings={"api": "CollisionWorld.in_collision(q)" if a.api == "single" else
+                           f"CollisionWorld.in_collision_many, blocks of {BATCH}"})
+    return 0
+
+
+# ------------------------------------------------------------------------------ the stage
+def run(ctx: Context) -> dict[str, Any]:
+    """Run the collision cases (one per scene) and return the stage document."""
+    started = time.perf_counter()
+    path, spec = ctx.problem("collision_KR60")
+    solvers = [common.ours("usar-arm", "collision.py", "--api", "single",
+                           note="CollisionWorld.in_collision(q), one call per configuration"),
+               common.ours("usar-arm batch", "collision.py", "--api", "many",
+                           note=f"CollisionWorld.in_collision_many, {BATCH} per call"),
+               ctx.peer("mplib", "collision", "robot.set_qpos + is_state_colliding (FCL)"),
+               ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)")]
+    outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "collision_KR60")
+    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    cases: dict[str, Any] = {}
+    for name, group in _by_scene(spec["problems"]).items():
+        judge = Judge(robot, scene_from_json(name, spec["scenes"][name]))
+        truth = judge.colliding(np.array([p["q"] for p in group], float))
+        truth_of = {p["id"]: bool(t) for p, t in zip(group, truth, strict=True)}
+
+        def check(p: dict[str, Any], r: dict[str, Any],
+                  truth_of: dict[Any, bool] = truth_of) -> dict[str, Any]:
+            t = truth_of[p["id"]]
+            answer = r.get("collision") if r.get("success") else None
+            return {"verified": answer is not None and answer == t, "collision": answer,
+                    "truth": t}
+
+        def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
+            pairs = list(zip(raw["collision"], raw["truth"], strict=True))
+            return {"false_negatives": sum(1 for a, t in pairs if a is False and t),
+                    "false_positives": sum(1 for a, t in pairs if a is True and not t),
+                    "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None}
+
+        sub = {**spec, "problems": group}
+        ids = set(truth_of)
+        cases[name] = {"scene": name, "obstacles": len(spec["scenes"][name]),
+                       **common.build_case(path, sub, common.subset(outcomes, ids), check,
+                                           extra)}
+    return common.stage_document("collision", ctx.mode, {"rounds": ctx.rounds, "batch": BATCH,
+                                                         "judge": "verify.Judge"},
+                                 cases, _targets(cases), started)
+
+
+def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for solver, label in (("usar-arm", "in_collision"), ("usar-arm batch", "in_collision_many")):
+        s = cases["table"]["solvers"][solver].get("summary", {})
+        out.append(common.target(f"Collision KR60 in table, mean per configuration ({label})",
+                                 (s.get("time_all_s") or {}).get("mean"), 30e-6, "<=", "s"))
+        out.append(common.target(f"Collision KR60 in table, agreement with the brute-force "
+                                 f"judge ({label})", s.get("success_rate"), 1.0, ">=",
+                                 "fraction"))
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(solver_main())

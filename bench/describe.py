@@ -1,0 +1,108 @@
+"""Discovery + URDF stage: how long ``usar_arm.pipeline.describe`` takes to learn an arm from the
+embedded simulator over TCP and build its validated description (URDF, SRDF, joint limits,
+collision matrix from 10,000 samples), and how accurate that description is against the
+simulator's own model. No peer does this; our figures only.
+
+As a solver (its own process)::
+
+    python bench/describe.py PROBLEMS.json RESULTS.json
+
+Each problem names a robot and a wire precision (``udk``: the UDK number format, the default;
+``full``: every digit). Timed: ``run_discovery`` (the TCP exchanges), ``describe_arm`` (frames,
+limits, URDF, validation, collision matrix, SRDF, and the accuracy check of
+``accuracy_samples`` random configurations against the simulator's model) and
+``write_description`` (atomic file writes), each separately; ``seconds`` is their sum.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from typing import Any
+
+import common
+from common import Context, peerio
+
+from usar_arm.pipeline import DescribeOptions, describe_arm, run_discovery, write_description
+
+REPEATS = {("quick", "udk"): 1, ("full", "udk"): 3, ("full", "full"): 1}
+"""Runs per (mode, wire precision): the full-precision run is for its accuracy figures."""
+ROBOTS = {"quick": ("KR60",), "full": ("KR60", "Fanuc_M16iB20")}
+ACCURACY_SAMPLES = 1000
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    spec, out = peerio.args()
+
+    def solve(p: dict[str, Any]) -> dict[str, Any]:
+        options = DescribeOptions(robot=p["robot"], wire_precision=p["wire_precision"],
+                                  accuracy_samples=p["accuracy_samples"])
+        record, t_wire = peerio.timed(run_discovery, options)
+        desc, t_build = peerio.timed(describe_arm, record, options)
+        with tempfile.TemporaryDirectory() as folder:
+            _, t_write = peerio.timed(write_description, desc, folder)
+        d = desc.discovery
+        return {"success": True, "seconds": t_wire + t_build + t_write,
+                "discovery_seconds": t_wire, "build_seconds": t_build,
+                "write_seconds": t_write, "dof": desc.chain.dof,
+                "exchanges": len(d.get("exchanges", [])),
+                "accuracy": d.get("accuracy_vs_simulator"),
+                "precision": {k: v for k, v in d.get("precision", {}).items()
+                              if k != "snapped"},
+                "collision_matrix": {k: v for k, v in d.get("collision_matrix", {}).items()
+                                     if k != "checked_pairs"},
+                "warnings": list(desc.warnings)}
+
+    peerio.write(out, peer="usar-arm", dist="usar-arm", stage="describe",
+                 results=peerio.solve_all(spec["problems"], solve, warmup=0))
+    return 0
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Time and check the descriptions of both arms at both wire precisions."""
+    started = time.perf_counter()
+    precisions = ("udk",) if ctx.mode == "quick" else ("udk", "full")
+    problems = [{"id": i, "robot": r, "wire_precision": w, "repeat": k,
+                 "accuracy_samples": ACCURACY_SAMPLES}
+                for i, (r, w, k) in enumerate((r, w, k) for r in ROBOTS[ctx.mode]
+                                              for w in precisions
+                                              for k in range(REPEATS[ctx.mode, w]))]
+    spec = {"stage": "describe", "problems": problems}
+    path = ctx.work / "describe_problems.json"
+    common.write_json(path, spec)
+    solver = common.ours("usar-arm", "describe.py",
+                         note="run_discovery + describe_arm + write_description")
+    outcome = common.run_alternating(spec, [solver], ctx.work, 1, "describe")["usar-arm"]
+    cases = {}
+    for robot in ROBOTS[ctx.mode]:
+        for wire in precisions:
+            rows = [(p, r) for p, r in zip(problems, outcome.results, strict=True)
+                    if p["robot"] == robot and p["wire_precision"] == wire]
+            results = [r for _, r in rows]
+            ok = [bool(r.get("success")) for r in results]
+            summary = common.base_summary(results, ok)
+            for key in ("discovery_seconds", "build_seconds", "write_seconds"):
+                summary[key] = common.stats([r.get(key) for r in results])
+            last = next((r for r in reversed(results) if r.get("success")), {})
+            summary.update(accuracy=last.get("accuracy"), precision=last.get("precision"),
+                           collision_matrix=last.get("collision_matrix"),
+                           warnings=last.get("warnings"), dof=last.get("dof"))
+            raw = {k: [r.get(k) for r in results]
+                   for k in ("id", "success", "seconds", "discovery_seconds", "build_seconds",
+                             "write_seconds")}
+            cases[f"{robot} ({wire})"] = {
+                "robot": robot, "wire_precision": wire,
+                "problems": {"file": None, "count": len(results),
+                             "settings": {"accuracy_samples": ACCURACY_SAMPLES,
+                                          "acm_samples": DescribeOptions().acm_samples}},
+                "solvers": {"usar-arm": common.solver_record(outcome, raw, summary)},
+                "ratios": {}}
+    return common.stage_document("describe", ctx.mode,
+                                 {"repeats": {w: REPEATS[ctx.mode, w] for w in precisions},
+                                  "precisions": list(precisions)},
+                                 cases, [], started)
+
+
+if __name__ == "__main__":
+    sys.exit(solver_main())

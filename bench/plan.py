@@ -1,0 +1,170 @@
+"""Planning stage: collision-free joint-space paths between seeded start/goal pairs (KR60 in
+empty, table, shelf, cage; the 7-joint Fanuc_M16iB20 in the same scenes; the KR60 among 1 to
+1,000 boxes), usar-arm beside mplib (``plan_qpos``'s RRTConnect + simplification) and roboplan
+(RRT-Connect + shortcutting).
+
+As a solver (our side)::
+
+    python bench/plan.py PROBLEMS.json RESULTS.json
+
+Timed: ``usar_arm.planning.ptp.plan_to_joints`` (start/goal checks, the straight line when it is
+free, else OMPL RRTConnect + simplification), 2 s budget; ``seconds`` is planning +
+simplification, as the peers'. ``duration_s``: our default timing (Ruckig, stop at waypoints,
+full limits) of that path, timed separately (``topp_seconds``). OMPL's RNG is seeded once per
+process (an OMPL 2.x limitation), so our figures are reproducible per process, not per problem;
+mplib and roboplan are seeded per problem.
+
+Every returned path is checked with the judge (``verify.check_path``): it must start at the
+start, end at the goal, stay within the limits, and be collision-free at every configuration
+0.005 rad apart along it; and it must have been found within the 2 s budget.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Any
+
+import common
+import numpy as np
+import verify
+from common import Context, peerio
+from scenes import from_json as scene_from_json
+
+from usar_arm.control.timing import stop_at_waypoints
+from usar_arm.control.trajectory import MotionLimits
+from usar_arm.errors import UsarArmError
+from usar_arm.planning.ompl_adapter import OmplOptions
+from usar_arm.planning.ptp import plan_to_joints
+from usar_arm.robot import robot_from_files
+
+CASES = (("KR60", "plan_KR60"), ("Fanuc_M16iB20", "plan_Fanuc_M16iB20"),
+         ("boxes", "plan_KR60_boxes"))
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    spec, out = peerio.args()
+    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    chain = robot.chain
+    lo, hi = chain.lower(), chain.upper()
+    limits = MotionLimits.from_chain(chain, 1.0)
+    options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
+    worlds: dict[str, Any] = {}
+
+    def enter(name: str) -> None:
+        if name not in worlds:
+            worlds[name] = robot.collision_world(scene_from_json(name, spec["scenes"][name]))
+        worlds["current"] = worlds[name]
+
+    def solve(p: dict[str, Any]) -> dict[str, Any]:
+        begin = time.perf_counter()
+        try:
+            plan = plan_to_joints(worlds["current"], chain.joint_names, lo, hi,
+                                  np.array(p["start"]), np.array(p["goal"]), options)
+        except UsarArmError as exc:
+            return {"success": False, "seconds": time.perf_counter() - begin, "path": None,
+                    "status": f"{type(exc).__name__}: {exc}"}
+        sec = time.perf_counter() - begin
+        timed, topp = peerio.timed(stop_at_waypoints, chain.joint_names, plan.waypoints, limits)
+        return {"success": True, "seconds": sec, "path": plan.waypoints,
+                "duration_s": timed.duration, "topp_seconds": topp,
+                "planner": "direct" if plan.ompl is None else plan.ompl.planner,
+                "simplify_seconds": None if plan.ompl is None else plan.ompl.simplify_seconds}
+
+    peerio.write(out, peer="usar-arm", dist="usar-arm", stage="plan",
+                 results=peerio.solve_by_scene(spec["problems"], enter, solve),
+                 settings={"call": "planning.ptp.plan_to_joints", "ompl": vars(options),
+                           "duration": "control.timing.stop_at_waypoints, speed scale 1.0"},
+                 notes="seconds = start/goal checks + straight-line check + RRTConnect + "
+                       "simplification; OMPL seeded once per process")
+    return 0
+
+
+# ------------------------------------------------------------------------------ the stage
+def _solvers(ctx: Context) -> list[common.Solver]:
+    return [common.ours("usar-arm", "plan.py", note="plan_to_joints: RRTConnect + simplify"),
+            ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify), as plan_qpos; "
+                     "checks edges at discrete states only"),
+            ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter")]
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Run the planning cases and return the stage document."""
+    started = time.perf_counter()
+    cases: dict[str, Any] = {}
+    for case, key in CASES:
+        path, spec = ctx.problem(key)
+        outcomes = common.run_alternating(spec, _solvers(ctx), ctx.work, ctx.rounds, key)
+        robot = robot_from_files(spec["urdf"], spec["srdf"])
+        judges = {n: verify.Judge(robot, scene_from_json(n, items))
+                  for n, items in spec["scenes"].items()}
+        budget = float(spec["time_limit_s"])
+
+        def check(p: dict[str, Any], r: dict[str, Any], robot: Any = robot,
+                  judges: dict[str, Any] = judges, budget: float = budget) -> dict[str, Any]:
+            c = verify.check_path(robot, judges[p["scene"]], p, r)
+            in_time = r.get("seconds") is not None and r["seconds"] <= budget
+            return {"verified": c.verified and in_time, "ends_match": c.ends_match,
+                    "ends_off_by_turns": c.ends_off_by_turns, "in_time": in_time,
+                    "within_limits": c.within_limits, "collision_free": c.collision_free,
+                    "path_length": c.length, "waypoints": c.waypoints,
+                    "duration_s": r.get("duration_s"), "scene": p["scene"],
+                    "line_blocked": p.get("line_blocked")}
+
+        if case == "boxes":
+            for n, items in spec["scenes"].items():
+                group = [p for p in spec["problems"] if p["scene"] == n]
+                ids = {p["id"] for p in group}
+                cases[n] = {"robot": spec["robot"], "dof": len(spec["joint_names"]),
+                            "scenes": [n], "obstacles": len(items),
+                            **common.build_case(path, {**spec, "problems": group},
+                                                common.subset(outcomes, ids), check, _extra)}
+            continue
+        cases[case] = {"robot": spec["robot"], "dof": len(spec["joint_names"]),
+                       "scenes": list(spec["scenes"]),
+                       **common.build_case(path, spec, outcomes, check, _extra)}
+    return common.stage_document("plan", ctx.mode, {"rounds": ctx.rounds,
+                                                    "judge_step": verify.PATH_STEP},
+                                 cases, _targets(cases), started)
+
+
+def _extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
+    """Wrong answers (answered, not verified) and per-scene medians."""
+    wrong = sum(1 for a, v in zip(raw["answered"], raw["verified"], strict=True) if a and not v)
+    hits = sum(1 for c in raw["collision_free"] if c is False)
+    per_scene = {}
+    for sc in dict.fromkeys(raw["scene"]):
+        rows = [k for k, s in enumerate(raw["scene"]) if s == sc]
+        secs = [raw["seconds"][k] for k in rows]
+        per_scene[sc] = {"problems": len(rows),
+                         "verified": sum(1 for k in rows if raw["verified"][k]),
+                         "time_all_s": common.stats(secs)}
+    durations = [d for d, v in zip(raw["duration_s"], raw["verified"], strict=True) if v and d]
+    turns = sum(1 for t in raw["ends_off_by_turns"] if t)
+    late = sum(1 for a, t in zip(raw["answered"], raw["in_time"], strict=True) if a and not t)
+    return {"answered_but_wrong": wrong, "paths_in_collision": hits,
+            "ends_off_by_whole_turns": turns, "answered_after_budget": late,
+            "duration_s": common.stats(durations), "by_scene": per_scene}
+
+
+def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    kr = cases["KR60"]
+    ours = kr["solvers"]["usar-arm"].get("summary", {})
+    mp = kr["ratios"].get("mplib", {}).get("usar-arm", {})
+    n = kr["problems"]["count"]
+    fa = cases["Fanuc_M16iB20"]["solvers"]["usar-arm"].get("summary", {})
+    return [
+        common.target(f"Plan KR60, {n} problems over 4 scenes: verified within 2 s",
+                      ours.get("success_rate"), 1.0, ">=", "fraction"),
+        common.target("Plan KR60 median planning + simplification",
+                      (ours.get("time_all_s") or {}).get("median"), 0.020, "<=", "s"),
+        common.target("Plan KR60 median time / mplib's median (same problems, same run)",
+                      mp.get("median"), 0.5, "<=", "ratio",
+                      "" if mp else "mplib not run"),
+        common.target("Plan Fanuc_M16iB20 (7 joints): verified within 2 s",
+                      fa.get("success_rate"), 1.0, ">=", "fraction"),
+    ]
+
+
+if __name__ == "__main__":
+    sys.exit(solver_main())

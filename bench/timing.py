@@ -1,0 +1,139 @@
+"""Time-parameterisation stage: the same geometric paths (our planner's, fixed in the problem
+file) timed under the same velocity and acceleration limits by usar-arm (Ruckig, jerk-limited:
+``stop`` at every waypoint, the default, and ``blend``), TOPP-RA (toppra: time-optimal on a cubic
+spline through the waypoints, no jerk limit) and roboplan (its TOPP-RA, Hermite spline stopping
+at every waypoint).
+
+As a solver (our side)::
+
+    python bench/timing.py --mode stop|blend PROBLEMS.json RESULTS.json
+
+Timed: ``control.timing.stop_at_waypoints`` / ``blended`` (blend re-checks its segments for
+collisions in the problem's scene and falls back to stopping where a segment fails), not the
+100 Hz sampling. Figures: duration (s) and its ratio to toppra's on the same path; computation
+time per trajectory (s). Every trajectory's 100 Hz samples are checked: ends at the waypoints,
+velocity and acceleration within the limits (finite differences), collision-free in the scene
+(the judge) - toppra's spline may leave the collision-checked polyline.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from typing import Any
+
+import common
+import numpy as np
+import verify
+from common import Context, peerio
+from scenes import from_json
+
+from usar_arm.control.timing import DEFAULT_RATE_HZ, blended, stop_at_waypoints
+from usar_arm.control.trajectory import MotionLimits
+from usar_arm.robot import robot_from_files
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mode", choices=("stop", "blend"), default="stop")
+    ap.add_argument("problems")
+    ap.add_argument("results")
+    a = ap.parse_args(argv)
+    spec = common.read_json(common.Path(a.problems))
+    names = tuple(spec["joint_names"])
+    limits = MotionLimits(*(np.array(spec[k], float)
+                            for k in ("lower", "upper", "vmax", "amax", "jmax")))
+    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    worlds: dict[str, Any] = {}
+
+    def solve(p: dict[str, Any]) -> dict[str, Any]:
+        wp = peerio.waypoints(p, len(names))
+        if a.mode == "stop":
+            motion, sec = peerio.timed(stop_at_waypoints, names, wp, limits)
+        else:
+            if p["scene"] not in worlds:
+                worlds[p["scene"]] = robot.collision_world(
+                    from_json(p["scene"], spec["scenes"][p["scene"]]))
+            motion, sec = peerio.timed(blended, names, wp, limits,
+                                       worlds[p["scene"]].in_collision_many,
+                                       1.0 / DEFAULT_RATE_HZ)
+        t = peerio.sample_times(motion.duration)
+        q = motion.evaluate(t)[0]
+        return {"success": True, "seconds": sec, "duration_s": motion.duration,
+                "fallbacks": motion.fallbacks, "samples": {"t": t, "q": q}}
+
+    peerio.write(a.results, peer=f"usar-arm ({a.mode})", dist="usar-arm", stage="topp",
+                 results=peerio.solve_all(spec["problems"], solve),
+                 settings={"mode": a.mode, "jerk_limits": spec["jmax"],
+                           "blend_check_step_s": 1.0 / DEFAULT_RATE_HZ})
+    return 0
+
+
+# ------------------------------------------------------------------------------ the stage
+def run(ctx: Context) -> dict[str, Any]:
+    """Run the timing case and return the stage document."""
+    started = time.perf_counter()
+    path, spec = ctx.problem("topp_KR60")
+    solvers = [common.ours("usar-arm", "timing.py", "--mode", "stop",
+                           note="stop_at_waypoints (default): Ruckig, jerk-limited"),
+               common.ours("usar-arm blend", "timing.py", "--mode", "blend",
+                           note="blended: Ruckig pass-through, collision re-check"),
+               ctx.peer("toppra", "topp", "TOPP-RA on a cubic spline (time-optimal, no jerk)"),
+               ctx.peer("roboplan", "topp", "TOPP-RA, Hermite spline (stops at waypoints)")]
+    outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "topp_KR60")
+    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    judges = {n: verify.Judge(robot, from_json(n, items)) for n, items in spec["scenes"].items()}
+    vmax, amax = np.array(spec["vmax"]), np.array(spec["amax"])
+    reference = {r["id"]: r.get("duration_s") for r in outcomes["toppra"].results
+                 if r.get("success")}
+
+    def check(p: dict[str, Any], r: dict[str, Any]) -> dict[str, Any]:
+        ref = reference.get(p["id"])
+        row: dict[str, Any] = {"duration_s": r.get("duration_s"),
+                               "waypoints": len(p["waypoints"]),
+                               "ratio_to_toppra": common.ratio(r.get("duration_s"), ref)}
+        samples = r.get("samples") if r.get("success") else None
+        if not samples:
+            return {**row, "verified": False}
+        c = verify.check_trajectory(judges[p["scene"]], np.array(p["waypoints"]),
+                                    np.array(samples["t"]), np.array(samples["q"]), vmax, amax)
+        return {**row, "verified": c.verified, "ends_match": c.ends_match,
+                "max_velocity_ratio": c.max_velocity_ratio,
+                "max_acceleration_ratio": c.max_acceleration_ratio,
+                "collision_free": c.collision_free, "fallbacks": r.get("fallbacks")}
+
+    def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
+        return {"duration_s": common.stats(raw["duration_s"]),
+                "ratio_to_toppra": common.stats(raw["ratio_to_toppra"]),
+                "in_collision": sum(1 for c in raw.get("collision_free", []) if c is False),
+                "over_limits": sum(1 for v, a in zip(raw.get("max_velocity_ratio", []),
+                                                     raw.get("max_acceleration_ratio", []),
+                                                     strict=True)
+                                   if v is not None and (v > verify.VELOCITY_SLACK
+                                                         or a > verify.ACCELERATION_SLACK))}
+
+    case = {"robot": spec["robot"], **common.build_case(path, spec, outcomes, check, extra)}
+    return common.stage_document("timing", ctx.mode, {"rounds": ctx.rounds,
+                                                      "speed_scale": spec["speed_scale"]},
+                                 {"KR60": case}, _targets(case), started)
+
+
+def _targets(case: dict[str, Any]) -> list[dict[str, Any]]:
+    def s(name: str) -> dict[str, Any]:
+        return case["solvers"][name].get("summary") or {}
+
+    stop, blend = s("usar-arm"), s("usar-arm blend")
+    return [
+        common.target("Timing: blend duration / TOPP-RA (toppra) duration, median",
+                      (blend.get("ratio_to_toppra") or {}).get("median"), 1.25, "<=", "ratio"),
+        common.target("Timing: Ruckig computation per trajectory (stop, default), mean",
+                      (stop.get("time_all_s") or {}).get("mean"), 1e-3, "<=", "s"),
+        common.target("Timing: stop trajectories verified (limits, ends, collision-free)",
+                      stop.get("success_rate"), 1.0, ">=", "fraction"),
+    ]
+
+
+if __name__ == "__main__":
+    sys.exit(solver_main())

@@ -1,0 +1,66 @@
+"""The benchmark harness's quick mode, end to end, so that it never rots: it runs, and every
+stage writes a well-formed results file, the README table and its plots."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+STAGES = ("ik", "collision", "plan", "timing", "describe", "execution")
+PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"}, "collision": {"mplib", "roboplan"},
+         "plan": {"mplib", "roboplan"}, "timing": {"toppra", "roboplan"},
+         "describe": set(), "execution": set()}
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    out = tmp_path_factory.mktemp("bench")
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "run.py"), "--quick", "--out",
+         str(out / "results"), "--problems", str(out / "problems")],
+        cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    return out / "results", proc.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stage", STAGES)
+def test_every_stage_writes_its_results_with_machine_versions_and_raw_figures(
+        quick_run: tuple[Path, str], stage: str) -> None:
+    doc = json.loads((quick_run[0] / f"{stage}.json").read_text())
+    assert doc["stage"] == stage and doc["mode"] == "quick"
+    assert {"cpu", "logical_cores", "ram_gib", "python", "os"} <= set(doc["machine"])
+    assert doc["versions"]["usar-arm"] not in ("", "unknown")
+    assert doc["cases"], "no case"
+    for t in doc["targets"]:
+        assert isinstance(t["pass"], bool) and t["target"]
+    for name, case in doc["cases"].items():
+        ours = case["solvers"]["usar-arm"]
+        assert "summary" in ours and ours["raw"], f"{name}: our solver has no figures"
+        for solver, s in case["solvers"].items():
+            if "skipped" in s:  # a missing peer venv is reported, never silent
+                assert s["kind"] == "peer" and s["skipped"].strip(), (name, solver)
+                continue
+            lengths = {len(v) for v in s["raw"].values()}
+            assert len(lengths) == 1, f"{name}/{solver}: ragged raw columns"
+        present = {n for n, s in case["solvers"].items() if s["kind"] == "peer"}
+        assert PEERS[stage] <= present, f"{name}: peers missing from the results"
+
+
+@pytest.mark.slow
+def test_the_report_has_the_targets_table_and_every_plot_it_shows(
+        quick_run: tuple[Path, str]) -> None:
+    folder = quick_run[0]
+    text = (folder / "README.md").read_text()
+    assert "## Targets" in text and "| stage | target |" in text
+    shown = [line.split("(")[-1].rstrip(")") for line in text.splitlines()
+             if line.startswith("![")]
+    assert shown, "no plot in the report"
+    for name in shown:
+        assert (folder / name).read_bytes()[:8] == PNG, name
