@@ -3,7 +3,7 @@ PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
 
-.PHONY: demo test bench bench-quick clean
+.PHONY: demo test bench bench-quick load soak clean
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -39,6 +39,15 @@ bench-quick: $(TEST_VENV)/.installed
 	$(PYTHON) bench/peers/venvs.py
 	$(TEST_VENV)/bin/python bench/run.py --quick --out $(BENCH_QUICK_OUT) \
 		--problems $(BENCH_QUICK_OUT)/problems
+
+# The simulator alone under 64 clients x 100 Hz for 60 s, and a 10-minute soak (tools/README.md);
+# run them on an otherwise idle machine: they measure wall-clock rates.
+load: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/python tools/load_sim.py --clients 64 --rate 100 --seconds 60 \
+		--json bench/results/load.json
+
+soak: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/python tools/soak_sim.py --minutes 10 --json bench/results/soak.json
 
 clean:
 	rm -rf $(DEMO_VENV) $(TEST_VENV) build *.egg-info
