@@ -128,6 +128,7 @@ def write_json(path: Path, doc: dict[str, Any], indent: int | None = 1) -> None:
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     with os.fdopen(fd, "w", encoding="utf-8") as f:
         f.write(text + "\n")
+    os.chmod(tmp, 0o644)  # (mkstemp makes it private; results are for everyone to read)
     os.replace(tmp, path)
 
 
