@@ -20,12 +20,13 @@ $(TEST_VENV)/.installed: pyproject.toml
 demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo
 
-# Three workers on two cores: one of them spends ten minutes mostly asleep in the soak test.
+# Three workers on two cores: one of them runs the "simulator-load" group (the 10-minute soak, mostly
+# asleep, then the 64-client load), the other two the rest.
 # The peers' venvs (bench/.venvs) let the quick benchmark in the suite run them too; a peer that
 # cannot be installed is reported as skipped by the benchmark, not a failure here.
 test: $(TEST_VENV)/.installed
 	$(PYTHON) bench/peers/venvs.py || echo "note: some benchmark peers could not be installed"
-	$(TEST_VENV)/bin/python -m pytest -n 3 tests
+	$(TEST_VENV)/bin/python -m pytest -n 3 --dist loadgroup tests
 
 # Benchmarks (bench/README-peers.md, bench/results/README.md). Each peer gets its own venv in
 # bench/.venvs (created once by venvs.py; mplib needs numpy < 2); usar-arm runs in the test venv.

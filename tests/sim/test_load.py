@@ -56,6 +56,7 @@ def test_eight_clients_at_100_hz_get_10_hz_status(tmp_path: Path) -> None:
     assert result["asta"]["act_per_s"]["min"] > 90
 
 
+@pytest.mark.xdist_group("simulator-load")
 @pytest.mark.slow
 def test_sixty_four_clients_at_100_hz_for_a_minute(tmp_path: Path) -> None:
     result = run_load(tmp_path, "--clients", "64", "--rate", "100", "--seconds", "60",

@@ -24,6 +24,7 @@ MINUTES = 10.0
 BUSY_WAIT_PERCENT = 15.0
 
 
+@pytest.mark.xdist_group("simulator-load")
 @pytest.mark.slow
 def test_ten_minutes_of_clients_churn_and_junk_leave_no_trace(tmp_path: Path) -> None:
     out = tmp_path / "soak.json"

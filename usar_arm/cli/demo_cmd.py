@@ -51,6 +51,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--seed", type=int, default=0, help="planner seed (default 0)")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="ACT commands per second (default 100)")
+    p.add_argument("--max-tracking-error", type=float, default=0.1, metavar="RAD",
+                   help="stop the arm when a joint strays further from the plan (default 0.1; "
+                        "raise it on a machine too busy for the simulator to keep time)")
     p.add_argument("--no-bag", action="store_true", help="do not write the rosbag2")
     p.add_argument("--json", action="store_true",
                    help="print the moves and files as one JSON object instead of the table")
@@ -136,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     if not 0 < args.speed_scale <= 1:
         raise InvalidInputError(f"--speed-scale must be in (0, 1], got {args.speed_scale}")
-    args.settle_tolerance, args.max_tracking_error = 1e-4, 0.1
+    args.settle_tolerance = 1e-4
     execution = execution_options(args)
     folder = Path(args.out)
     if folder.exists() and not folder.is_dir():
