@@ -19,7 +19,7 @@ import pytest
 pytest.importorskip("atheris")
 
 FUZZ = Path(__file__).resolve().parents[1] / "fuzz"
-FUZZ_SECONDS = 12
+FUZZ_SECONDS = 10
 TARGETS = ["codec", "scene", "limits", "trajectory"]
 
 
