@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.errors import ProtocolError
-from usar_arm.sim.connection import fast_act
+from usar_arm.sim.connection import MAX_WRITE_BUFFER, fast_act
 from usar_arm.sim.server import SimServer
 from usar_arm.sim.session import LOG_FIRST
 from usar_arm.usarsim.client import UsarClient
@@ -47,6 +47,16 @@ def _read_until(sock: socket.socket, needle: bytes, count: int = 1, timeout: flo
         assert chunk, f"connection closed; got {data[-300:]!r}"
         data += chunk
     return data
+
+
+def _connected(sim: SimServer, peer: str) -> bool:
+    """Whether the simulator still has a session for the client at ``peer``."""
+    for _ in range(10):
+        try:
+            return any(session.peer == peer for session in list(sim.sessions.values()))
+        except RuntimeError:  # (changed size while copied: the server thread is at work)
+            time.sleep(0.001)
+    return True
 
 
 def _summary(caplog: pytest.LogCaptureFixture, port: int, timeout: float = 5) -> str:
@@ -158,8 +168,11 @@ def test_a_client_leaving_mid_line_loses_its_robot_and_nothing_else(
     assert any("left mid-line (18 bytes unterminated)" in r.getMessage() for r in caplog.records)
 
 
-def test_a_client_that_never_reads_is_disconnected_alone(
+def test_a_client_that_never_reads_cannot_pile_up_memory_or_slow_the_others(
         sim: SimServer, caplog: pytest.LogCaptureFixture) -> None:
+    """A deaf client asking for ~0.7 MB of replies per burst: the server queues at most
+    MAX_WRITE_BUFFER for it (then disconnects it, logging why; or, when it has stopped reading
+    the deaf client's requests, queues nothing more), and serves the others meanwhile."""
     caplog.set_level(logging.INFO, logger="usar_arm.sim")
     with UsarClient(port=sim.port, timeout=3) as good:
         good.spawn("USARBot.KR60", start="RobotStart1")
@@ -168,14 +181,31 @@ def test_a_client_that_never_reads_is_disconnected_alone(
         sock.sendall(INIT)
         time.sleep(0.2)
         sock.settimeout(0.5)
-        deadline = time.monotonic() + 120  # (~8 MB must pile up: 4 MB queued + kernel buffers)
-        while not any("not reading its messages" in r.getMessage() for r in caplog.records):
-            assert time.monotonic() < deadline, "the server kept queueing for a deaf client"
+        peer = f"127.0.0.1:{sock.getsockname()[1]}"
+        most = 0
+        end = time.monotonic() + 8
+        while _connected(sim, peer) and time.monotonic() < end:
             with contextlib.suppress(OSError):  # blocked (timeout) or reset by the server
                 sock.sendall(b"GETGEO {Type Actuator}\r\n" * 1000)  # ~0.7 MB of replies
+            most = max(most, _queued(sim, peer))
             assert good.get_conf("Robot").name == "KR60"  # served meanwhile
+        assert most <= MAX_WRITE_BUFFER + 1_000_000, most
+        if not _connected(sim, peer):
+            deadline = time.monotonic() + 5
+            while not any("not reading its messages" in r.getMessage() for r in caplog.records):
+                assert time.monotonic() < deadline, "disconnected without saying why"
+                time.sleep(0.02)
         sock.close()
         assert good.get_conf("Robot").name == "KR60"
+
+
+def _queued(sim: SimServer, peer: str) -> int:
+    """Bytes the simulator holds for the client at ``peer`` (0 when it is gone)."""
+    for conn in list(sim.connections.values()):
+        session, transport = conn.session, conn.transport
+        if session is not None and session.peer == peer and transport is not None:
+            return int(transport.get_write_buffer_size())
+    return 0
 
 
 def test_a_flood_of_ten_thousand_lines_a_second_leaves_the_others_their_rate(
