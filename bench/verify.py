@@ -23,7 +23,8 @@ import fcl
 import numpy as np
 from scipy.spatial import cKDTree
 
-from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
+from usar_arm.planning.collision import shape_geometry
+from usar_arm.planning.scene import Box, Scene
 from usar_arm.robot import Robot
 from usar_arm.spatial import Array, matrix_from_quat, rotation_distance
 
@@ -39,22 +40,6 @@ LIMIT_SLACK = 1e-6
 VELOCITY_SLACK = 1.02
 ACCELERATION_SLACK = 1.10
 """Allowed ratio of finite-difference velocity / acceleration to the limit (100 Hz samples)."""
-
-
-def _geometry(shape: object) -> fcl.CollisionGeometry:
-    if isinstance(shape, Box):
-        return fcl.Box(*shape.size)
-    if isinstance(shape, CylinderShape):
-        return fcl.Cylinder(shape.radius, shape.length)
-    if isinstance(shape, Sphere):
-        return fcl.Sphere(shape.radius)
-    if isinstance(shape, Mesh):
-        model = fcl.BVHModel()
-        model.beginModel(len(shape.vertices), len(shape.faces))
-        model.addSubModel(np.asarray(shape.vertices, float), np.asarray(shape.faces, np.int32))
-        model.endModel()
-        return model
-    raise TypeError(f"unsupported shape {shape!r}")
 
 
 def _tf(t: Array) -> fcl.Transform:
@@ -79,7 +64,7 @@ class Judge:
         self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),  # type: ignore
                                                   fcl.Transform()) for c in cyl]
         self.link_radius = np.array([math.hypot(c.radius, c.length / 2) for c in cyl])  # type: ignore
-        self.objects = [fcl.CollisionObject(_geometry(o.shape), _tf(o.pose))
+        self.objects = [fcl.CollisionObject(shape_geometry(o.shape), _tf(o.pose))
                         for o in scene.objects]
         self.object_centre = np.array([o.pose[:3, 3] for o in scene.objects]).reshape(-1, 3)
         self.object_radius = np.array([o.bounding_radius() for o in scene.objects])

@@ -38,7 +38,9 @@ def _fcl_transform(t: Array) -> fcl.Transform:
     return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
 
 
-def _shape_geometry(shape: object) -> fcl.CollisionGeometry:
+def shape_geometry(shape: object) -> fcl.CollisionGeometry:
+    """The python-fcl geometry of a scene shape (box, cylinder, sphere or triangle mesh), in
+    the shape's own frame (m)."""
     if isinstance(shape, Box):
         return fcl.Box(*shape.size)
     if isinstance(shape, CylinderShape):
@@ -94,7 +96,7 @@ class CollisionWorld:
         self._half = np.array([c.length / 2 + self.padding for c in cyls])
         self._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
                        for r, h in zip(self._radius, self._half, strict=True)]
-        self._static = [fcl.CollisionObject(_shape_geometry(o.shape), _fcl_transform(o.pose))
+        self._static = [fcl.CollisionObject(shape_geometry(o.shape), _fcl_transform(o.pose))
                         for o in scene.objects]
         self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
         self._names = self._links + [o.name for o in scene.objects]
