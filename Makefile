@@ -14,7 +14,7 @@ $(DEMO_VENV)/.installed: pyproject.toml
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
-	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz]"
+	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray]"
 	touch $@
 
 demo: $(DEMO_VENV)/.installed

@@ -29,7 +29,7 @@ ALLOWED: dict[str, set[str]] = {
 # orchestration
 FACADES = {"cli", "arm", "cycle", "motion", "pipeline", "robot", "__init__", "__main__"}
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
-HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1}
+HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1}
 
 
 def _modules() -> list[tuple[str, Path]]:
