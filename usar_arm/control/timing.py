@@ -24,6 +24,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from ruckig import InputParameter, Result, Ruckig, Synchronization
@@ -67,6 +68,50 @@ def _calculate(start: Array, target: Array, v0: Array, v1: Array, limits: Motion
     return traj
 
 
+def _phase_table(profile: Any) -> tuple[Array, Array, Array, Array, Array]:
+    """One DoF's Ruckig profile as constant-jerk phases: start times (s), jerk, and position,
+    velocity, acceleration at each phase's start; the last row is the final state (jerk 0).
+
+    Ruckig runs an optional two-phase brake pre-trajectory first, then the seven phases of the
+    main profile; after its end the state moves on with its final acceleration.
+    """
+    brake = profile.brake
+    if profile.accel.duration > 0.0:
+        raise TimingError("Ruckig returned an acceleration pre-trajectory, which the "
+                          "vectorised sampler does not model")
+    b_t = np.asarray(brake.t, float)
+    t = np.concatenate([b_t, np.asarray(profile.t, float)])
+    starts = np.concatenate([[0.0], np.cumsum(t)])
+    jerk = np.concatenate([np.asarray(brake.j, float), np.asarray(profile.j, float),
+                           [0.0]])
+    pos = np.concatenate([np.asarray(brake.p, float), np.asarray(profile.p, float)])
+    vel = np.concatenate([np.asarray(brake.v, float), np.asarray(profile.v, float)])
+    acc = np.concatenate([np.asarray(brake.a, float), np.asarray(profile.a, float)])
+    return starts, jerk, pos, vel, acc
+
+
+def profile_states(traj: RuckigTrajectory, times: Array) -> tuple[Array, Array, Array]:
+    """Positions, velocities and accelerations (m, dof) of a Ruckig trajectory at ``times``
+    (s, clipped to [0, duration]), evaluated for all times at once.
+
+    Each DoF is piecewise constant-jerk: within a phase that starts at t_k with state
+    (p_k, v_k, a_k) and jerk j_k, p = p_k + v_k dt + a_k dt^2/2 + j_k dt^3/6 (dt = t - t_k).
+    Equal to Ruckig's own ``at_time`` to rounding (tested).
+    """
+    times = np.clip(np.asarray(times, float), 0.0, float(traj.duration))
+    dof = traj.degrees_of_freedom
+    out = np.empty((3, len(times), dof))
+    for d, profile in enumerate(traj.profiles[-1]):
+        starts, jerk, p, v, a = _phase_table(profile)
+        k = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(jerk) - 1)
+        dt = times - starts[k]
+        j = jerk[k]
+        out[2, :, d] = a[k] + j * dt
+        out[1, :, d] = v[k] + (a[k] + 0.5 * j * dt) * dt
+        out[0, :, d] = p[k] + (v[k] + (0.5 * a[k] + j * dt / 6.0) * dt) * dt
+    return out[0], out[1], out[2]
+
+
 @dataclass
 class _Straight:
     """A rest-to-rest straight segment a -> a + delta, timed by a 1-DoF profile of s in [0, 1]:
@@ -80,15 +125,16 @@ class _Straight:
     def duration(self) -> float:
         return float(self.profile.duration)
 
-    def at(self, t: float) -> tuple[Array, Array, Array]:
-        s, sd, sdd = self.profile.at_time(min(t, self.duration))
-        return self.start + s[0] * self.delta, sd[0] * self.delta, sdd[0] * self.delta
+    def states(self, times: Array) -> tuple[Array, Array, Array]:
+        """Positions, velocities, accelerations (m, n) at segment times ``times`` (s)."""
+        s, sd, sdd = profile_states(self.profile, times)
+        return (self.start + s * self.delta, sd * self.delta, sdd * self.delta)
 
     @property
     def peak_speed(self) -> float:
         """Largest ds/dt of the profile (1/s)."""
-        return float(max(abs(self.profile.at_time(t)[1][0]) for t in
-                         np.linspace(0.0, self.duration, 21)))
+        _, sd, _ = profile_states(self.profile, np.linspace(0.0, self.duration, 21))
+        return float(np.max(np.abs(sd)))
 
 
 @dataclass
@@ -101,9 +147,9 @@ class _Free:
     def duration(self) -> float:
         return float(self.traj.duration)
 
-    def at(self, t: float) -> tuple[Array, Array, Array]:
-        pos, vel, acc = self.traj.at_time(min(t, self.duration))
-        return np.array(pos), np.array(vel), np.array(acc)
+    def states(self, times: Array) -> tuple[Array, Array, Array]:
+        """Positions, velocities, accelerations (m, n) at segment times ``times`` (s)."""
+        return profile_states(self.traj, times)
 
 
 Segment = _Straight | _Free
@@ -167,19 +213,17 @@ class TimedMotion:
         q, qd, qdd = (np.empty((len(times), n)) for _ in range(3))
         if self.profile is not None:
             assert self.path is not None
-            s = np.empty((len(times), 3))
-            for k, t in enumerate(times):
-                pos, vel, acc = self.profile.at_time(float(t))
-                s[k] = (pos[0], vel[0], acc[0])
-            d1, d2 = self.path(s[:, 0], 1), self.path(s[:, 0], 2)
-            q[:] = self.path(s[:, 0])
-            qd[:] = d1 * s[:, 1:2]
-            qdd[:] = d2 * s[:, 1:2] ** 2 + d1 * s[:, 2:3]
+            pos, vel, acc = (x[:, 0] for x in profile_states(self.profile, times))
+            d1, d2 = self.path(pos, 1), self.path(pos, 2)
+            q[:] = self.path(pos)
+            qd[:] = d1 * vel[:, None]
+            qdd[:] = d2 * vel[:, None] ** 2 + d1 * acc[:, None]
             return q, qd, qdd
         index = np.clip(np.searchsorted(self.starts, times, side="right") - 1, 0,
                         len(self.segments) - 1)
-        for k, (t, i) in enumerate(zip(times, index, strict=True)):
-            q[k], qd[k], qdd[k] = self.segments[i].at(float(t - self.starts[i]))
+        for i in np.unique(index):
+            rows = index == i
+            q[rows], qd[rows], qdd[rows] = self.segments[i].states(times[rows] - self.starts[i])
         return q, qd, qdd
 
     def sample(self, rate: float = DEFAULT_RATE_HZ, motion: str = "ptp") -> Trajectory:
@@ -261,7 +305,7 @@ def _pass_through(wp: Array, lines: list[_Straight], limits: MotionLimits) -> Ar
 def _segment_ok(seg: _Free, limits: MotionLimits, forbidden: SampleCheck | None,
                 step: float) -> bool:
     times = np.append(np.arange(0.0, seg.duration, step), seg.duration)
-    q = np.array([seg.at(float(t))[0] for t in times])
+    q = seg.states(times)[0]
     if np.any(q < limits.lower - 1e-9) or np.any(q > limits.upper + 1e-9):
         return False
     return not (forbidden is not None and bool(np.any(forbidden(q))))
