@@ -17,16 +17,13 @@ import fcl
 import numpy as np
 
 from usar_arm.model import Cylinder, KinematicChain
+from usar_arm.planning import bounds
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import EMPTY, Box, CylinderShape, Mesh, Scene, Sphere
 from usar_arm.spatial import Array
 
 Pair = tuple[str, str]
-
-
-SMALL_BATCH = 24
-"""Batches up to this size get their link poses from Pinocchio (cheaper than numpy's overhead)."""
 
 
 def pair(a: str, b: str) -> Pair:
@@ -69,9 +66,10 @@ class Contact:
 class CollisionWorld:
     """The arm (cylinders from a chain) and a scene, checked with python-fcl.
 
-    Broadphase: each robot cylinder's world axis-aligned bounding box is computed for all links
-    at once (numpy) and compared with the other boxes of every checked pair; only overlapping
-    pairs reach FCL's exact narrowphase.
+    Broadphase: a compiled kernel (:mod:`.bounds`) computes every link's pose for a batch of
+    configurations and clears the checked pairs that provably cannot touch (enclosing capsules,
+    separating axes of the exact cylinder against boxes); only the pairs it cannot clear reach
+    FCL's exact narrowphase, so only FCL ever reports a contact.
 
     Args:
         chain: the robot description (link cylinders).
@@ -101,11 +99,55 @@ class CollisionWorld:
         self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
         self._names = self._links + [o.name for o in scene.objects]
         self._poses = np.zeros((len(self._links), 4, 4))
-        self._poe: PoeModel | None = None
+        self._init_bounds(chain, links, scene)
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self._levers: Array | None = None
         self.set_disabled(disabled)
+
+    def _init_bounds(self, chain: KinematicChain, links: list, scene: Scene) -> None:
+        """Plain arrays for the compiled broadphase: the chain as twists at zero, each link
+        cylinder's pose at zero and the obstacles as boxes, spheres and capsules."""
+        poe = PoeModel(chain)
+        zero = chain.link_poses(np.zeros(chain.dof))
+        self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
+        self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
+        self._revolute = np.ascontiguousarray(poe.revolute, dtype=np.int64).reshape(-1)
+        self._moved_by = np.array([poe.joints_moving(lk.name) for lk in links], dtype=np.int64)
+        self._zero = np.array([zero[lk.name] @ local for lk, local in
+                               zip(links, self._local, strict=True)]).reshape(-1, 4, 4)
+        kinds, poses, sizes = [], [], []
+        for o in scene.objects:
+            shape, pose = o.shape, np.asarray(o.pose, float)
+            size = np.zeros(3)
+            if isinstance(shape, Box):
+                kind, size[:] = bounds.BOX, np.asarray(shape.size, float) / 2
+            elif isinstance(shape, Sphere):
+                kind, size[0] = bounds.SPHERE, shape.radius
+            elif isinstance(shape, CylinderShape):
+                kind, size[:2] = bounds.CAPSULE, (shape.radius, shape.length / 2)
+            elif isinstance(shape, Mesh):  # the box that bounds the mesh in its own frame
+                v = np.asarray(shape.vertices, float)
+                lo, hi = v.min(axis=0), v.max(axis=0)
+                centre = np.eye(4)
+                centre[:3, 3] = (lo + hi) / 2
+                kind, size[:], pose = bounds.HULL, (hi - lo) / 2, pose @ centre
+            else:
+                raise TypeError(f"unsupported shape {shape!r}")
+            kinds.append(kind)
+            poses.append(pose[:3])
+            sizes.append(size)
+        self._kind = np.array(kinds, dtype=np.int64)
+        self._opose = np.array(poses, dtype=float).reshape(-1, 3, 4)
+        self._osize = np.array(sizes, dtype=float).reshape(-1, 3)
+
+    def bounded_poses(self, qs: Array) -> tuple[Array, Array]:
+        """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
+        (N, P + Q) verdicts of the compiled tests on the robot-robot then robot-scene pairs
+        (order of ``_rr``/``_rs``): :data:`~.bounds.CLEAR`, :data:`~.bounds.CONTACT` or
+        :data:`~.bounds.UNDECIDED` (for FCL)."""
+        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
 
     @staticmethod
     def _aabb(obj: object) -> Array:
@@ -135,8 +177,11 @@ class CollisionWorld:
               if pair(self._links[i], self._links[j]) not in self._skip]
         rs = [(i, k) for i in range(n) for k, o in enumerate(self.scene.objects)
               if pair(self._links[i], o.name) not in self._skip]
-        self._rr = np.array(rr, dtype=int).reshape(-1, 2)
-        self._rs = np.array(rs, dtype=int).reshape(-1, 2)
+        self._rr = np.array(rr, dtype=np.int64).reshape(-1, 2)
+        self._rs = np.array(rs, dtype=np.int64).reshape(-1, 2)
+        self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
+                                   self._radius, self._half, self._moved_by, self._rr, self._rs,
+                                   self._kind, self._opose, self._osize)
 
     def lever_arms(self) -> Array:
         """Per actuated joint (configuration order), a bound on how far any point of the robot's
@@ -204,19 +249,6 @@ class CollisionWorld:
         c = w[:, :3, 3]
         return np.stack([c - half, c + half], axis=1)
 
-    def _candidates(self) -> tuple[Array, Array]:
-        """Checked robot-robot and robot-scene pairs whose AABBs overlap."""
-        box = self._robot_boxes()
-        rr, rs = self._rr, self._rs
-        a, b = box[rr[:, 0]], box[rr[:, 1]]
-        hit_rr = rr[np.all((a[:, 0] <= b[:, 1]) & (b[:, 0] <= a[:, 1]), axis=1)]
-        if len(rs):
-            a, s = box[rs[:, 0]], self._static_box[rs[:, 1]]
-            hit_rs = rs[np.all((a[:, 0] <= s[:, 1]) & (s[:, 0] <= a[:, 1]), axis=1)]
-        else:
-            hit_rs = rs
-        return hit_rr, hit_rs
-
     def _place(self, i: int) -> fcl.CollisionObject:
         obj = self._robot[i]
         obj.setTransform(_fcl_transform(self._world[i]))
@@ -225,33 +257,48 @@ class CollisionWorld:
     # ------------------------------------------------------------------ queries
     def in_collision(self, q: Array) -> bool:
         """True when any checked pair overlaps at ``q``."""
-        self.set_configuration(q)
-        return bool(self._narrowphase(stop_at_first=True))
+        world, verdicts = self.bounded_poses(q)
+        if not verdicts.any():
+            return False
+        return bool(self._exact(world[0], verdicts[0], stop_at_first=True))
 
     def contacts(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, sorted."""
-        self.set_configuration(q)
-        return sorted(self._narrowphase(stop_at_first=False))
+        world, verdicts = self.bounded_poses(q)
+        return sorted(self._exact(world[0], verdicts[0], stop_at_first=False))
 
-    def _narrowphase(self, stop_at_first: bool) -> list[Pair]:
-        hit_rr, hit_rs = self._candidates()
-        found: list[Pair] = []
+    def _exact(self, poses: Array, verdicts: Array, stop_at_first: bool) -> list[Pair]:
+        """The pairs in contact, given the compiled verdicts: proven contacts as they are, FCL's
+        answer on the undecided ones (link poses (L, 3, 4))."""
+        proven = np.flatnonzero(verdicts == bounds.CONTACT)
+        if stop_at_first and len(proven):
+            return [self._pair_name(int(proven[0]))]
+        found = [self._pair_name(int(p)) for p in proven]
         placed: dict[int, fcl.CollisionObject] = {}
         request = self._request
-        for i, j in hit_rr:
-            oi = placed.get(i) or placed.setdefault(i, self._place(i))
-            oj = placed.get(j) or placed.setdefault(j, self._place(j))
-            if fcl.collide(oi, oj, request, fcl.CollisionResult()) > 0:
-                found.append(pair(self._links[i], self._links[j]))
-                if stop_at_first:
-                    return found
-        for i, k in hit_rs:
-            oi = placed.get(i) or placed.setdefault(i, self._place(i))
-            if fcl.collide(oi, self._static[k], request, fcl.CollisionResult()) > 0:
-                found.append(pair(self._links[i], self.scene.objects[k].name))
+        n_rr = len(self._rr)
+        for p in np.flatnonzero(verdicts == bounds.UNDECIDED):
+            if p < n_rr:
+                i, j = self._rr[p]
+                other = self._placed(j, poses, placed)
+            else:
+                i, k = self._rs[p - n_rr]
+                other = self._static[k]
+            if fcl.collide(self._placed(i, poses, placed), other, request,
+                           fcl.CollisionResult()) > 0:
+                found.append(self._pair_name(int(p)))
                 if stop_at_first:
                     return found
         return found
+
+    def _pair_name(self, p: int) -> Pair:
+        """The names of checked pair ``p`` (robot-robot pairs first, then robot-scene)."""
+        n_rr = len(self._rr)
+        if p < n_rr:
+            i, j = self._rr[p]
+            return pair(self._links[i], self._links[j])
+        i, k = self._rs[p - n_rr]
+        return pair(self._links[i], self.scene.objects[k].name)
 
     def contacts_brute_force(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, testing each pair with FCL, no broadphase.
@@ -321,9 +368,9 @@ class CollisionWorld:
     def in_collision_many(self, qs: Array) -> Array:
         """:meth:`in_collision` for N configurations (N, n) at once -> bool (N,).
 
-        Forward kinematics of every link and the broadphase run vectorised (numpy) over the
-        whole batch; FCL's narrowphase runs only for the pairs whose boxes overlap, stopping at
-        a configuration's first contact. The fast path for edges and trajectories.
+        Forward kinematics of every link and the bounding-volume tests run compiled over the
+        whole batch; FCL's narrowphase runs only for the pairs they could not clear, stopping
+        at a configuration's first contact. The fast path for edges and trajectories.
         """
         found = self._many(qs, stop_at_first=True)
         out = np.zeros(len(found), dtype=bool)
@@ -334,21 +381,6 @@ class CollisionWorld:
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""
         return [sorted(p) for p in self._many(qs, stop_at_first=False)]
-
-    def _link_poses(self, qs: Array) -> Array:
-        """World poses (N, L, 4, 4) of the links with geometry: Pinocchio one configuration at
-        a time for small batches, vectorised products of exponentials for large ones."""
-        if len(qs) > SMALL_BATCH:
-            if self._poe is None:
-                self._poe = PoeModel(self.chain)
-            return self._poe.link_poses(qs, self._links)
-        out = np.empty((len(qs), len(self._links), 4, 4))
-        oMf = self.kinematics.data.oMf
-        for n, q in enumerate(qs):
-            self.kinematics.update(q)
-            for k, fid in enumerate(self._frame_ids):
-                out[n, k] = oMf[fid].homogeneous
-        return out
 
     def _placed(self, i: int, poses: Array, placed: dict[int, fcl.CollisionObject]
                 ) -> fcl.CollisionObject:
@@ -361,44 +393,8 @@ class CollisionWorld:
         return o
 
     def _many(self, qs: Array, stop_at_first: bool) -> list[list[Pair]]:
-        qs = np.atleast_2d(np.asarray(qs, float))
-        world = self._link_poses(qs) @ self._local                       # (N, L, 4, 4)
-        z = world[..., :3, 2]
-        half = (np.abs(z) * self._half[:, None]
-                + self._radius[:, None] * np.sqrt(np.clip(1.0 - z * z, 0.0, 1.0)))
-        centre = world[..., :3, 3]
-        lo, hi = centre - half, centre + half                            # (N, L, 3)
-        rr, rs = self._rr, self._rs
-        hit_rr = np.all((lo[:, rr[:, 0]] <= hi[:, rr[:, 1]])
-                        & (lo[:, rr[:, 1]] <= hi[:, rr[:, 0]]), axis=2)  # (N, P)
-        if len(rs):
-            s = self._static_box[rs[:, 1]]
-            hit_rs = np.all((lo[:, rs[:, 0]] <= s[:, 1]) & (s[:, 0] <= hi[:, rs[:, 0]]),
-                            axis=2)                                      # (N, Q)
-        else:
-            hit_rs = np.zeros((len(qs), 0), dtype=bool)
-        found: list[list[Pair]] = [[] for _ in range(len(qs))]
-        rows = np.flatnonzero(hit_rr.any(axis=1) | hit_rs.any(axis=1))
-        request = self._request
-        for n in rows:
-            placed: dict[int, fcl.CollisionObject] = {}
-            poses = world[n]
-            hits = found[n]
-            for p in np.flatnonzero(hit_rr[n]):
-                i, j = rr[p]
-                oi = self._placed(i, poses, placed)
-                oj = self._placed(j, poses, placed)
-                if fcl.collide(oi, oj, request, fcl.CollisionResult()) > 0:
-                    hits.append(pair(self._links[i], self._links[j]))
-                    if stop_at_first:
-                        break
-            if hits and stop_at_first:
-                continue
-            for p in np.flatnonzero(hit_rs[n]):
-                i, k = rs[p]
-                oi = self._placed(i, poses, placed)
-                if fcl.collide(oi, self._static[k], request, fcl.CollisionResult()) > 0:
-                    hits.append(pair(self._links[i], self.scene.objects[k].name))
-                    if stop_at_first:
-                        break
+        world, verdicts = self.bounded_poses(qs)
+        found: list[list[Pair]] = [[] for _ in range(len(world))]
+        for n in np.flatnonzero(verdicts.any(axis=1)):
+            found[n] = self._exact(world[n], verdicts[n], stop_at_first)
         return found

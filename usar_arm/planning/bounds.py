@@ -1,0 +1,362 @@
+"""Compiled broadphase of the collision world: link poses for a batch of configurations and
+geometric proofs that settle most pairs without python-fcl.
+
+A robot link is a cylinder (radius r, half-length h about its local z axis). Each checked pair
+gets one of three verdicts (:func:`classify`): CLEAR (provably apart), CONTACT (provably
+overlapping) or UNDECIDED, which goes to python-fcl, the exact judge (:mod:`.collision`).
+
+CONTACT is proven with balls that lie inside both shapes (radius min(r, h), centres on the
+cylinder's axis) and overlap by more than ``MARGIN`` (0.1 mm): a certainty about the exact
+shapes, far outside any exact test's tolerance. Meshes never get CONTACT (python-fcl sees a
+mesh as a surface). CLEAR is a separating-axis or distance argument that holds for the exact
+shapes, with a margin of ``EPS`` metres against rounding:
+
+* link-link and link-cylinder obstacle: the capsules (segment + radius) that enclose both
+  cylinders are farther apart than the sum of their radii;
+* link-sphere: the link's capsule axis is farther from the sphere's centre than r + R;
+* link-box (and link-mesh, through the box that bounds the mesh in its own frame): an axis
+  among the box's three face normals, the cylinder's axis, the three cross products of the
+  two, and the line between the centres, on which the projections of the exact cylinder
+  (|u.z| h + r sqrt(1 - (u.z)^2)) and of the box (sum |u.b_i| e_i) do not overlap.
+
+Forward kinematics is the product of exponentials of the chain's joints (space frame), the same
+representation as :mod:`.poe`; Pinocchio stays the reference it is tested against.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from usar_arm.planning.jit import kernel
+from usar_arm.spatial import Array
+
+EPS = 1e-9
+"""Safety margin (m): a pair is cleared only when separated by more than this."""
+MARGIN = 1e-4
+"""A pair is proven in contact only when balls inside both shapes overlap by more than this
+(m): far beyond the tolerance of any exact test, so python-fcl always agrees."""
+
+BOX, SPHERE, CAPSULE, HULL = 0, 1, 2, 3
+"""Obstacle kinds: an oriented box (half extents), a sphere (radius), a cylinder (radius,
+half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding box (it can
+clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
+
+
+@kernel
+def _dot(a: Array, b: Array) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@kernel
+def link_poses(qs: Array, axes: Array, points: Array, revolute: Array, moved_by: Array,
+               zero: Array) -> Array:
+    """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
+
+    ``axes``/``points`` (n, 3): each joint's axis and a point on it at the zero configuration;
+    ``revolute`` (n,) 1 for revolute, 0 for prismatic; ``moved_by`` (L,) how many joints (a
+    prefix of the chain) move each body; ``zero`` (L, 4, 4) each body's pose at zero.
+    """
+    n_cfg, n = qs.shape
+    n_body = zero.shape[0]
+    out = np.empty((n_cfg, n_body, 3, 4))
+    rots = np.empty((n + 1, 3, 3))
+    poss = np.zeros((n + 1, 3))
+    e = np.empty((3, 3))
+    for c in range(n_cfg):
+        for row in range(3):
+            for col in range(3):
+                rots[0, row, col] = 1.0 if row == col else 0.0
+        for i in range(n):
+            w = axes[i]
+            rot, new = rots[i], rots[i + 1]
+            if revolute[i]:
+                a = qs[c, i]
+                s, co = math.sin(a), math.cos(a)
+                v = 1.0 - co
+                e[0, 0] = co + w[0] * w[0] * v
+                e[0, 1] = w[0] * w[1] * v - w[2] * s
+                e[0, 2] = w[0] * w[2] * v + w[1] * s
+                e[1, 0] = w[1] * w[0] * v + w[2] * s
+                e[1, 1] = co + w[1] * w[1] * v
+                e[1, 2] = w[1] * w[2] * v - w[0] * s
+                e[2, 0] = w[2] * w[0] * v - w[1] * s
+                e[2, 1] = w[2] * w[1] * v + w[0] * s
+                e[2, 2] = co + w[2] * w[2] * v
+                p = points[i]
+                for row in range(3):
+                    for col in range(3):
+                        new[row, col] = (rot[row, 0] * e[0, col] + rot[row, 1] * e[1, col]
+                                         + rot[row, 2] * e[2, col])
+                for row in range(3):
+                    poss[i + 1, row] = poss[i, row] + _dot(rot[row], p) - _dot(new[row], p)
+            else:
+                for row in range(3):
+                    for col in range(3):
+                        new[row, col] = rot[row, col]
+                    poss[i + 1, row] = poss[i, row] + _dot(rot[row], w) * qs[c, i]
+        for k in range(n_body):
+            m = moved_by[k]
+            r = rots[m]
+            for row in range(3):
+                for col in range(4):
+                    out[c, k, row, col] = (r[row, 0] * zero[k, 0, col] + r[row, 1] * zero[k, 1, col]
+                                           + r[row, 2] * zero[k, 2, col])
+                out[c, k, row, 3] += poss[m, row]
+    return out
+
+
+@kernel
+def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
+    """Distance (m) between the segments p1 + s d1 and p2 + t d2, s, t in [0, 1]
+    (closest points of two segments, Ericson, Real-Time Collision Detection 5.1.9)."""
+    r0, r1, r2 = p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2]
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = d2[0] * r0 + d2[1] * r1 + d2[2] * r2
+    tiny = 1e-18
+    if a <= tiny and e <= tiny:
+        return math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    if a <= tiny:
+        s = 0.0
+        t = min(max(f / e, 0.0), 1.0)
+    else:
+        c = d1[0] * r0 + d1[1] * r1 + d1[2] * r2
+        if e <= tiny:
+            t = 0.0
+            s = min(max(-c / a, 0.0), 1.0)
+        else:
+            b = _dot(d1, d2)
+            denom = a * e - b * b
+            s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > tiny else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = min(max(-c / a, 0.0), 1.0)
+            elif t > 1.0:
+                t = 1.0
+                s = min(max((b - c) / a, 0.0), 1.0)
+    x = r0 + d1[0] * s - d2[0] * t
+    y = r1 + d1[1] * s - d2[1] * t
+    z = r2 + d1[2] * s - d2[2] * t
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@kernel
+def _cylinder_box_separated(c: Array, z: Array, r: float, h: float, b_centre: Array,
+                            b_axes: Array, b_half: Array, eps: float, cand: Array) -> bool:
+    """True when an axis among the candidates separates the cylinder (centre c, unit axis z,
+    radius r, half-length h) from the box (centre, axes as rows (3, 3), half extents).
+    ``cand`` (8, 3) is scratch space for the candidate axes."""
+    d0, d1, d2 = c[0] - b_centre[0], c[1] - b_centre[1], c[2] - b_centre[2]
+    count = 0
+    for i in range(3):
+        cand[count] = b_axes[i]
+        count += 1
+    cand[count] = z
+    count += 1
+    for i in range(3):
+        b = b_axes[i]
+        u0 = z[1] * b[2] - z[2] * b[1]
+        u1 = z[2] * b[0] - z[0] * b[2]
+        u2 = z[0] * b[1] - z[1] * b[0]
+        norm = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+        if norm > 1e-6:
+            cand[count, 0], cand[count, 1], cand[count, 2] = u0 / norm, u1 / norm, u2 / norm
+            count += 1
+    dn = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if dn > 1e-9:
+        cand[count, 0], cand[count, 1], cand[count, 2] = d0 / dn, d1 / dn, d2 / dn
+        count += 1
+    for k in range(count):
+        u = cand[k]
+        uz = abs(_dot(u, z))
+        cyl = uz * h + r * math.sqrt(max(0.0, 1.0 - uz * uz))
+        box = (abs(_dot(u, b_axes[0])) * b_half[0] + abs(_dot(u, b_axes[1])) * b_half[1]
+               + abs(_dot(u, b_axes[2])) * b_half[2])
+        if abs(u[0] * d0 + u[1] * d1 + u[2] * d2) > cyl + box + eps:
+            return True
+    return False
+
+
+@kernel
+def _point_box_distance(x: Array, centre: Array, axes: Array, half: Array) -> float:
+    """Distance (m) from the point ``x`` to the solid box (0 inside)."""
+    total = 0.0
+    for a in range(3):
+        u = axes[a]
+        t = abs((x[0] - centre[0]) * u[0] + (x[1] - centre[1]) * u[1]
+                + (x[2] - centre[2]) * u[2]) - half[a]
+        if t > 0.0:
+            total += t * t
+    return math.sqrt(total)
+
+
+@kernel
+def _inner_box_contact(c: Array, z: Array, rho: float, reach: float, b_centre: Array,
+                       b_axes: Array, b_half: Array, margin: float, x: Array) -> bool:
+    """True when a ball of radius ``rho`` inside the cylinder (its centre on the axis within
+    ``reach`` of the centre ``c``) reaches more than ``margin`` into the box: a proof of
+    contact. Tries the two ends of that segment and its point nearest the box's centre."""
+    t = ((b_centre[0] - c[0]) * z[0] + (b_centre[1] - c[1]) * z[1]
+         + (b_centre[2] - c[2]) * z[2])
+    t = min(max(t, -reach), reach)
+    for offset in (-reach, reach, t):
+        for a in range(3):
+            x[a] = c[a] + z[a] * offset
+        if _point_box_distance(x, b_centre, b_axes, b_half) < rho - margin:
+            return True
+    return False
+
+
+CLEAR, CONTACT, UNDECIDED = 0, 1, 2
+"""Verdicts of :func:`classify` on a pair: provably apart, provably touching (by more than
+the margin), or for the exact judge to decide."""
+
+
+@kernel
+def classify(world: Array, radius: Array, half: Array, rr: Array, rs: Array,
+             kind: Array, pose: Array, size: Array, eps: float, margin: float) -> Array:
+    """Verdicts (N, P + Q) int8 (CLEAR, CONTACT, UNDECIDED) on every checked pair.
+
+    ``world`` (N, L, 3, 4): link cylinder poses (axis = local z); ``radius``/``half`` (L,);
+    ``rr`` (P, 2) link-link pairs; ``rs`` (Q, 2) link-obstacle pairs; ``kind`` (S,) obstacle
+    kinds (BOX, SPHERE, CAPSULE); ``pose`` (S, 3, 4) obstacle poses; ``size`` (S, 3): box half
+    extents, sphere radius in [0], capsule radius and half-length in [0], [1].
+
+    CLEAR needs a separation above ``eps`` between enclosing volumes; CONTACT needs balls
+    inside both shapes that overlap by more than ``margin`` (m), so that any exact test agrees.
+    """
+    n_cfg, n_link = world.shape[0], world.shape[1]
+    n_rr, n_rs, n_obj = rr.shape[0], rs.shape[0], pose.shape[0]
+    out = np.zeros((n_cfg, n_rr + n_rs), dtype=np.int8)
+    # obstacles: an outer segment (a sphere's has length 0), an inner one, axes, bounding radius
+    o_start = np.empty((n_obj, 3))
+    o_dir = np.zeros((n_obj, 3))
+    o_in_start = np.empty((n_obj, 3))
+    o_in_dir = np.zeros((n_obj, 3))
+    o_rho = np.zeros(n_obj)
+    o_axes = np.empty((n_obj, 3, 3))
+    o_bound = np.empty(n_obj)
+    for s in range(n_obj):
+        if kind[s] == CAPSULE:
+            o_rho[s] = min(size[s, 0], size[s, 1])
+            o_bound[s] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2)
+        elif kind[s] == SPHERE:
+            o_rho[s] = size[s, 0]
+            o_bound[s] = size[s, 0]
+        else:
+            o_bound[s] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2 + size[s, 2] ** 2)
+        for a in range(3):
+            o_axes[s, a] = pose[s, :, a]
+            o_start[s, a] = pose[s, a, 3]
+            o_in_start[s, a] = pose[s, a, 3]
+            if kind[s] == CAPSULE:
+                o_start[s, a] -= pose[s, a, 2] * size[s, 1]
+                o_dir[s, a] = 2.0 * pose[s, a, 2] * size[s, 1]
+                o_in_start[s, a] -= pose[s, a, 2] * (size[s, 1] - o_rho[s])
+                o_in_dir[s, a] = 2.0 * pose[s, a, 2] * (size[s, 1] - o_rho[s])
+    rho = np.minimum(radius, half)
+    reach = half - rho
+    bound = np.sqrt(radius * radius + half * half)
+    l_start = np.empty((n_link, 3))
+    l_dir = np.empty((n_link, 3))
+    l_in_start = np.empty((n_link, 3))
+    l_in_dir = np.empty((n_link, 3))
+    l_axis = np.empty((n_link, 3))
+    l_centre = np.empty((n_link, 3))
+    cand = np.empty((8, 3))
+    scratch = np.empty(3)
+    for c in range(n_cfg):
+        for k in range(n_link):
+            for a in range(3):
+                z, centre = world[c, k, a, 2], world[c, k, a, 3]
+                l_axis[k, a] = z
+                l_centre[k, a] = centre
+                l_start[k, a] = centre - z * half[k]
+                l_dir[k, a] = 2.0 * z * half[k]
+                l_in_start[k, a] = centre - z * reach[k]
+                l_in_dir[k, a] = 2.0 * z * reach[k]
+        for p in range(n_rr):
+            i, j = rr[p, 0], rr[p, 1]
+            if segment_distance(l_start[i], l_dir[i], l_start[j], l_dir[j]) > (
+                    radius[i] + radius[j] + eps):
+                continue
+            inner = segment_distance(l_in_start[i], l_in_dir[i], l_in_start[j], l_in_dir[j])
+            out[c, p] = CONTACT if inner < rho[i] + rho[j] - margin else UNDECIDED
+        for q in range(n_rs):
+            i, s = rs[q, 0], rs[q, 1]
+            col = n_rr + q
+            gap = math.sqrt((l_centre[i, 0] - pose[s, 0, 3]) ** 2
+                            + (l_centre[i, 1] - pose[s, 1, 3]) ** 2
+                            + (l_centre[i, 2] - pose[s, 2, 3]) ** 2)
+            if gap > bound[i] + o_bound[s] + eps:
+                continue
+            if kind[s] == BOX or kind[s] == HULL:
+                if _cylinder_box_separated(l_centre[i], l_axis[i], radius[i], half[i],
+                                           o_start[s], o_axes[s], size[s], eps, cand):
+                    continue
+                touching = kind[s] == BOX and _inner_box_contact(
+                    l_centre[i], l_axis[i], rho[i], reach[i], o_start[s], o_axes[s], size[s],
+                    margin, scratch)
+            else:
+                if segment_distance(l_start[i], l_dir[i], o_start[s], o_dir[s]) > (
+                        radius[i] + size[s, 0] + eps):
+                    continue
+                inner = segment_distance(l_in_start[i], l_in_dir[i], o_in_start[s],
+                                         o_in_dir[s])
+                touching = inner < rho[i] + o_rho[s] - margin
+            out[c, col] = CONTACT if touching else UNDECIDED
+    return out
+
+
+@kernel
+def check(qs: Array, joints: Array, links: Array, pairs: Array, n_rr: int, obstacles: Array,
+          eps: float, margin: float) -> tuple[Array, Array]:
+    """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
+    (N, n) in one call (one dispatch: the single-configuration query is dominated by it).
+
+    Packed inputs (built once by :func:`pack`): ``joints`` (n, 7) axis, point, revolute;
+    ``links`` (L, 15) zero pose (3 x 4, row-major), radius, half-length, joints moving it;
+    ``pairs`` (P + Q, 2) link-link pairs then link-obstacle pairs (the first ``n_rr``);
+    ``obstacles`` (S, 16) kind, pose (3 x 4, row-major), size (3).
+    """
+    n_link, n_obj = links.shape[0], obstacles.shape[0]
+    zero = np.zeros((n_link, 4, 4))
+    for k in range(n_link):
+        for row in range(3):
+            for col in range(4):
+                zero[k, row, col] = links[k, 4 * row + col]
+    moved = np.empty(n_link, dtype=np.int64)
+    for k in range(n_link):
+        moved[k] = int(links[k, 14])
+    revolute = np.empty(joints.shape[0], dtype=np.int64)
+    for i in range(joints.shape[0]):
+        revolute[i] = int(joints[i, 6])
+    world = link_poses(qs, joints[:, 0:3], joints[:, 3:6], revolute, moved, zero)
+    kind = np.empty(n_obj, dtype=np.int64)
+    pose = np.empty((n_obj, 3, 4))
+    for s in range(n_obj):
+        kind[s] = int(obstacles[s, 0])
+        for row in range(3):
+            for col in range(4):
+                pose[s, row, col] = obstacles[s, 1 + 4 * row + col]
+    verdicts = classify(world, links[:, 12], links[:, 13], pairs[:n_rr], pairs[n_rr:], kind,
+                        pose, obstacles[:, 13:16], eps, margin)
+    return world, verdicts
+
+
+def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array,
+         half: Array, moved_by: Array, rr: Array, rs: Array, kind: Array, pose: Array,
+         size: Array) -> tuple[Array, Array, Array, int, Array]:
+    """The packed arrays :func:`check` takes (see there), from the per-item arrays."""
+    joints = np.hstack([axes.reshape(-1, 3), points.reshape(-1, 3),
+                        np.asarray(revolute, float).reshape(-1, 1)])
+    links = np.hstack([zero[:, :3, :].reshape(-1, 12), radius.reshape(-1, 1),
+                       half.reshape(-1, 1), np.asarray(moved_by, float).reshape(-1, 1)])
+    pairs = np.vstack([rr.reshape(-1, 2), rs.reshape(-1, 2)]).astype(np.int64)
+    obstacles = np.hstack([np.asarray(kind, float).reshape(-1, 1), pose.reshape(-1, 12),
+                           size.reshape(-1, 3)])
+    return (np.ascontiguousarray(joints), np.ascontiguousarray(links),
+            np.ascontiguousarray(pairs), len(rr), np.ascontiguousarray(obstacles))
