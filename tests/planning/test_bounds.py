@@ -186,7 +186,7 @@ def test_the_world_agrees_with_brute_force_in_each_shipped_scene(kr60: Robot,
                                                                  scene: str) -> None:
     world = kr60.collision_world(load_scene(scene))
     qs = np.random.default_rng(11).uniform(kr60.chain.lower(), kr60.chain.upper(), (1500, 6))
-    total, colliding = _agree(world, qs)
+    _, colliding = _agree(world, qs)
     assert colliding > 0 or scene == "empty"
     for q in qs[:300]:
         assert world.in_collision(q) == bool(world.contacts_brute_force(q))
