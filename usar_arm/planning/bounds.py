@@ -61,49 +61,51 @@ def link_poses(qs: Array, axes: Array, points: Array, revolute: Array, moved_by:
     n_cfg, n = qs.shape
     n_body = zero.shape[0]
     out = np.empty((n_cfg, n_body, 3, 4))
-    rots = np.empty((n + 1, 3, 3))
-    poss = np.zeros((n + 1, 3))
-    e = np.empty((3, 3))
+    frames = np.empty((n + 1, 3, 4))  # rotation | position after the first i joints
     for c in range(n_cfg):
-        for row in range(3):
-            for col in range(3):
-                rots[0, row, col] = 1.0 if row == col else 0.0
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+        t0 = t1 = t2 = 0.0
+        frames[0] = 0.0
+        frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
         for i in range(n):
-            w = axes[i]
-            rot, new = rots[i], rots[i + 1]
+            w0, w1, w2 = axes[i, 0], axes[i, 1], axes[i, 2]
             if revolute[i]:
                 a = qs[c, i]
-                s, co = math.sin(a), math.cos(a)
+                sn, co = math.sin(a), math.cos(a)
                 v = 1.0 - co
-                e[0, 0] = co + w[0] * w[0] * v
-                e[0, 1] = w[0] * w[1] * v - w[2] * s
-                e[0, 2] = w[0] * w[2] * v + w[1] * s
-                e[1, 0] = w[1] * w[0] * v + w[2] * s
-                e[1, 1] = co + w[1] * w[1] * v
-                e[1, 2] = w[1] * w[2] * v - w[0] * s
-                e[2, 0] = w[2] * w[0] * v - w[1] * s
-                e[2, 1] = w[2] * w[1] * v + w[0] * s
-                e[2, 2] = co + w[2] * w[2] * v
-                p = points[i]
-                for row in range(3):
-                    for col in range(3):
-                        new[row, col] = (rot[row, 0] * e[0, col] + rot[row, 1] * e[1, col]
-                                         + rot[row, 2] * e[2, col])
-                for row in range(3):
-                    poss[i + 1, row] = poss[i, row] + _dot(rot[row], p) - _dot(new[row], p)
+                e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
+                e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
+                e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
+                p0, p1, p2 = points[i, 0], points[i, 1], points[i, 2]
+                # t += R p - (R E) p = R (p - E p)
+                d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
+                d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
+                d2 = p2 - (e20 * p0 + e21 * p1 + e22 * p2)
+                t0 += r00 * d0 + r01 * d1 + r02 * d2
+                t1 += r10 * d0 + r11 * d1 + r12 * d2
+                t2 += r20 * d0 + r21 * d1 + r22 * d2
+                r00, r01, r02 = (r00 * e00 + r01 * e10 + r02 * e20, r00 * e01 + r01 * e11
+                                 + r02 * e21, r00 * e02 + r01 * e12 + r02 * e22)
+                r10, r11, r12 = (r10 * e00 + r11 * e10 + r12 * e20, r10 * e01 + r11 * e11
+                                 + r12 * e21, r10 * e02 + r11 * e12 + r12 * e22)
+                r20, r21, r22 = (r20 * e00 + r21 * e10 + r22 * e20, r20 * e01 + r21 * e11
+                                 + r22 * e21, r20 * e02 + r21 * e12 + r22 * e22)
             else:
-                for row in range(3):
-                    for col in range(3):
-                        new[row, col] = rot[row, col]
-                    poss[i + 1, row] = poss[i, row] + _dot(rot[row], w) * qs[c, i]
+                x = qs[c, i]
+                t0 += (r00 * w0 + r01 * w1 + r02 * w2) * x
+                t1 += (r10 * w0 + r11 * w1 + r12 * w2) * x
+                t2 += (r20 * w0 + r21 * w1 + r22 * w2) * x
+            f = frames[i + 1]
+            f[0, 0], f[0, 1], f[0, 2], f[0, 3] = r00, r01, r02, t0
+            f[1, 0], f[1, 1], f[1, 2], f[1, 3] = r10, r11, r12, t1
+            f[2, 0], f[2, 1], f[2, 2], f[2, 3] = r20, r21, r22, t2
         for k in range(n_body):
-            m = moved_by[k]
-            r = rots[m]
+            f = frames[moved_by[k]]
             for row in range(3):
                 for col in range(4):
-                    out[c, k, row, col] = (r[row, 0] * zero[k, 0, col] + r[row, 1] * zero[k, 1, col]
-                                           + r[row, 2] * zero[k, 2, col])
-                out[c, k, row, 3] += poss[m, row]
+                    out[c, k, row, col] = (f[row, 0] * zero[k, 0, col] + f[row, 1] * zero[k, 1, col]
+                                           + f[row, 2] * zero[k, 2, col])
+                out[c, k, row, 3] += f[row, 3]
     return out
 
 

@@ -372,11 +372,11 @@ class CollisionWorld:
         whole batch; FCL's narrowphase runs only for the pairs they could not clear, stopping
         at a configuration's first contact. The fast path for edges and trajectories.
         """
-        found = self._many(qs, stop_at_first=True)
-        out = np.zeros(len(found), dtype=bool)
-        for n, pairs in enumerate(found):
-            out[n] = bool(pairs)
-        return out
+        world, verdicts = self.bounded_poses(qs)
+        hit = (verdicts == bounds.CONTACT).any(axis=1)
+        for n in np.flatnonzero(~hit & (verdicts == bounds.UNDECIDED).any(axis=1)):
+            hit[n] = bool(self._exact(world[n], verdicts[n], stop_at_first=True))
+        return hit
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""

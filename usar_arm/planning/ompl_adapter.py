@@ -100,16 +100,18 @@ def edge_configurations(a: Array, b: Array, resolution: float, levers: Array | N
     if levers is not None and math.isfinite(max_step):
         steps = max(steps, math.ceil(float(levers @ delta) / max_step))
     fractions = np.linspace(0.0, 1.0, steps + 1)
-    order = [0, steps]
+    levels = [np.array([0, steps])]
+    seen = np.zeros(steps + 1, dtype=bool)
+    seen[[0, steps]] = True
     stride = steps
-    seen = {0, steps}
-    while stride > 1:
+    while stride > 1:  # halve the stride: the midpoints not yet taken, left to right
         stride //= 2
-        for k in range(stride, steps, max(stride, 1)):
-            if k not in seen:
-                seen.add(k)
-                order.append(k)
-    order += [k for k in range(steps + 1) if k not in seen]
+        ks = np.arange(stride, steps, stride)
+        ks = ks[~seen[ks]]
+        seen[ks] = True
+        levels.append(ks)
+    levels.append(np.flatnonzero(~seen))
+    order = np.concatenate(levels)
     return a + (b - a) * fractions[order][:, None]
 
 
