@@ -3,7 +3,7 @@ PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
 
-.PHONY: demo test bench bench-quick load soak clean
+.PHONY: demo test test-all test-slow lint typecheck bench bench-quick load soak clean
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -20,13 +20,27 @@ $(TEST_VENV)/.installed: pyproject.toml
 demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo
 
-# Three workers on two cores: one of them runs the "simulator-load" group (the 10-minute soak, mostly
-# asleep, then the 64-client load), the other two the rest.
-# The peers' venvs (bench/.venvs) let the quick benchmark in the suite run them too; a peer that
-# cannot be installed is reported as skipped by the benchmark, not a failure here.
+# The default suite: unit, integration and end-to-end tests against the embedded simulator
+# (everything not marked slow), on both cores.
 test: $(TEST_VENV)/.installed
-	$(PYTHON) bench/peers/venvs.py || echo "note: some benchmark peers could not be installed"
-	$(TEST_VENV)/bin/python -m pytest -n 3 --dist loadgroup tests
+	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow" tests
+
+# The long campaigns and slow end-to-end runs (marked slow): the 10-minute soak, the 64-client
+# load, the 1,000-plan invariants, the 1,000,000-configuration collision agreement, fuzzing, the
+# kill campaign, the demo, the examples and the quick benchmark (which needs the peers' venvs in
+# bench/.venvs). Three workers: the "simulator-load" group (soak, load) is mostly asleep.
+test-slow: $(TEST_VENV)/.installed
+	$(PYTHON) bench/peers/venvs.py
+	$(TEST_VENV)/bin/python -m pytest -n 3 --dist loadgroup -m slow tests
+
+test-all: test test-slow
+
+lint: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/ruff check usar_arm tests bench tools fuzz examples
+
+# Not yet part of lint: mypy still reports errors (mostly numpy typing), see the README.
+typecheck: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/mypy usar_arm
 
 # Benchmarks (bench/README-peers.md, bench/results/README.md). Each peer gets its own venv in
 # bench/.venvs (created once by venvs.py; mplib needs numpy < 2); usar-arm runs in the test venv.

@@ -1,4 +1,4 @@
-"""Discovery + URDF stage: how long ``usar_arm.pipeline.describe`` takes to learn an arm from the
+"""Discovery + URDF stage: how long ``usar_arm.embedded.describe`` takes to learn an arm from the
 embedded simulator over TCP and build its validated description (URDF, SRDF, joint limits,
 collision matrix from 10,000 samples), and how accurate that description is against the
 simulator's own model. No peer does this; our figures only.
@@ -8,8 +8,8 @@ As a solver (its own process)::
     python bench/describe.py PROBLEMS.json RESULTS.json
 
 Each problem names a robot and a wire precision (``udk``: the UDK number format, the default;
-``full``: every digit). Timed: ``run_discovery`` (the TCP exchanges), ``describe_arm`` (frames,
-limits, URDF, validation, collision matrix, SRDF, and the accuracy check of
+``full``: every digit). Timed: ``run_discovery`` (the TCP exchanges), ``describe_discovered``
+(frames, limits, URDF, validation, collision matrix, SRDF, and the accuracy check of
 ``accuracy_samples`` random configurations against the simulator's model) and
 ``write_description`` (atomic file writes), each separately; ``seconds`` is their sum.
 """
@@ -24,7 +24,8 @@ from typing import Any
 import common
 from common import Context, peerio
 
-from usar_arm.pipeline import DescribeOptions, describe_arm, run_discovery, write_description
+from usar_arm.description import DescribeOptions, write_description
+from usar_arm.embedded import describe_discovered, run_discovery
 
 REPEATS = {("quick", "udk"): 1, ("full", "udk"): 3, ("full", "full"): 1}
 """Runs per (mode, wire precision): the full-precision run is for its accuracy figures."""
@@ -39,7 +40,7 @@ def solver_main(argv: list[str] | None = None) -> int:
         options = DescribeOptions(robot=p["robot"], wire_precision=p["wire_precision"],
                                   accuracy_samples=p["accuracy_samples"])
         record, t_wire = peerio.timed(run_discovery, options)
-        desc, t_build = peerio.timed(describe_arm, record, options)
+        desc, t_build = peerio.timed(describe_discovered, record, options)
         with tempfile.TemporaryDirectory() as folder:
             _, t_write = peerio.timed(write_description, desc, folder)
         d = desc.discovery
@@ -72,7 +73,7 @@ def run(ctx: Context) -> dict[str, Any]:
     path = ctx.work / "describe_problems.json"
     common.write_json(path, spec)
     solver = common.ours("usar-arm", "describe.py",
-                         note="run_discovery + describe_arm + write_description")
+                         note="run_discovery + describe_discovered + write_description")
     outcome = common.run_alternating(spec, [solver], ctx.work, 1, "describe")["usar-arm"]
     cases = {}
     for robot in ROBOTS[ctx.mode]:

@@ -87,7 +87,8 @@ def robot_paths(name: str, out: Path) -> tuple[Path, Path]:
     else:
         d = out / "robots" / name
         if not (d / f"{name}.urdf").is_file():
-            from usar_arm.pipeline import DescribeOptions, describe, write_description
+            from usar_arm.description import DescribeOptions, write_description
+            from usar_arm.embedded import describe
 
             common.log(f"describing {name} from the embedded simulator into {d}")
             write_description(describe(DescribeOptions(robot=name, accuracy_samples=0)), d)

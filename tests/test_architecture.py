@@ -27,7 +27,8 @@ ALLOWED: dict[str, set[str]] = {
     "export": {"control", "planning", "urdf", "model"} | UTILITIES,
 }
 # orchestration
-FACADES = {"cli", "arm", "cycle", "motion", "pipeline", "robot", "__init__", "__main__"}
+FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "__init__",
+           "__main__"}
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
 HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1}
 
@@ -94,3 +95,39 @@ def test_discovery_never_imports_the_simulator() -> None:
     for module, path in _modules():
         if _layer(module) == "discover":
             assert not any(n.startswith("usar_arm.sim") for n in _imports(path))
+
+
+OFFLINE_PLAN = """
+import sys
+from pathlib import Path
+from usar_arm import Arm
+root = Path(sys.argv[1])
+arm = Arm.from_files(root / "robots/generated/KR60.urdf", root / "robots/generated/KR60.srdf")
+arm.plan(joints=[0.5, -0.5, 0.3, 0.0, 0.5, 0.0], scene="table")
+loaded = sorted(m for m in sys.modules
+                if m.split(".")[0] == "mujoco" or m.startswith("usar_arm.sim"))
+print("\\n".join(loaded))
+"""
+
+
+def test_offline_planning_never_loads_the_simulator() -> None:
+    """`from usar_arm import Arm`, an arm from files and a plan in a scene, in a fresh process:
+    neither MuJoCo nor any module of the embedded simulator is imported."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-c", OFFLINE_PLAN, str(root)], capture_output=True,
+                          text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == [], f"offline planning imported {done.stdout.split()}"
+
+
+def test_the_version_comes_from_the_package_metadata() -> None:
+    from importlib.metadata import version
+
+    import usar_arm
+
+    assert usar_arm.__version__ == version("usar-arm")
+    literal = [p for p in PACKAGE.rglob("*.py") if "__version__ = \"" in p.read_text()]
+    assert literal == [], f"a second version string in {literal}"

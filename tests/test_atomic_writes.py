@@ -73,7 +73,8 @@ def prepare_write_tree_atomic(folder: Path) -> Callable[[int, Path], None]:
 
 
 def _kr60_description() -> Any:
-    from usar_arm.pipeline import DescribeOptions, describe
+    from usar_arm.description import DescribeOptions
+    from usar_arm.embedded import describe
 
     return describe(DescribeOptions(accuracy_samples=0))
 
@@ -81,7 +82,7 @@ def _kr60_description() -> Any:
 def prepare_description(folder: Path) -> Callable[[int, Path], None]:
     from dataclasses import replace
 
-    from usar_arm.pipeline import write_description
+    from usar_arm.description import write_description
 
     a = _kr60_description()
     b = replace(a, urdf=a.urdf.replace("</robot>", "  <!-- version 2 -->\n</robot>"),

@@ -1,23 +1,17 @@
 """usar-arm: learn a USARSim robot arm over the wire, describe it, plan and move it.
 
-The library's front door is :class:`usar_arm.Arm` (see ``examples/``).
+The library's front door is :class:`usar_arm.Arm` (see ``examples/``). Importing it loads the
+planning stack but never the embedded simulator (MuJoCo, the TCP server): that is started only
+by ``Arm.connect()`` without a host, through :mod:`usar_arm.embedded`.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from importlib.metadata import version
 
-__version__ = "0.1.0"
+__version__ = version("usar-arm")
+"""The installed distribution's version: the one version string (pyproject.toml)."""
+
+from usar_arm.arm import Arm  # noqa: E402  (after __version__, which the modules below read)
+
 __all__ = ["Arm", "__version__"]
-
-if TYPE_CHECKING:
-    from usar_arm.arm import Arm
-
-
-def __getattr__(name: str) -> Any:
-    # Imported lazily: `import usar_arm` stays light for tools that only need a submodule.
-    if name == "Arm":
-        from usar_arm.arm import Arm
-
-        return Arm
-    raise AttributeError(f"module 'usar_arm' has no attribute '{name}'")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -26,23 +26,31 @@ from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executo
 from usar_arm.control.tip import TipSensor, platform_sensor_name, pose_error
 from usar_arm.control.tip_correction import correct_tip
 from usar_arm.control.trajectory import Trajectory
+from usar_arm.description import DescribeOptions
 from usar_arm.discover.session import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
-from usar_arm.pipeline import DescribeOptions
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot, robot_from_files, robot_from_record
-from usar_arm.sim.robot_spec import builtin_robots
-from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.spatial import FLIP_X, Array, invert, transform
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.numbers import printed_resolution
 
 log = logging.getLogger("usar_arm.arm")
+
+
+class EmbeddedServer(Protocol):
+    """What an arm needs of the embedded simulator it started (``usar_arm.sim.SimServer``);
+    typed structurally so that offline use never imports the simulator."""
+
+    world: Any
+    sessions: dict[str, Any]
+
+    def stop(self, timeout: float = 10.0) -> None: ...
 
 
 class Arm:
@@ -52,7 +60,7 @@ class Arm:
     """
 
     def __init__(self, robot: Robot, client: UsarClient | None = None,
-                 server: SimServer | None = None):
+                 server: EmbeddedServer | None = None):
         self.robot = robot
         self.client = client
         self.server = server
@@ -77,17 +85,22 @@ class Arm:
                                   naming=naming, velocity_limits=velocity_limits,
                                   wire_precision=wire_precision, timeout=timeout,
                                   accuracy_samples=0)
-        server = None
+        server: EmbeddedServer | None = None
         address = (host or "127.0.0.1", port)
+        known: tuple[str, ...] = ()
         if host is None:
-            server = SimServer(SimOptions(host="127.0.0.1", port=0,
-                                          wire_precision=wire_precision, speed=sim_speed))
-            address = ("127.0.0.1", server.start())
+            # Imported here, not at the top: offline arms (from_files) never load the simulator.
+            from usar_arm.embedded import known_classes, start_simulator
+
+            simulator = start_simulator(wire_precision, sim_speed)
+            server, known = simulator, known_classes()
+            assert simulator.port is not None
+            address = ("127.0.0.1", simulator.port)
         client = UsarClient(*address, timeout=timeout)
         try:
             client.connect()
             record = discover(client, options.robot_class, start=start, timeout=timeout,
-                              known_classes=tuple(sorted(builtin_robots())) if server else ())
+                              known_classes=known)
             arm = cls(robot_from_record(record, options, cache), client, server)
         except BaseException:
             client.close()

@@ -3,7 +3,7 @@
 A :class:`Robot` is built from a fresh discovery (:func:`robot_from_record`, which caches the
 generated description under a key made of the CONF/GEO lines it was built from, so a second run
 against the same server skips the collision-matrix sampling), from files a user gives
-(:func:`robot_from_files`), or from a :class:`~usar_arm.pipeline.Description`.
+(:func:`robot_from_files`), or from a :class:`~usar_arm.description.Description`.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_arm import __version__
+from usar_arm.description import DescribeOptions, Description, describe_arm, write_description
 from usar_arm.discover.session import DiscoveryRecord
 from usar_arm.errors import FileFormatError
 from usar_arm.model import KinematicChain
-from usar_arm.pipeline import DescribeOptions, Description, describe_arm, write_description
 from usar_arm.planning.collision import CollisionWorld, Pair
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.kinematics import KinematicModel

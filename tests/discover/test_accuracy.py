@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from usar_arm.pipeline import DescribeOptions, accuracy_report, describe
+from usar_arm.description import DescribeOptions
+from usar_arm.embedded import accuracy_report, describe
 from usar_arm.sim.robot_spec import builtin_robots
 
 ROBOTS = ("KR60", "Fanuc_M16iB20")

@@ -15,7 +15,8 @@ from tests.discover.fake_usarsim import CONF, GEO, fake_usarsim
 from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm import errors
 from usar_arm.cli.main import main
-from usar_arm.pipeline import DescribeOptions, describe
+from usar_arm.description import DescribeOptions
+from usar_arm.embedded import describe
 from usar_arm.spatial import rot_x, rot_y, rot_z
 
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from usar_arm.pipeline import DescribeOptions, describe
+from usar_arm.description import DescribeOptions
+from usar_arm.embedded import describe
 from usar_arm.robot import Robot, robot_from_description
 
 

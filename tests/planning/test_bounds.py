@@ -212,7 +212,7 @@ def test_a_million_configurations_agree_with_brute_force(kr60: Robot, fanuc: Rob
     per_world = 1_000_000 // len(worlds) + 1
     for world in worlds:
         chain = world.chain
-        for _ in range(per_world // 5000):
+        for _ in range(-(-per_world // 5000)):
             qs = rng.uniform(chain.lower(), chain.upper(), (5000, chain.dof))
             n, c = _agree(world, qs)
             total, colliding = total + n, colliding + c

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
+from usar_arm.description import FRAMES, DescribeOptions
 from usar_arm.discover.naming import SCHEMES
-from usar_arm.pipeline import FRAMES, DescribeOptions, run_discovery
+from usar_arm.embedded import run_discovery
 from usar_arm.robot import Robot, robot_from_files, robot_from_record
 
 

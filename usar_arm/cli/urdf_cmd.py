@@ -7,9 +7,10 @@ from pathlib import Path
 
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.describe_args import add_description_args, add_server_args, options_from
+from usar_arm.description import Description, write_description
+from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK
 from usar_arm.fileio import write_tree_atomic
-from usar_arm.pipeline import Description, describe, write_description
 from usar_arm.urdf.moveit import moveit_files, package_name
 
 

@@ -1,44 +1,40 @@
-"""From a USARSim server to validated robot description files (the ``usar-arm urdf`` pipeline).
+"""From a learnt arm to validated robot description files (the ``usar-arm urdf`` pipeline).
 
 discover (wire) -> WireArm -> frames (snap, z-up) -> KinematicChain -> URDF -> checks
 (check_urdf, yourdfpy, Pinocchio, semantics) -> collision matrix (python-fcl) -> SRDF ->
 joint_limits.yaml and discovery.json. Nothing is written until every check has passed.
+
+This module never starts or imports the embedded simulator: talking to a server (embedded or
+remote) and checking against the simulator's own model is :mod:`usar_arm.embedded`'s job, so
+offline work (``Arm.from_files``, planning from files) stays free of MuJoCo and the TCP server.
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
 import logging
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from usar_arm import __version__
 from usar_arm.discover.build import build_chain
 from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
 from usar_arm.discover.limits import home_state, load_limits_file, resolve
 from usar_arm.discover.naming import Naming
-from usar_arm.discover.session import DiscoveryRecord, discover
+from usar_arm.discover.session import DiscoveryRecord
 from usar_arm.discover.wire_arm import WireArm
 from usar_arm.errors import InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.model import KinematicChain
 from usar_arm.planning.acm import AcmResult, compute_acm
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.sim.robot_spec import ActuatorSpec, builtin_robots, joint_frames, tip_pose
-from usar_arm.sim.server import SimOptions, SimServer
-from usar_arm.spatial import FLIP_X, angle_between
 from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
-from usar_arm.usarsim.client import UsarClient
 
-log = logging.getLogger("usar_arm.pipeline")
+log = logging.getLogger("usar_arm.description")
 
 FRAMES = ("z-up", "z-down")
 
@@ -110,40 +106,6 @@ class Description:
                 f"{name}.discovery.json": json.dumps(self.discovery, indent=2) + "\n"}
 
 
-@contextlib.contextmanager
-def embedded_simulator(wire_precision: str = "udk", **kwargs: Any) -> Iterator[SimServer]:
-    """The embedded simulator on a free loopback port, for the duration of a ``with`` block."""
-    server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,
-                                  **kwargs))
-    server.start()
-    try:
-        yield server
-    finally:
-        server.stop()
-
-
-def run_discovery(options: DescribeOptions) -> DiscoveryRecord:
-    """Connect (embedded or remote), spawn and learn the robot's arm."""
-    known = tuple(sorted(builtin_robots()))
-    if options.host is None:
-        with embedded_simulator(options.wire_precision) as server:
-            assert server.port is not None
-            with UsarClient("127.0.0.1", server.port, timeout=options.timeout) as client:
-                return discover(client, options.robot_class, start=options.start,
-                                actuator=options.actuator, timeout=options.timeout,
-                                known_classes=known)
-    with UsarClient(options.host, options.port, timeout=options.timeout) as client:
-        return discover(client, options.robot_class, start=options.start,
-                        actuator=options.actuator, timeout=options.timeout)
-
-
-def describe(options: DescribeOptions) -> Description:
-    """Discover the robot and build its validated description (nothing is written)."""
-    record = run_discovery(options)
-    assert record.arm is not None
-    return describe_arm(record, options)
-
-
 def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Description:
     """Build and check the description of an arm already discovered."""
     arm = record.arm
@@ -181,11 +143,6 @@ def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Descripti
     joint_limits = joint_limits_yaml(chain, sources)
     discovery = _discovery_json(record, arm, options, chain, frames_down.snaps, acm, sources,
                                 warnings)
-    if options.host is None:
-        spec = builtin_robots()[options.robot_class]
-        act = next(a for a in spec.actuators if a.name == arm.name)
-        discovery["accuracy_vs_simulator"] = accuracy_report(chain, act, options.frame,
-                                                             options.accuracy_samples)
     return Description(chain, urdf, srdf, joint_limits, discovery, acm, home, sources,
                        tuple(warnings))
 
@@ -284,31 +241,3 @@ def _discovery_json(record: DiscoveryRecord, arm: WireArm, options: DescribeOpti
     }
 
 
-def accuracy_report(chain: KinematicChain, act: ActuatorSpec, frame: str, samples: int,
-                    seed: int = 0) -> dict[str, Any]:
-    """Forward kinematics of ``chain`` against the simulator's ground truth at seeded random
-    configurations: the largest joint-origin, joint-axis and flange errors."""
-    flip = FLIP_X if frame == "z-up" else np.eye(3)
-    rng = np.random.default_rng(seed)
-    lo = np.array([j.limit_low for j in act.joints])
-    hi = np.array([j.limit_high for j in act.joints])
-    origin = axis = flange = 0.0
-    zero_axis = 0.0
-    for i in range(samples + 1):
-        q = np.zeros(len(lo)) if i == 0 else rng.uniform(lo, hi)
-        truth = joint_frames(act, q)
-        got = [(j, f) for j, f in chain.joint_frames(q) if j.actuated]
-        for (jt, f), t in zip(got, truth, strict=True):
-            origin = max(origin, float(np.linalg.norm(f[:3, 3] - flip @ t[:3, 3])))
-            err = angle_between(f[:3, :3] @ np.asarray(jt.axis), flip @ t[:3, 2])
-            axis = max(axis, err)
-            if i == 0:
-                zero_axis = max(zero_axis, err)
-        tp = tip_pose(act, q)
-        flange = max(flange, float(np.linalg.norm(chain.frame_pose("flange", q)[:3, 3]
-                                                  - flip @ tp[:3, 3])))
-    return {"reference": "the embedded simulator's own model (ground truth)",
-            "configurations": samples, "seed": seed,
-            "max_joint_origin_error_m": origin, "max_joint_axis_error_rad": axis,
-            "max_joint_axis_error_at_zero_pose_rad": zero_axis,
-            "max_flange_error_m": flange}
