@@ -36,21 +36,28 @@ from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot, robot_from_files, robot_from_record
-from usar_arm.spatial import FLIP_X, Array, invert, transform
+from usar_arm.spatial import Array
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.numbers import printed_resolution
 
 log = logging.getLogger("usar_arm.arm")
 
 
+class TruthReading(Protocol):
+    """The simulator's own state of a robot (``usar_arm.sim.truth.Truth``)."""
+
+    tool0: dict[str, Array]
+
+
 class EmbeddedServer(Protocol):
     """What an arm needs of the embedded simulator it started (``usar_arm.sim.SimServer``);
     typed structurally so that offline use never imports the simulator."""
 
-    world: Any
-    sessions: dict[str, Any]
+    def truth(self, peer_port: int) -> TruthReading | None:
+        """The true state of the robot of the client at ``peer_port``, read under a lock."""
 
-    def stop(self, timeout: float = 10.0) -> None: ...
+    def stop(self, timeout: float = 10.0) -> None:
+        """Stop serving and free the port."""
 
 
 class Arm:
@@ -309,15 +316,12 @@ class Arm:
         return TipSensor(self.client, sensor, platform, self._sensor_to_tool0())
 
     def _true_tool0(self) -> Array | None:
-        """tool0 in base_link from the embedded simulator's own physics (None otherwise)."""
-        if self.server is None or self.client is None or not self.robot.tip_sensor:
+        """tool0 in base_link as the embedded simulator's own spec and physics have it (None
+        with a remote server): read under the server's lock, nothing learnt involved."""
+        if self.server is None or self.client is None or self.robot.actuator is None:
             return None
         port = self.client.local_port
-        for session in list(self.server.sessions.values()):
-            if session.peer.endswith(f":{port}") and session.robot is not None:
-                world = self.server.world
-                tip = world.tip_pose(session.key, str(self.robot.actuator))
-                flip = transform(FLIP_X)
-                sensor = flip @ invert(world.platform_pose(session.key)) @ tip @ flip
-                return sensor @ self._sensor_to_tool0()
-        return None
+        truth = self.server.truth(port) if port is not None else None
+        if truth is None:
+            return None
+        return truth.tool0.get(str(self.robot.actuator))

@@ -234,23 +234,14 @@ class JointRecorder:
         self._thread = threading.Thread(target=self._loop, daemon=True)
         self._thread.start()
 
-    def _session_key(self) -> str | None:
-        ports = {lk.upstream_port for lk in self.proxy.links}
-        for session in list(self.sim.sessions.values()):
-            if any(session.peer.endswith(f":{p}") for p in ports) and session.robot is not None:
-                return session.key
-        return None
-
     def _loop(self) -> None:
         while not self._stop.wait(0.02):
-            key = self._session_key()
-            if key is not None:
-                try:
-                    sim_time = self.sim.world.time
-                    q = np.array(self.sim.world.joint_values(key, "KR60Arm"))
-                except (KeyError, ValueError, IndexError):
-                    continue
-                self.samples.append((time.monotonic(), sim_time, q))
+            for port in {lk.upstream_port for lk in self.proxy.links} - {None}:
+                truth = self.sim.truth(port)
+                if truth is not None:
+                    self.samples.append((time.monotonic(), truth.sim_time,
+                                         np.array(truth.joints["KR60Arm"])))
+                    break
 
     def at(self, when: float) -> tuple[float, np.ndarray]:
         """The simulated time and the joints of the last sample before wall time ``when``."""

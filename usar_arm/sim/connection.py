@@ -21,7 +21,7 @@ import math
 import re
 import time
 from collections import deque
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from usar_arm.errors import ProtocolError
 from usar_arm.sim.session import Session
@@ -29,8 +29,20 @@ from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import MAX_LINE_BYTES, format_message, parse_line
 from usar_arm.usarsim.numbers import NumberStyle
 
-if TYPE_CHECKING:
-    from usar_arm.sim.server import SimServer
+
+class Host(Protocol):
+    """What a connection needs of the server that accepted it (``SimServer``)."""
+
+    style: NumberStyle
+
+    def join(self, client: Connection, peer: str) -> Session | None:
+        """A new session for the client at ``peer``, or None when the server is full."""
+
+    def leave(self, session: Session) -> None:
+        """The session's client is gone (its robot is destroyed at the next frame)."""
+
+    def handle(self, session: Session, msg: m.Message) -> None:
+        """Act on one message of the session's client."""
 
 log = logging.getLogger("usar_arm.sim")
 wire_log = logging.getLogger("usar_arm.sim.wire")
@@ -78,7 +90,7 @@ def fast_act(raw: bytes) -> m.Act | None:
 class Connection(asyncio.Protocol):
     """The protocol object of one client; owns its :class:`Session`."""
 
-    def __init__(self, server: SimServer):
+    def __init__(self, server: Host):
         self.server = server
         self.partial = bytearray()
         self.skipping = False
@@ -94,33 +106,20 @@ class Connection(asyncio.Protocol):
         self.transport = transport
         peer = transport.get_extra_info("peername")
         peer_text = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
-        server = self.server
-        if len(server.sessions) >= server.max_connections:
-            log.warning("%s: refused: %d connections already (the limit)", peer_text,
-                        server.max_connections)
+        self.session = self.server.join(self, peer_text)
+        if self.session is None:
             transport.close()
-            return
-        server.counter += 1
-        self.session = Session(f"c{server.counter}", peer_text, self.send)
-        server.sessions[self.session.key] = self.session
-        server.connections[self.session.key] = self
-        log.info("%s: connected", peer_text)
-        spec = server.world_spec
-        self.send(m.GameInfo(spec.gametype, spec.level, spec.time_limit))
 
     def connection_lost(self, exc: Exception | None) -> None:
         session, self.session = self.session, None
         if session is None:
             return
-        self.server.connections.pop(session.key, None)
-        self.server.sessions.pop(session.key, None)
+        self.server.leave(session)
         if self.partial and not self.skipping:
             session.rejections.count("unterminated at disconnect")
             log.info("%s: left mid-line (%d bytes unterminated)", session.peer, len(self.partial))
         if self.lines:
             session.rejections.count("unread at disconnect", len(self.lines))
-        if session.robot is not None:
-            self.server.leaving.append(session.key)
         log.info("%s: disconnected after %.1f s%s; %s", session.peer,
                  time.monotonic() - self.since,
                  "; robot destroyed" if session.robot is not None else "",
@@ -218,7 +217,6 @@ class Connection(asyncio.Protocol):
     def _line(self, raw: bytes) -> None:
         session = self.session
         assert session is not None
-        server = self.server
         if wire_log.isEnabledFor(logging.DEBUG):
             wire_log.debug("<- %s %s", session.peer, raw.decode("utf-8", "replace"))
         msg: m.Message | None = fast_act(raw)
@@ -235,7 +233,7 @@ class Connection(asyncio.Protocol):
         rejections = session.rejections
         refused = rejections.total
         try:
-            session.handle(msg, server.world, server.world_spec, server.robots, server.style)
+            self.server.handle(session, msg)
         except Exception:  # a bug must not take the server down for everyone
             log.exception("%s: error while handling %r", session.peer, raw[:200])
             rejections.count("server error")

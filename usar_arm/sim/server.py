@@ -21,10 +21,13 @@ from usar_arm.sim.connection import MAX_WRITE_BUFFER, Connection
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import RobotSpec, builtin_robots
 from usar_arm.sim.session import Session
+from usar_arm.sim.truth import Truth, tool0_in_base
 from usar_arm.sim.world_spec import WorldSpec, load_world
+from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import STYLES, NumberStyle
 
-__all__ = ["MAX_CONNECTIONS", "MAX_WRITE_BUFFER", "SimOptions", "SimServer", "wait_for_port"]
+__all__ = ["MAX_CONNECTIONS", "MAX_WRITE_BUFFER", "ClientInfo", "SimOptions", "SimServer",
+           "Truth", "wait_for_port"]
 
 log = logging.getLogger("usar_arm.sim")
 
@@ -71,6 +74,17 @@ class SimOptions:
             raise ValueError(f"physics_hz must be >= 500, got {self.physics_hz}")
 
 
+@dataclass(frozen=True)
+class ClientInfo:
+    """A connected client: the server's key, its address, whether it has spawned a robot,
+    and how many bytes of replies wait in its socket's buffer."""
+
+    key: str
+    peer: str
+    has_robot: bool
+    queued_bytes: int
+
+
 class SimServer:
     """The simulator. Use :meth:`start` (background thread) or :meth:`run` (this thread).
 
@@ -89,12 +103,15 @@ class SimServer:
         self.style: NumberStyle = STYLES[self.options.wire_precision]
         self.world = PhysicsWorld(timestep=1.0 / self.options.physics_hz,
                                   gravity=self.options.gravity)
-        self.sessions: dict[str, Session] = {}
-        self.connections: dict[str, Connection] = {}
         self.max_connections = MAX_CONNECTIONS
-        self.counter = 0
-        self.leaving: list[str] = []
+        self._clients: dict[str, Connection] = {}
+        """Session key -> the connection that owns the session (``connection.session``)."""
+        self._joined = 0
+        self._leaving: list[str] = []
         """Keys of robots whose connection closed, destroyed at the next physics frame."""
+        self._lock = threading.RLock()
+        """Held by the loop thread while it changes the physics or a session, and by
+        :meth:`truth` / :meth:`clients` while they read them from another thread."""
         self._status_due: list[tuple[float, str]] = []
         """(simulated time, session key) of the next status of every robot (a heap)."""
         self.behind_count = 0
@@ -123,7 +140,7 @@ class SimServer:
         finally:
             physics.cancel()
             server.close()
-            for conn in list(self.connections.values()):
+            for conn in list(self._clients.values()):
                 if conn.transport is not None:
                     conn.transport.abort()
             await server.wait_closed()
@@ -175,6 +192,66 @@ class SimServer:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    # ------------------------------------------------------------------ clients
+    def join(self, client: Connection, peer: str) -> Session | None:
+        """Register a new client and greet it (NFO); None when the server is full."""
+        with self._lock:
+            if len(self._clients) >= self.max_connections:
+                log.warning("%s: refused: %d connections already (the limit)", peer,
+                            self.max_connections)
+                return None
+            self._joined += 1
+            session = Session(f"c{self._joined}", peer, client.send)
+            self._clients[session.key] = client
+        log.info("%s: connected", peer)
+        spec = self.world_spec
+        client.send(m.GameInfo(spec.gametype, spec.level, spec.time_limit))
+        return session
+
+    def leave(self, session: Session) -> None:
+        """Forget a client; its robot is destroyed at the next physics frame."""
+        with self._lock:
+            self._clients.pop(session.key, None)
+            if session.robot is not None:
+                self._leaving.append(session.key)
+
+    def handle(self, session: Session, msg: m.Message) -> None:
+        """Act on one message of a client (the loop thread, between physics frames)."""
+        with self._lock:
+            session.handle(msg, self.world, self.world_spec, self.robots, self.style)
+
+    def clients(self) -> list[ClientInfo]:
+        """The connected clients, read consistently from any thread."""
+        with self._lock:
+            out = []
+            for key, conn in self._clients.items():
+                session, transport = conn.session, conn.transport
+                if session is None:
+                    continue
+                queued = transport.get_write_buffer_size() if transport is not None else 0
+                out.append(ClientInfo(key, session.peer, session.robot is not None, queued))
+            return out
+
+    def truth(self, peer_port: int) -> Truth | None:
+        """The true state (joints, tool0 in base_link) of the robot of the client whose
+        address ends in ``:peer_port``, from the simulator's spec and physics under the lock
+        (None when that client has no robot)."""
+        with self._lock:
+            for conn in self._clients.values():
+                session = conn.session
+                if session is None or session.robot is None:
+                    continue
+                if not session.peer.endswith(f":{peer_port}"):
+                    continue
+                world, key = self.world, session.key
+                platform = world.platform_pose(key)
+                joints, tool0 = {}, {}
+                for act in session.robot.actuators:
+                    joints[act.name] = world.joint_values(key, act.name)
+                    tool0[act.name] = tool0_in_base(act, platform, world.tip_pose(key, act.name))
+                return Truth(key, session.peer, world.time, joints, tool0)
+        return None
+
     # ------------------------------------------------------------------ physics
     async def _physics(self) -> None:
         loop = asyncio.get_running_loop()
@@ -207,21 +284,26 @@ class SimServer:
             await asyncio.sleep(max(0.0, wait))
 
     def _frame(self) -> None:
+        with self._lock:
+            self._frame_locked()
+
+    def _frame_locked(self) -> None:
         world = self.world
-        spawning = [s for s in self.sessions.values() if s.pending is not None]
-        if spawning or self.leaving:
+        spawning = [c.session for c in self._clients.values()
+                    if c.session is not None and c.session.pending is not None]
+        if spawning or self._leaving:
             try:
                 with world.batch():  # one model rebuild for all of them
-                    for key in self.leaving:
+                    for key in self._leaving:
                         world.remove_robot(key)
-                    self.leaving.clear()
+                    self._leaving.clear()
                     for session in spawning:
                         session.spawn_pending(world)
             except Exception:  # the physics must go on for everyone else
                 log.exception("spawning %s failed", ", ".join(s.peer for s in spawning))
                 for session in spawning:
                     session.pending = session.robot = None
-                self.leaving.clear()
+                self._leaving.clear()
                 spawning = []
             for session in spawning:
                 heapq.heappush(self._status_due, (session.next_status, session.key))
@@ -229,7 +311,7 @@ class SimServer:
         due = self._status_due
         while due and due[0][0] <= world.time + 1e-9:
             _, key = heapq.heappop(due)
-            conn = self.connections.get(key)
+            conn = self._clients.get(key)
             session = conn.session if conn is not None else None
             if session is None or session.robot is None:
                 continue  # gone
