@@ -15,6 +15,7 @@ Units: m, rad, s; poses are 4x4 transforms of tool0 in base_link.
 
 from __future__ import annotations
 
+import json
 import logging
 from dataclasses import replace
 from pathlib import Path
@@ -303,8 +304,27 @@ class Arm:
         return sensor.world_from_tool0(self.fk(q))
 
     def _sensor_to_tool0(self) -> Array:
+        """tool0 in the tip sensor's frame.
+
+        The model's offset, except where the sensor sits at the Tip: when the model puts them
+        no farther apart than the step the server printed the Tip with (UDK: 0.01 m, so the
+        KR60's 0.048 m Tip reads 0.05 while its sensor mount reads 0.048), they are one point
+        and the sensor, printed finer, says where it is; only the rotation is kept.
+        """
         zero = np.zeros(len(self.joint_names))
-        return np.linalg.inv(self.fk(zero, str(self.robot.tip_sensor))) @ self.fk(zero)
+        offset = np.linalg.inv(self.fk(zero, str(self.robot.tip_sensor))) @ self.fk(zero)
+        step = self._tip_step()
+        if step > 0 and float(np.linalg.norm(offset[:3, 3])) <= step:
+            offset[:3, 3] = 0.0
+        return offset
+
+    def _tip_step(self) -> float:
+        """The resolution (m) the server printed the Tip with (0: exact or unknown)."""
+        for name, text in self.robot.files.items():
+            if name.endswith(".discovery.json"):
+                precision = json.loads(text).get("precision", {})
+                return float(precision.get("tip_resolution_m") or 0.0)
+        return 0.0
 
     def _tip_sensor(self) -> TipSensor | None:
         sensor = self.robot.tip_sensor
