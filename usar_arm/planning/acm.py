@@ -27,6 +27,8 @@ from usar_arm.urdf.srdf import DisabledPair
 
 ALWAYS_BATCH = 200
 ALWAYS_FRACTION = 0.95
+CHUNK = 1000
+"""States checked per batched call while looking for pairs that ever touch."""
 
 
 @dataclass(frozen=True)
@@ -42,7 +44,6 @@ class AcmResult:
     def pairs(self) -> set[Pair]:
         """The disabled pairs (canonical order)."""
         return {pair(d.link1, d.link2) for d in self.disabled}
-
 
 def adjacent_pairs(chain: KinematicChain) -> set[Pair]:
     """Pairs of links with geometry joined in the link graph after removing geometry-less links."""
@@ -89,8 +90,8 @@ def compute_acm(chain: KinematicChain, kinematics: KinematicModel, samples: int 
     lo, hi = chain.lower(), chain.upper()
     while True:
         counts: dict[Pair, int] = {}
-        for q in rng.uniform(lo, hi, size=(ALWAYS_BATCH, len(lo))):
-            for p in world.contacts(q):
+        for found in world.contacts_many(rng.uniform(lo, hi, size=(ALWAYS_BATCH, len(lo)))):
+            for p in found:
                 if p not in reasons:
                     counts[p] = counts.get(p, 0) + 1
         always = [p for p, c in counts.items() if c > ALWAYS_FRACTION * ALWAYS_BATCH]
@@ -101,8 +102,10 @@ def compute_acm(chain: KinematicChain, kinematics: KinematicModel, samples: int 
     seen: set[Pair] = set()
     enabled = [p for p in candidates if p not in reasons]
     world.set_disabled(reasons)  # only the still-enabled pairs need checking now
-    for q in rng.uniform(lo, hi, size=(samples, len(lo))):
-        seen.update(world.contacts(q))
+    states = rng.uniform(lo, hi, size=(samples, len(lo)))
+    for start in range(0, samples, CHUNK):  # stop early once every enabled pair was seen
+        for found in world.contacts_many(states[start:start + CHUNK]):
+            seen.update(found)
         if len(seen) == len(enabled):
             break
     for p in enabled:
