@@ -1,4 +1,5 @@
-# The two set-up commands of the README. Each creates its own virtual environment.
+# The two set-up commands of the README. Each creates its own virtual environment, then compiles
+# the numba kernels once (cached on disk beside the package) so that no command pays for it.
 PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
@@ -9,12 +10,14 @@ $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
 	$(DEMO_VENV)/bin/pip install --quiet --upgrade pip
 	$(DEMO_VENV)/bin/pip install --quiet .
+	$(DEMO_VENV)/bin/python -c "from usar_arm.planning.bounds import warm_up; warm_up()"
 	touch $@
 
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
 	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray]"
+	$(TEST_VENV)/bin/python -c "from usar_arm.planning.bounds import warm_up; warm_up()"
 	touch $@
 
 demo: $(DEMO_VENV)/.installed

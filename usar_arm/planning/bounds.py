@@ -362,3 +362,16 @@ def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array
                            size.reshape(-1, 3)])
     return (np.ascontiguousarray(joints), np.ascontiguousarray(links),
             np.ascontiguousarray(pairs), len(rr), np.ascontiguousarray(obstacles))
+
+
+def warm_up() -> None:
+    """Compile :func:`check` for the argument types the collision world passes (numba caches
+    the machine code on disk, so later processes load it instead of compiling for ~20 s).
+    Run once after installing (``make demo`` and ``make test`` do):
+    ``python -c "from usar_arm.planning.bounds import warm_up; warm_up()"``."""
+    eye = np.eye(4)
+    packed = pack(np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3)), np.array([1]), eye[None],
+                  np.array([0.1]), np.array([0.2]), np.array([1]), np.zeros((0, 2), np.int64),
+                  np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
+                  np.array([[0.5, 0.5, 0.5]]))
+    check(np.zeros((1, 1)), *packed, EPS, MARGIN)
