@@ -50,13 +50,12 @@ def _dot(a: Array, b: Array) -> float:
 
 
 @kernel
-def link_poses(qs: Array, axes: Array, points: Array, revolute: Array, moved_by: Array,
-               zero: Array) -> Array:
+def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
 
-    ``axes``/``points`` (n, 3): each joint's axis and a point on it at the zero configuration;
-    ``revolute`` (n,) 1 for revolute, 0 for prismatic; ``moved_by`` (L,) how many joints (a
-    prefix of the chain) move each body; ``zero`` (L, 4, 4) each body's pose at zero.
+    ``joints`` (n, 7): each joint's axis and a point on it at the zero configuration, then 1
+    for revolute or 0 for prismatic; ``zero`` (L, 4, 4) each body's pose at zero; ``links``
+    (L, LINK_WIDTH) with how many joints (a prefix of the chain) move each body at MOVED.
     """
     n_cfg, n = qs.shape
     n_body = zero.shape[0]
@@ -68,15 +67,15 @@ def link_poses(qs: Array, axes: Array, points: Array, revolute: Array, moved_by:
         frames[0] = 0.0
         frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
         for i in range(n):
-            w0, w1, w2 = axes[i, 0], axes[i, 1], axes[i, 2]
-            if revolute[i]:
+            w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
+            if joints[i, 6] > 0.5:
                 a = qs[c, i]
                 sn, co = math.sin(a), math.cos(a)
                 v = 1.0 - co
                 e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
                 e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
                 e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
-                p0, p1, p2 = points[i, 0], points[i, 1], points[i, 2]
+                p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
                 # t += R p - (R E) p = R (p - E p)
                 d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
                 d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
@@ -100,7 +99,7 @@ def link_poses(qs: Array, axes: Array, points: Array, revolute: Array, moved_by:
             f[1, 0], f[1, 1], f[1, 2], f[1, 3] = r10, r11, r12, t1
             f[2, 0], f[2, 1], f[2, 2], f[2, 3] = r20, r21, r22, t2
         for k in range(n_body):
-            f = frames[moved_by[k]]
+            f = frames[int(links[k, MOVED])]
             for row in range(3):
                 for col in range(4):
                     out[c, k, row, col] = (f[row, 0] * zero[k, 0, col] + f[row, 1] * zero[k, 1, col]
@@ -216,6 +215,124 @@ CLEAR, CONTACT, UNDECIDED = 0, 1, 2
 """Verdicts of :func:`classify` on a pair: provably apart, provably touching (by more than
 the margin), or for the exact judge to decide."""
 
+RADIUS, HALF, RHO, REACH, BOUND, MOVED = range(6)
+LINK_WIDTH = 6
+"""Columns of the per-link array: the cylinder's radius and half-length (m), the radius of the
+balls inside it and how far their centres reach from its centre along the axis, the radius of a
+sphere around it, and how many joints move it."""
+
+O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
+    0, 3, 6, 9, 12, 15, 16, 17)
+OBSTACLE_WIDTH = 20
+"""Columns of the per-obstacle array: size (3), the enclosing segment's start and direction,
+the inner balls' segment's start and direction, their radius, the radius of a sphere about the
+centre that contains the obstacle, and the centre (3)."""
+
+
+@kernel
+def prepare_links(radius: Array, half: Array, moved_by: Array) -> Array:
+    """The per-link array (L, LINK_WIDTH) of cylinders of ``radius``/``half`` (m)."""
+    out = np.empty((radius.shape[0], LINK_WIDTH))
+    for k in range(radius.shape[0]):
+        rho = min(radius[k], half[k])
+        out[k, RADIUS], out[k, HALF], out[k, RHO] = radius[k], half[k], rho
+        out[k, REACH] = half[k] - rho
+        out[k, BOUND] = math.sqrt(radius[k] * radius[k] + half[k] * half[k])
+        out[k, MOVED] = moved_by[k]
+    return out
+
+
+@kernel
+def prepare_obstacles(kind: Array, pose: Array, size: Array) -> tuple[Array, Array]:
+    """The per-obstacle array (S, OBSTACLE_WIDTH) and the obstacles' axes as rows (S, 3, 3)
+    of obstacles of ``kind`` at ``pose`` (S, 3, 4) with ``size`` (S, 3) (see :func:`classify`).
+    """
+    n_obj = kind.shape[0]
+    out = np.zeros((n_obj, OBSTACLE_WIDTH))
+    axes = np.empty((n_obj, 3, 3))
+    for s in range(n_obj):
+        for a in range(3):
+            out[s, O_SIZE + a] = size[s, a]
+        if kind[s] == CAPSULE:
+            out[s, O_RHO] = min(size[s, 0], size[s, 1])
+            out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2)
+        elif kind[s] == SPHERE:
+            out[s, O_RHO] = size[s, 0]
+            out[s, O_BOUND] = size[s, 0]
+        else:
+            out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2 + size[s, 2] ** 2)
+        for a in range(3):
+            for b in range(3):
+                axes[s, a, b] = pose[s, b, a]
+            centre, z = pose[s, a, 3], pose[s, a, 2]
+            out[s, O_CENTRE + a] = centre
+            out[s, O_START + a] = centre
+            out[s, O_IN_START + a] = centre
+            if kind[s] == CAPSULE:
+                out[s, O_START + a] = centre - z * size[s, 1]
+                out[s, O_DIR + a] = 2.0 * z * size[s, 1]
+                out[s, O_IN_START + a] = centre - z * (size[s, 1] - out[s, O_RHO])
+                out[s, O_IN_DIR + a] = 2.0 * z * (size[s, 1] - out[s, O_RHO])
+    return out, axes
+
+
+@kernel
+def _verdicts(world: Array, links: Array, pairs: Array, n_rr: int, kind: Array,
+              obstacles: Array, axes: Array, eps: float, margin: float) -> Array:
+    """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
+    link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links` and
+    :func:`prepare_obstacles`."""
+    n_cfg, n_link = world.shape[0], world.shape[1]
+    n_pairs = pairs.shape[0]
+    out = np.zeros((n_cfg, n_pairs), dtype=np.int8)
+    seg = np.empty((6, n_link, 3))  # start, direction, inner start, inner direction, axis, centre
+    cand = np.empty((8, 3))
+    scratch = np.empty(3)
+    for c in range(n_cfg):
+        for k in range(n_link):
+            half, reach = links[k, HALF], links[k, REACH]
+            for a in range(3):
+                z, centre = world[c, k, a, 2], world[c, k, a, 3]
+                seg[0, k, a] = centre - z * half
+                seg[1, k, a] = 2.0 * z * half
+                seg[2, k, a] = centre - z * reach
+                seg[3, k, a] = 2.0 * z * reach
+                seg[4, k, a] = z
+                seg[5, k, a] = centre
+        for p in range(n_rr):
+            i, j = pairs[p, 0], pairs[p, 1]
+            if segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j]) > (
+                    links[i, RADIUS] + links[j, RADIUS] + eps):
+                continue
+            inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
+            touching = inner < links[i, RHO] + links[j, RHO] - margin
+            out[c, p] = CONTACT if touching else UNDECIDED
+        for p in range(n_rr, n_pairs):
+            i, s = pairs[p, 0], pairs[p, 1]
+            o = obstacles[s]
+            gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
+                            + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
+                            + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
+            if gap > links[i, BOUND] + o[O_BOUND] + eps:
+                continue
+            if kind[s] == BOX or kind[s] == HULL:
+                centre, half = o[O_START:O_START + 3], o[O_SIZE:O_SIZE + 3]
+                if _cylinder_box_separated(seg[5, i], seg[4, i], links[i, RADIUS],
+                                           links[i, HALF], centre, axes[s], half, eps, cand):
+                    continue
+                touching = kind[s] == BOX and _inner_box_contact(
+                    seg[5, i], seg[4, i], links[i, RHO], links[i, REACH], centre, axes[s], half,
+                    margin, scratch)
+            else:
+                if segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
+                                    o[O_DIR:O_DIR + 3]) > links[i, RADIUS] + o[O_SIZE] + eps:
+                    continue
+                inner = segment_distance(seg[2, i], seg[3, i], o[O_IN_START:O_IN_START + 3],
+                                         o[O_IN_DIR:O_IN_DIR + 3])
+                touching = inner < links[i, RHO] + o[O_RHO] - margin
+            out[c, p] = CONTACT if touching else UNDECIDED
+    return out
+
 
 @kernel
 def classify(world: Array, radius: Array, half: Array, rr: Array, rs: Array,
@@ -224,144 +341,49 @@ def classify(world: Array, radius: Array, half: Array, rr: Array, rs: Array,
 
     ``world`` (N, L, 3, 4): link cylinder poses (axis = local z); ``radius``/``half`` (L,);
     ``rr`` (P, 2) link-link pairs; ``rs`` (Q, 2) link-obstacle pairs; ``kind`` (S,) obstacle
-    kinds (BOX, SPHERE, CAPSULE); ``pose`` (S, 3, 4) obstacle poses; ``size`` (S, 3): box half
-    extents, sphere radius in [0], capsule radius and half-length in [0], [1].
+    kinds (BOX, SPHERE, CAPSULE, HULL); ``pose`` (S, 3, 4) obstacle poses; ``size`` (S, 3):
+    box half extents, sphere radius in [0], cylinder radius and half-length in [0], [1].
 
     CLEAR needs a separation above ``eps`` between enclosing volumes; CONTACT needs balls
     inside both shapes that overlap by more than ``margin`` (m), so that any exact test agrees.
     """
-    n_cfg, n_link = world.shape[0], world.shape[1]
-    n_rr, n_rs, n_obj = rr.shape[0], rs.shape[0], pose.shape[0]
-    out = np.zeros((n_cfg, n_rr + n_rs), dtype=np.int8)
-    # obstacles: an outer segment (a sphere's has length 0), an inner one, axes, bounding radius
-    o_start = np.empty((n_obj, 3))
-    o_dir = np.zeros((n_obj, 3))
-    o_in_start = np.empty((n_obj, 3))
-    o_in_dir = np.zeros((n_obj, 3))
-    o_rho = np.zeros(n_obj)
-    o_axes = np.empty((n_obj, 3, 3))
-    o_bound = np.empty(n_obj)
-    for s in range(n_obj):
-        if kind[s] == CAPSULE:
-            o_rho[s] = min(size[s, 0], size[s, 1])
-            o_bound[s] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2)
-        elif kind[s] == SPHERE:
-            o_rho[s] = size[s, 0]
-            o_bound[s] = size[s, 0]
-        else:
-            o_bound[s] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2 + size[s, 2] ** 2)
-        for a in range(3):
-            o_axes[s, a] = pose[s, :, a]
-            o_start[s, a] = pose[s, a, 3]
-            o_in_start[s, a] = pose[s, a, 3]
-            if kind[s] == CAPSULE:
-                o_start[s, a] -= pose[s, a, 2] * size[s, 1]
-                o_dir[s, a] = 2.0 * pose[s, a, 2] * size[s, 1]
-                o_in_start[s, a] -= pose[s, a, 2] * (size[s, 1] - o_rho[s])
-                o_in_dir[s, a] = 2.0 * pose[s, a, 2] * (size[s, 1] - o_rho[s])
-    rho = np.minimum(radius, half)
-    reach = half - rho
-    bound = np.sqrt(radius * radius + half * half)
-    l_start = np.empty((n_link, 3))
-    l_dir = np.empty((n_link, 3))
-    l_in_start = np.empty((n_link, 3))
-    l_in_dir = np.empty((n_link, 3))
-    l_axis = np.empty((n_link, 3))
-    l_centre = np.empty((n_link, 3))
-    cand = np.empty((8, 3))
-    scratch = np.empty(3)
-    for c in range(n_cfg):
-        for k in range(n_link):
-            for a in range(3):
-                z, centre = world[c, k, a, 2], world[c, k, a, 3]
-                l_axis[k, a] = z
-                l_centre[k, a] = centre
-                l_start[k, a] = centre - z * half[k]
-                l_dir[k, a] = 2.0 * z * half[k]
-                l_in_start[k, a] = centre - z * reach[k]
-                l_in_dir[k, a] = 2.0 * z * reach[k]
-        for p in range(n_rr):
-            i, j = rr[p, 0], rr[p, 1]
-            if segment_distance(l_start[i], l_dir[i], l_start[j], l_dir[j]) > (
-                    radius[i] + radius[j] + eps):
-                continue
-            inner = segment_distance(l_in_start[i], l_in_dir[i], l_in_start[j], l_in_dir[j])
-            out[c, p] = CONTACT if inner < rho[i] + rho[j] - margin else UNDECIDED
-        for q in range(n_rs):
-            i, s = rs[q, 0], rs[q, 1]
-            col = n_rr + q
-            gap = math.sqrt((l_centre[i, 0] - pose[s, 0, 3]) ** 2
-                            + (l_centre[i, 1] - pose[s, 1, 3]) ** 2
-                            + (l_centre[i, 2] - pose[s, 2, 3]) ** 2)
-            if gap > bound[i] + o_bound[s] + eps:
-                continue
-            if kind[s] == BOX or kind[s] == HULL:
-                if _cylinder_box_separated(l_centre[i], l_axis[i], radius[i], half[i],
-                                           o_start[s], o_axes[s], size[s], eps, cand):
-                    continue
-                touching = kind[s] == BOX and _inner_box_contact(
-                    l_centre[i], l_axis[i], rho[i], reach[i], o_start[s], o_axes[s], size[s],
-                    margin, scratch)
-            else:
-                if segment_distance(l_start[i], l_dir[i], o_start[s], o_dir[s]) > (
-                        radius[i] + size[s, 0] + eps):
-                    continue
-                inner = segment_distance(l_in_start[i], l_in_dir[i], o_in_start[s],
-                                         o_in_dir[s])
-                touching = inner < rho[i] + o_rho[s] - margin
-            out[c, col] = CONTACT if touching else UNDECIDED
-    return out
+    links = prepare_links(radius, half, np.zeros(radius.shape[0], dtype=np.int64))
+    obstacles, axes = prepare_obstacles(kind, pose, size)
+    pairs = np.empty((rr.shape[0] + rs.shape[0], 2), dtype=np.int64)
+    pairs[:rr.shape[0]] = rr
+    pairs[rr.shape[0]:] = rs
+    return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, eps, margin)
 
 
 @kernel
-def check(qs: Array, joints: Array, links: Array, pairs: Array, n_rr: int, obstacles: Array,
-          eps: float, margin: float) -> tuple[Array, Array]:
+def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: Array, n_rr: int,
+          kind: Array, obstacles: Array, axes: Array, eps: float, margin: float
+          ) -> tuple[Array, Array]:
     """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
-    (N, n) in one call (one dispatch: the single-configuration query is dominated by it).
+    (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
+    world = link_poses(qs, joints, zero, links)
+    return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, eps, margin)
 
-    Packed inputs (built once by :func:`pack`): ``joints`` (n, 7) axis, point, revolute;
-    ``links`` (L, 15) zero pose (3 x 4, row-major), radius, half-length, joints moving it;
-    ``pairs`` (P + Q, 2) link-link pairs then link-obstacle pairs (the first ``n_rr``);
-    ``obstacles`` (S, 16) kind, pose (3 x 4, row-major), size (3).
-    """
-    n_link, n_obj = links.shape[0], obstacles.shape[0]
-    zero = np.zeros((n_link, 4, 4))
-    for k in range(n_link):
-        for row in range(3):
-            for col in range(4):
-                zero[k, row, col] = links[k, 4 * row + col]
-    moved = np.empty(n_link, dtype=np.int64)
-    for k in range(n_link):
-        moved[k] = int(links[k, 14])
-    revolute = np.empty(joints.shape[0], dtype=np.int64)
-    for i in range(joints.shape[0]):
-        revolute[i] = int(joints[i, 6])
-    world = link_poses(qs, joints[:, 0:3], joints[:, 3:6], revolute, moved, zero)
-    kind = np.empty(n_obj, dtype=np.int64)
-    pose = np.empty((n_obj, 3, 4))
-    for s in range(n_obj):
-        kind[s] = int(obstacles[s, 0])
-        for row in range(3):
-            for col in range(4):
-                pose[s, row, col] = obstacles[s, 1 + 4 * row + col]
-    verdicts = classify(world, links[:, 12], links[:, 13], pairs[:n_rr], pairs[n_rr:], kind,
-                        pose, obstacles[:, 13:16], eps, margin)
-    return world, verdicts
+
+Packed = tuple[Array, Array, Array, Array, int, Array, Array, Array]
 
 
 def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array,
          half: Array, moved_by: Array, rr: Array, rs: Array, kind: Array, pose: Array,
-         size: Array) -> tuple[Array, Array, Array, int, Array]:
-    """The packed arrays :func:`check` takes (see there), from the per-item arrays."""
-    joints = np.hstack([axes.reshape(-1, 3), points.reshape(-1, 3),
-                        np.asarray(revolute, float).reshape(-1, 1)])
-    links = np.hstack([zero[:, :3, :].reshape(-1, 12), radius.reshape(-1, 1),
-                       half.reshape(-1, 1), np.asarray(moved_by, float).reshape(-1, 1)])
-    pairs = np.vstack([rr.reshape(-1, 2), rs.reshape(-1, 2)]).astype(np.int64)
-    obstacles = np.hstack([np.asarray(kind, float).reshape(-1, 1), pose.reshape(-1, 12),
-                           size.reshape(-1, 3)])
-    return (np.ascontiguousarray(joints), np.ascontiguousarray(links),
-            np.ascontiguousarray(pairs), len(rr), np.ascontiguousarray(obstacles))
+         size: Array) -> Packed:
+    """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once."""
+    joints = np.ascontiguousarray(np.hstack([
+        axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))
+    links = prepare_links(np.ascontiguousarray(radius, dtype=float),
+                          np.ascontiguousarray(half, dtype=float),
+                          np.ascontiguousarray(moved_by, dtype=np.int64))
+    pairs = np.ascontiguousarray(np.vstack([rr.reshape(-1, 2), rs.reshape(-1, 2)]),
+                                 dtype=np.int64)
+    kind = np.ascontiguousarray(kind, dtype=np.int64)
+    obstacles, obstacle_axes = prepare_obstacles(kind, np.ascontiguousarray(pose, dtype=float),
+                                                 np.ascontiguousarray(size, dtype=float))
+    return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
+            obstacles, obstacle_axes)
 
 
 def warm_up() -> None:
