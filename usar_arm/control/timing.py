@@ -24,12 +24,11 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from ruckig import InputParameter, Result, Ruckig, Synchronization
 from ruckig import Trajectory as RuckigTrajectory
-from scipy.interpolate import CubicSpline
 
 from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.errors import TimingError
@@ -40,6 +39,9 @@ DEFAULT_RATE_HZ = 500.0
 PASS_THROUGH_FRACTION = 0.9
 """Blend: pass-through velocities stay this fraction below the velocity limits (Ruckig needs
 consistent target states)."""
+
+if TYPE_CHECKING:  # scipy.interpolate costs ~0.4 s of start-up; only LIN timing needs it
+    from scipy.interpolate import CubicSpline
 
 SampleCheck = Callable[[Array], Array]
 """Given configurations (m, n), True where a configuration is not allowed (collision)."""
@@ -339,6 +341,8 @@ def along_path(names: tuple[str, ...], s: Array, q: Array, limits: MotionLimits,
     cap s' and s'' (e.g. a Cartesian speed when s is the tool's path length).
     """
     start = time.perf_counter()
+    from scipy.interpolate import CubicSpline
+
     spline = CubicSpline(s, q, axis=0)
     grid = np.linspace(s[0], s[-1], max(200, 4 * len(s)))
     m1 = np.abs(spline(grid, 1)).max(axis=0) + 1e-12

@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linprog
 
 from usar_arm.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix
 
@@ -127,6 +126,9 @@ def _chebyshev(a: Array, b: Array, bound: float) -> tuple[Array, float]:
     radius is negative (and the point the least violating) when the set is empty."""
     norms = np.linalg.norm(a, axis=1)
     c = np.array([0.0, 0.0, 0.0, -1.0])
+    # Imported here: scipy.optimize costs ~0.5 s of start-up that offline planning never needs.
+    from scipy.optimize import linprog
+
     res = linprog(c, A_ub=np.hstack([a, norms[:, None]]), b_ub=b,
                   bounds=[(-bound, bound)] * 3 + [(None, bound)], method="highs")
     if res.status != 0:
