@@ -133,6 +133,18 @@ def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
         out.append(common.target(f"Collision KR60 in table, agreement with the brute-force "
                                  f"judge ({label})", s.get("success_rate"), 1.0, ">=",
                                  "fraction"))
+    solvers = cases["table"]["solvers"]
+
+    def times(solver: str) -> dict[str, Any]:
+        return solvers.get(solver, {}).get("summary", {}).get("time_all_s") or {}
+
+    single, batch = times("usar-arm").get("median"), times("usar-arm batch").get("mean")
+    peer = times("roboplan").get("median")
+    out.append(common.target("Collision KR60 in table, median single query / roboplan's median "
+                             "(same run)", single / peer if single and peer else None, 1.0,
+                             "<=", "ratio", "" if peer else "roboplan not run"))
+    out.append(common.target("Collision KR60 in table, batched, mean per configuration",
+                             batch, 2e-6, "<=", "s"))
     return out
 
 

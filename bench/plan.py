@@ -163,7 +163,40 @@ def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
                       "" if mp else "mplib not run"),
         common.target("Plan Fanuc_M16iB20 (7 joints): verified within 2 s",
                       fa.get("success_rate"), 1.0, ">=", "fraction"),
+        *_peer_targets(cases),
     ]
+
+
+def _ratio(a: float | None, b: float | None) -> float | None:
+    return a / b if a and b else None
+
+
+def _peer_targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    """The speed targets against the fastest peer (roboplan), same problems, same run."""
+    out = []
+    for robot, limit in (("KR60", 0.8), ("Fanuc_M16iB20", 1.0)):
+        solvers = cases[robot]["solvers"]
+        ours = (solvers["usar-arm"].get("summary", {}).get("time_all_s") or {})
+        peer = (solvers.get("roboplan", {}).get("summary", {}).get("time_all_s") or {})
+        note = "" if peer else "roboplan not run"
+        out.append(common.target(f"Plan {robot} median / roboplan's median",
+                                 _ratio(ours.get("median"), peer.get("median")), limit, "<=",
+                                 "ratio", note))
+        if robot == "KR60":
+            out.append(common.target("Plan KR60 p90 / roboplan's p90",
+                                     _ratio(ours.get("p90"), peer.get("p90")), 1.0, "<=",
+                                     "ratio", note))
+    empty = (cases["KR60"]["solvers"]["usar-arm"].get("summary", {}).get("by_scene", {})
+             .get("empty", {}).get("time_all_s") or {})
+    out.append(common.target("Plan KR60 in the empty scene, median", empty.get("median"),
+                             0.002, "<=", "s"))
+    boxes = cases.get("boxes_1000", {}).get("solvers", {}).get("usar-arm", {}).get("summary")
+    if boxes:
+        out.append(common.target("Plan KR60 among 1,000 boxes: verified within 2 s",
+                                 boxes.get("success_rate"), 1.0, ">=", "fraction"))
+        out.append(common.target("Plan KR60 among 1,000 boxes, median",
+                                 (boxes.get("time_all_s") or {}).get("median"), 0.1, "<=", "s"))
+    return out
 
 
 if __name__ == "__main__":

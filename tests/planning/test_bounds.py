@@ -199,6 +199,26 @@ def test_the_world_agrees_with_brute_force_in_random_scenes(kr60: Robot) -> None
         _agree(world, rng.uniform(kr60.chain.lower(), kr60.chain.upper(), (400, 6)))
 
 
+@pytest.mark.parametrize("scene", list(BUILTIN))
+def test_a_segment_walk_answers_as_checking_every_configuration(kr60: Robot,
+                                                                 scene: str) -> None:
+    """segment_free skips configurations the clearance proves free; its answer must equal
+    brute-force FCL on every one of the segment's configurations."""
+    world = kr60.collision_world(load_scene(scene))
+    rng = np.random.default_rng(21)
+    lo, hi = kr60.chain.lower(), kr60.chain.upper()
+    outcomes = set()
+    for _ in range(120):
+        a = rng.uniform(lo, hi)
+        b = np.clip(a + rng.normal(0.0, 0.4, 6), lo, hi)
+        steps = int(rng.integers(1, 300))
+        qs = a + (b - a) * (np.arange(steps + 1) / steps)[:, None]
+        truth = not any(world.contacts_brute_force(q) for q in qs)
+        assert world.segment_free(a, b, steps) == truth, (a.tolist(), b.tolist(), steps)
+        outcomes.add(truth)
+    assert outcomes == {True, False} or scene == "empty"
+
+
 @pytest.mark.slow
 def test_a_million_configurations_agree_with_brute_force(kr60: Robot, fanuc: Robot) -> None:
     """1,000,000 configurations: the four shipped scenes and random box/cylinder/sphere/mesh

@@ -42,7 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="output folder (default demo-output; its files are replaced)")
     p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
                    help="udk (default): numbers as UDK prints them, so the learnt model is "
-                        "about a millimetre off; full: exact numbers (an extension)")
+                        "2-3 mm off at the tool; full: exact numbers (an extension)")
     p.add_argument("--tip-correction", action="store_true",
                    help="correct every move's goal with the tip GroundTruth sensor (about 8 s "
                         "per move; brings a UDK-learnt arm within 1 mm / 1 mrad)")
@@ -188,8 +188,9 @@ def run(args: argparse.Namespace) -> int:
         f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad"
         f"{', simulator truth' if with_truth else ''})")
     if not ok and args.wire_precision == "udk" and not args.tip_correction:
-        out("  (the description learnt over UDK's truncated numbers is about 1 mm off; "
-            "--tip-correction or --wire-precision full close the gap)")
+        out("  (the description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
+            "the Tip prints to the centimetre; --tip-correction or --wire-precision full close "
+            "the gap)")
     out(f"\nwrote into {folder}/ in {time.perf_counter() - begin:.0f} s:")
     for what, path in files.items():
         out(f"  {what:<17} {path}")

@@ -1,6 +1,6 @@
 """Tip correction: move the joint goal until the *real* tool0 is where it should be.
 
-The description learnt through UDK is off by about a millimetre and a few tenths of a mrad at
+The description learnt through UDK is off by 2-3 millimetres and a few tenths of a mrad at
 the tool (UDK prints link offsets to the millimetre and orientations to 0.01 rad). Near one
 pose that error is a nearly constant bias, which the tip GroundTruth sensor can measure -- but
 it too prints truncated numbers (1 mm, 0.001 rad). So the arm visits :data:`DITHERS` poses a

@@ -145,10 +145,11 @@ def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
 
 
 @kernel
-def _cylinder_box_separated(c: Array, z: Array, r: float, h: float, b_centre: Array,
-                            b_axes: Array, b_half: Array, eps: float, cand: Array) -> bool:
-    """True when an axis among the candidates separates the cylinder (centre c, unit axis z,
-    radius r, half-length h) from the box (centre, axes as rows (3, 3), half extents).
+def _cylinder_box_gap(c: Array, z: Array, r: float, h: float, b_centre: Array,
+                      b_axes: Array, b_half: Array, cand: Array) -> float:
+    """The largest gap (m) between the projections of the cylinder (centre c, unit axis z,
+    radius r, half-length h) and the box (centre, axes as rows (3, 3), half extents) on the
+    candidate axes: a lower bound of their distance when positive (they are separated).
     ``cand`` (8, 3) is scratch space for the candidate axes."""
     d0, d1, d2 = c[0] - b_centre[0], c[1] - b_centre[1], c[2] - b_centre[2]
     count = 0
@@ -170,15 +171,15 @@ def _cylinder_box_separated(c: Array, z: Array, r: float, h: float, b_centre: Ar
     if dn > 1e-9:
         cand[count, 0], cand[count, 1], cand[count, 2] = d0 / dn, d1 / dn, d2 / dn
         count += 1
+    best = -math.inf
     for k in range(count):
         u = cand[k]
         uz = abs(_dot(u, z))
         cyl = uz * h + r * math.sqrt(max(0.0, 1.0 - uz * uz))
         box = (abs(_dot(u, b_axes[0])) * b_half[0] + abs(_dot(u, b_axes[1])) * b_half[1]
                + abs(_dot(u, b_axes[2])) * b_half[2])
-        if abs(u[0] * d0 + u[1] * d1 + u[2] * d2) > cyl + box + eps:
-            return True
-    return False
+        best = max(best, abs(u[0] * d0 + u[1] * d1 + u[2] * d2) - cyl - box)
+    return best
 
 
 @kernel
@@ -277,60 +278,87 @@ def prepare_obstacles(kind: Array, pose: Array, size: Array) -> tuple[Array, Arr
 
 
 @kernel
+def _segments(world: Array, links: Array, seg: Array) -> None:
+    """Fill ``seg`` (6, L, 3) from one configuration's link poses ``world`` (L, 3, 4): each
+    cylinder's axis segment (start, direction), its inner balls' segment, its axis, its centre."""
+    for k in range(world.shape[0]):
+        half, reach = links[k, HALF], links[k, REACH]
+        for a in range(3):
+            z, centre = world[k, a, 2], world[k, a, 3]
+            seg[0, k, a] = centre - z * half
+            seg[1, k, a] = 2.0 * z * half
+            seg[2, k, a] = centre - z * reach
+            seg[3, k, a] = 2.0 * z * reach
+            seg[4, k, a] = z
+            seg[5, k, a] = centre
+
+
+@kernel
+def _judge(seg: Array, links: Array, pairs: Array, n_rr: int, kind: Array, obstacles: Array,
+           axes: Array, eps: float, margin: float, out: Array, cand: Array, scratch: Array
+           ) -> tuple[float, float]:
+    """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and lower bounds
+    (m) of the clearance of the cleared link-link and link-obstacle pairs (0 when a pair is not
+    cleared; inf when there is none)."""
+    self_gap, scene_gap = math.inf, math.inf
+    for p in range(n_rr):
+        i, j = pairs[p, 0], pairs[p, 1]
+        gap = (segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j])
+               - links[i, RADIUS] - links[j, RADIUS])
+        if gap > eps:
+            out[p] = CLEAR
+            self_gap = min(self_gap, gap)
+            continue
+        inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
+        out[p] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
+        self_gap = 0.0
+    for p in range(n_rr, pairs.shape[0]):
+        i, s = pairs[p, 0], pairs[p, 1]
+        o = obstacles[s]
+        gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2 + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
+                        + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2) - links[i, BOUND] - o[O_BOUND]
+        if gap <= eps:
+            if kind[s] == BOX or kind[s] == HULL:
+                gap = _cylinder_box_gap(seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
+                                        o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3],
+                                        cand)
+            else:
+                gap = (segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
+                                        o[O_DIR:O_DIR + 3]) - links[i, RADIUS] - o[O_SIZE])
+        if gap > eps:
+            out[p] = CLEAR
+            scene_gap = min(scene_gap, gap)
+            continue
+        scene_gap = 0.0
+        if kind[s] == BOX:
+            touching = _inner_box_contact(seg[5, i], seg[4, i], links[i, RHO], links[i, REACH],
+                                          o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3],
+                                          margin, scratch)
+        elif kind[s] == HULL:
+            touching = False
+        else:
+            inner = segment_distance(seg[2, i], seg[3, i], o[O_IN_START:O_IN_START + 3],
+                                     o[O_IN_DIR:O_IN_DIR + 3])
+            touching = inner < links[i, RHO] + o[O_RHO] - margin
+        out[p] = CONTACT if touching else UNDECIDED
+    return self_gap, scene_gap
+
+
+@kernel
 def _verdicts(world: Array, links: Array, pairs: Array, n_rr: int, kind: Array,
               obstacles: Array, axes: Array, eps: float, margin: float) -> Array:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
     link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links` and
     :func:`prepare_obstacles`."""
     n_cfg, n_link = world.shape[0], world.shape[1]
-    n_pairs = pairs.shape[0]
-    out = np.zeros((n_cfg, n_pairs), dtype=np.int8)
-    seg = np.empty((6, n_link, 3))  # start, direction, inner start, inner direction, axis, centre
+    out = np.zeros((n_cfg, pairs.shape[0]), dtype=np.int8)
+    seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
     for c in range(n_cfg):
-        for k in range(n_link):
-            half, reach = links[k, HALF], links[k, REACH]
-            for a in range(3):
-                z, centre = world[c, k, a, 2], world[c, k, a, 3]
-                seg[0, k, a] = centre - z * half
-                seg[1, k, a] = 2.0 * z * half
-                seg[2, k, a] = centre - z * reach
-                seg[3, k, a] = 2.0 * z * reach
-                seg[4, k, a] = z
-                seg[5, k, a] = centre
-        for p in range(n_rr):
-            i, j = pairs[p, 0], pairs[p, 1]
-            if segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j]) > (
-                    links[i, RADIUS] + links[j, RADIUS] + eps):
-                continue
-            inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
-            touching = inner < links[i, RHO] + links[j, RHO] - margin
-            out[c, p] = CONTACT if touching else UNDECIDED
-        for p in range(n_rr, n_pairs):
-            i, s = pairs[p, 0], pairs[p, 1]
-            o = obstacles[s]
-            gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
-                            + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
-                            + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
-            if gap > links[i, BOUND] + o[O_BOUND] + eps:
-                continue
-            if kind[s] == BOX or kind[s] == HULL:
-                centre, half = o[O_START:O_START + 3], o[O_SIZE:O_SIZE + 3]
-                if _cylinder_box_separated(seg[5, i], seg[4, i], links[i, RADIUS],
-                                           links[i, HALF], centre, axes[s], half, eps, cand):
-                    continue
-                touching = kind[s] == BOX and _inner_box_contact(
-                    seg[5, i], seg[4, i], links[i, RHO], links[i, REACH], centre, axes[s], half,
-                    margin, scratch)
-            else:
-                if segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
-                                    o[O_DIR:O_DIR + 3]) > links[i, RADIUS] + o[O_SIZE] + eps:
-                    continue
-                inner = segment_distance(seg[2, i], seg[3, i], o[O_IN_START:O_IN_START + 3],
-                                         o[O_IN_DIR:O_IN_DIR + 3])
-                touching = inner < links[i, RHO] + o[O_RHO] - margin
-            out[c, p] = CONTACT if touching else UNDECIDED
+        _segments(world[c], links, seg)
+        _judge(seg, links, pairs, n_rr, kind, obstacles, axes, eps, margin, out[c], cand,
+               scratch)
     return out
 
 
@@ -365,6 +393,67 @@ def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: Array, n_r
     return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, eps, margin)
 
 
+@kernel
+def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
+         links: Array, pairs: Array, n_rr: int, kind: Array, obstacles: Array, axes: Array,
+         eps: float, margin: float) -> tuple[int, int, Array, Array, Array]:
+    """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
+    configurations, skipping those that the clearance already proves free.
+
+    At a configuration whose pairs are all cleared, the smallest lower bound of the clearance
+    (link-obstacle, and half of it for link-link, where both links move) divided by how far
+    any point of the robot moves per step (``levers`` (n,), m per unit of each joint, see
+    ``CollisionWorld.lever_arms``) says how many next configurations cannot be in contact
+    either: they are skipped. Configurations with a pair left undecided are not skipped past.
+
+    Returns:
+        The index of the first configuration with a proven contact (-1: none), how many
+        configurations were evaluated, and the undecided ones in order: their indices (U,),
+        link poses (U, L, 3, 4) and verdicts (U, P + Q), for the exact judge.
+    """
+    n, n_link, n_pairs = a.shape[0], zero.shape[0], pairs.shape[0]
+    motion = 0.0
+    for j in range(n):
+        motion += levers[j] * abs(b[j] - a[j]) / steps
+    q = np.empty((1, n))
+    seg = np.empty((6, n_link, 3))
+    cand = np.empty((8, 3))
+    scratch = np.empty(3)
+    row = np.zeros(n_pairs, dtype=np.int8)
+    where = np.empty(steps + 1, dtype=np.int64)
+    poses = np.empty((steps + 1, n_link, 3, 4))
+    verdicts = np.empty((steps + 1, n_pairs), dtype=np.int8)
+    count = evaluated = 0
+    k = 0
+    while k <= steps:
+        f = k / steps
+        for j in range(n):
+            q[0, j] = a[j] + (b[j] - a[j]) * f
+        world = link_poses(q, joints, zero, links)
+        _segments(world[0], links, seg)
+        self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, eps,
+                                     margin, row, cand, scratch)
+        evaluated += 1
+        undecided = False
+        for p in range(n_pairs):
+            if row[p] == CONTACT:
+                return k, evaluated, where[:count], poses[:count], verdicts[:count]
+            if row[p] == UNDECIDED:
+                undecided = True
+        if undecided:
+            where[count] = k
+            poses[count] = world[0]
+            verdicts[count] = row
+            count += 1
+            k += 1
+            continue
+        if motion <= 0.0:
+            break  # a == b: every configuration is this one
+        free = min(scene_gap, 0.5 * self_gap) / motion  # steps that cannot reach a contact
+        k += 1 + int(min(free * (1.0 - 1e-9), steps + 1.0))
+    return -1, evaluated, where[:count], poses[:count], verdicts[:count]
+
+
 Packed = tuple[Array, Array, Array, Array, int, Array, Array, Array]
 
 
@@ -387,7 +476,8 @@ def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array
 
 
 def warm_up() -> None:
-    """Compile :func:`check` for the argument types the collision world passes (numba caches
+    """Compile :func:`check` and :func:`walk` for the argument types the collision world passes
+    (numba caches
     the machine code on disk, so later processes load it instead of compiling for ~20 s).
     Run once after installing (``make demo`` and ``make test`` do):
     ``python -c "from usar_arm.planning.bounds import warm_up; warm_up()"``."""
@@ -397,3 +487,4 @@ def warm_up() -> None:
                   np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
+    walk(np.zeros(1), np.ones(1), 4, np.ones(1), *packed, EPS, MARGIN)

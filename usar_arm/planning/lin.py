@@ -17,7 +17,7 @@ import numpy as np
 from usar_arm.errors import IKError, LinBlockedError
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKSolver
-from usar_arm.planning.ompl_adapter import edge_configurations
+from usar_arm.planning.ompl_adapter import edge_configurations, edge_steps
 from usar_arm.spatial import Array, exp_so3, log_so3, transform
 
 
@@ -89,6 +89,9 @@ def plan_lin(ik: IKSolver, world: CollisionWorld, start_q: Array, start_pose: Ar
     path = np.array(qs)
     levers = world.lever_arms()
     for k in range(len(path) - 1):
+        checks = edge_steps(path[k], path[k + 1], options.resolution, levers, options.max_step)
+        if world.segment_free(path[k], path[k + 1], checks):
+            continue
         dense = edge_configurations(path[k], path[k + 1], options.resolution, levers,
                                     options.max_step)
         hits = world.in_collision_many(dense)

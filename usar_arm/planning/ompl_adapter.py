@@ -84,6 +84,16 @@ class OmplResult:
     edges_checked: int
 
 
+def edge_steps(a: Array, b: Array, resolution: float, levers: Array | None = None,
+               max_step: float = math.inf) -> int:
+    """How many steps the segment a -> b is checked in (see :func:`edge_configurations`)."""
+    delta = np.abs(np.asarray(b, float) - np.asarray(a, float))
+    steps = max(1, math.ceil(float(np.max(delta)) / resolution))
+    if levers is not None and math.isfinite(max_step):
+        steps = max(steps, math.ceil(float(levers @ delta) / max_step))
+    return steps
+
+
 def edge_configurations(a: Array, b: Array, resolution: float, levers: Array | None = None,
                         max_step: float = math.inf) -> Array:
     """Configurations along a -> b, at most ``resolution`` apart per joint, both ends included,
@@ -95,10 +105,7 @@ def edge_configurations(a: Array, b: Array, resolution: float, levers: Array | N
     0.01 rad moves a point 2.9 m from the KR60's first axis by 29 mm, enough to clip a thin
     shelf board between two checks.
     """
-    delta = np.abs(b - a)
-    steps = max(1, math.ceil(float(np.max(delta)) / resolution))
-    if levers is not None and math.isfinite(max_step):
-        steps = max(steps, math.ceil(float(levers @ delta) / max_step))
+    steps = edge_steps(a, b, resolution, levers, max_step)
     fractions = np.linspace(0.0, 1.0, steps + 1)
     levels = [np.array([0, steps])]
     seen = np.zeros(steps + 1, dtype=bool)
@@ -123,12 +130,16 @@ def stages(count: int) -> list[tuple[int, int]]:
 
 def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
               state_valid: Callable[[Array], bool], states_valid: Callable[[Array], Array],
-              options: OmplOptions, levers: Array | None = None) -> OmplResult:
+              options: OmplOptions, levers: Array | None = None,
+              segment_free: Callable[[Array, Array, int], bool] | None = None) -> OmplResult:
     """A collision-free joint path from ``start`` to ``goal``.
 
     Args:
         state_valid: True when one configuration is allowed.
         states_valid: for (m, n) configurations, True where each is allowed (batched).
+        segment_free: given a, b and a number of steps, True when every configuration of the
+            evenly stepped segment is allowed (the edge check; without it, ``states_valid`` on
+            the segment's configurations, coarse to fine).
         levers: per joint, how far (m) a point of the robot moves per unit of the joint; with
             them, edges are checked every ``options.max_step`` m of motion as well.
 
@@ -164,8 +175,11 @@ def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
     class EdgeValidator(ob.MotionValidator):
         def checkMotion(self, *args: object) -> bool:
             counts["edges"] += 1
-            qs = edge_configurations(to_array(args[0]), to_array(args[1]), options.resolution,
-                                     levers, options.max_step)
+            a, b = to_array(args[0]), to_array(args[1])
+            if segment_free is not None:
+                return segment_free(a, b, edge_steps(a, b, options.resolution, levers,
+                                                     options.max_step))
+            qs = edge_configurations(a, b, options.resolution, levers, options.max_step)
             # Coarse-to-fine in stages: a blocked edge is usually caught by the first batch.
             for lo, hi in stages(len(qs)):
                 if not np.all(states_valid(qs[lo:hi])):

@@ -19,9 +19,8 @@ from usar_arm.planning.ik import IKSolver
 from usar_arm.planning.ompl_adapter import (
     OmplOptions,
     OmplResult,
-    edge_configurations,
+    edge_steps,
     plan_path,
-    stages,
 )
 from usar_arm.spatial import Array
 
@@ -79,14 +78,16 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     def states_valid(qs: Array) -> Array:
         return ~world.in_collision_many(qs)
 
-    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options)
+    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options,
+                       segment_free=world.segment_free)
     blocked = _first_blocked(world, result.waypoints, options, levers)
     if blocked is None:
         return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin)
     log.info("the path clips an obstacle between the planner's checks on segment %d of %d; "
              "planning again with edges checked every %g m", blocked + 1,
              len(result.waypoints) - 1, options.max_step)
-    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options, levers)
+    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options, levers,
+                       segment_free=world.segment_free)
     blocked = _first_blocked(world, result.waypoints, options, levers)
     if blocked is not None:  # (cannot happen: the planner checked every edge that densely)
         raise NoPathError(options.planner, options.time_limit,
@@ -99,11 +100,10 @@ def _first_blocked(world: CollisionWorld, waypoints: Array, options: OmplOptions
     """Index of the first segment of ``waypoints`` in collision when checked every
     ``options.resolution`` of joint motion and ``options.max_step`` m of robot motion."""
     for k in range(len(waypoints) - 1):
-        qs = edge_configurations(waypoints[k], waypoints[k + 1], options.resolution, levers,
-                                 options.max_step)
-        for lo, hi in stages(len(qs)):  # coarse to fine: a blocked segment costs little
-            if np.any(world.in_collision_many(qs[lo:hi])):
-                return k
+        a, b = waypoints[k], waypoints[k + 1]
+        steps = edge_steps(a, b, options.resolution, levers, options.max_step)
+        if not world.segment_free(a, b, steps):
+            return k
     return None
 
 
