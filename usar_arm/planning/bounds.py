@@ -476,9 +476,9 @@ def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array
 
 
 def warm_up() -> None:
-    """Compile :func:`check` and :func:`walk` for the argument types the collision world passes
-    (numba caches
-    the machine code on disk, so later processes load it instead of compiling for ~20 s).
+    """Compile :func:`check` and :func:`walk` for the argument types the collision world
+    passes (numba caches the machine code on disk, so later processes load it instead of
+    compiling for ~20 s).
     Run once after installing (``make demo`` and ``make test`` do):
     ``python -c "from usar_arm.planning.bounds import warm_up; warm_up()"``."""
     eye = np.eye(4)
