@@ -7,11 +7,7 @@ by ``Arm.connect()`` without a host, through :mod:`usar_arm.embedded`.
 
 from __future__ import annotations
 
-from importlib.metadata import version
-
-__version__ = version("usar-arm")
-"""The installed distribution's version: the one version string (pyproject.toml)."""
-
-from usar_arm.arm import Arm  # noqa: E402  (after __version__, which the modules below read)
+from usar_arm.arm import Arm
+from usar_arm.version import __version__
 
 __all__ = ["Arm", "__version__"]

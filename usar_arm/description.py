@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from usar_arm import __version__
 from usar_arm.discover.build import build_chain
 from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
 from usar_arm.discover.limits import home_state, load_limits_file, resolve
@@ -33,6 +32,7 @@ from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
+from usar_arm.version import __version__
 
 log = logging.getLogger("usar_arm.description")
 

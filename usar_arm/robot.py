@@ -15,7 +15,6 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from usar_arm import __version__
 from usar_arm.description import DescribeOptions, Description, describe_arm, write_description
 from usar_arm.discover.session import DiscoveryRecord
 from usar_arm.errors import FileFormatError
@@ -26,6 +25,7 @@ from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import validate_allow
 from usar_arm.urdf.reader import apply_joint_limits, parse_srdf, parse_urdf
+from usar_arm.version import __version__
 
 log = logging.getLogger("usar_arm.robot")
 
