@@ -3,8 +3,9 @@
 * IK: forward kinematics (Pinocchio, the shared URDF) of the answer against the target pose, and
   the joint limits.
 * Collision: :class:`Judge`, a brute-force python-fcl check of every pair the SRDF and the scene
-  leave enabled. It shares nothing with ``usar_arm.planning.collision`` but the URDF's link
-  cylinders and the scene's shapes: its own FCL objects, no broadphase (an exact bounding-sphere
+  leave enabled. It shares nothing with ``usar_arm.planning.collision`` (nor its compiled
+  broadphase) but the URDF's link cylinders and the scene's shapes: its own FCL primitives
+  built here, its own FCL objects, no broadphase (an exact bounding-sphere
   test only skips pairs that cannot touch), FCL's default request.
 * Paths: start and goal, limits, and every configuration along every segment at most
   :data:`PATH_STEP` apart (joint units) checked by the judge.
@@ -23,8 +24,7 @@ import fcl
 import numpy as np
 from scipy.spatial import cKDTree
 
-from usar_arm.planning.collision import shape_geometry
-from usar_arm.planning.scene import Box, Scene
+from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
 from usar_arm.robot import Robot
 from usar_arm.spatial import Array, matrix_from_quat, rotation_distance
 
@@ -46,6 +46,23 @@ def _tf(t: Array) -> fcl.Transform:
     return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
 
 
+def _geometry(shape: object) -> fcl.CollisionGeometry:
+    """The judge's own python-fcl primitive of a scene shape, in the shape's frame (m)."""
+    if isinstance(shape, Box):
+        return fcl.Box(*(float(x) for x in shape.size))
+    if isinstance(shape, CylinderShape):
+        return fcl.Cylinder(float(shape.radius), float(shape.length))
+    if isinstance(shape, Sphere):
+        return fcl.Sphere(float(shape.radius))
+    if isinstance(shape, Mesh):
+        mesh = fcl.BVHModel()
+        mesh.beginModel(len(shape.vertices), len(shape.faces))
+        mesh.addSubModel(np.asarray(shape.vertices, float), np.asarray(shape.faces, np.int32))
+        mesh.endModel()
+        return mesh
+    raise TypeError(f"the judge has no geometry for {shape!r}")
+
+
 class Judge:
     """Brute-force collision check of one robot in one scene (python-fcl).
 
@@ -64,7 +81,7 @@ class Judge:
         self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),  # type: ignore
                                                   fcl.Transform()) for c in cyl]
         self.link_radius = np.array([math.hypot(c.radius, c.length / 2) for c in cyl])  # type: ignore
-        self.objects = [fcl.CollisionObject(shape_geometry(o.shape), _tf(o.pose))
+        self.objects = [fcl.CollisionObject(_geometry(o.shape), _tf(o.pose))
                         for o in scene.objects]
         self.object_centre = np.array([o.pose[:3, 3] for o in scene.objects]).reshape(-1, 3)
         self.object_radius = np.array([o.bounding_radius() for o in scene.objects])
