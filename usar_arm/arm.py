@@ -47,7 +47,9 @@ log = logging.getLogger("usar_arm.arm")
 class TruthReading(Protocol):
     """The simulator's own state of a robot (``usar_arm.sim.truth.Truth``)."""
 
-    tool0: dict[str, Array]
+    @property
+    def tool0(self) -> dict[str, Array]:
+        """Per actuator, tool0's 4x4 pose in base_link (m)."""
 
 
 class EmbeddedServer(Protocol):

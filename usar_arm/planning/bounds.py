@@ -26,11 +26,17 @@ representation as :mod:`.poe`; Pinocchio stays the reference it is tested agains
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from usar_arm.planning.jit import kernel
 from usar_arm.spatial import Array
+
+IndexArray = np.ndarray[Any, np.dtype[np.int64]]
+"""Integer arrays (pair indices, kinds)."""
+VerdictArray = np.ndarray[Any, np.dtype[np.int8]]
+"""Per-pair verdicts (CLEAR, CONTACT, UNDECIDED)."""
 
 EPS = 1e-9
 """Safety margin (m): a pair is cleared only when separated by more than this."""
@@ -231,7 +237,7 @@ centre that contains the obstacle, and the centre (3)."""
 
 
 @kernel
-def prepare_links(radius: Array, half: Array, moved_by: Array) -> Array:
+def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
     """The per-link array (L, LINK_WIDTH) of cylinders of ``radius``/``half`` (m)."""
     out = np.empty((radius.shape[0], LINK_WIDTH))
     for k in range(radius.shape[0]):
@@ -244,7 +250,7 @@ def prepare_links(radius: Array, half: Array, moved_by: Array) -> Array:
 
 
 @kernel
-def prepare_obstacles(kind: Array, pose: Array, size: Array) -> tuple[Array, Array]:
+def prepare_obstacles(kind: IndexArray, pose: Array, size: Array) -> tuple[Array, Array]:
     """The per-obstacle array (S, OBSTACLE_WIDTH) and the obstacles' axes as rows (S, 3, 3)
     of obstacles of ``kind`` at ``pose`` (S, 3, 4) with ``size`` (S, 3) (see :func:`classify`).
     """
@@ -294,8 +300,9 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 
 
 @kernel
-def _judge(seg: Array, links: Array, pairs: Array, n_rr: int, kind: Array, obstacles: Array,
-           axes: Array, eps: float, margin: float, out: Array, cand: Array, scratch: Array
+def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
+           obstacles: Array, axes: Array, eps: float, margin: float, out: VerdictArray,
+           cand: Array, scratch: Array
            ) -> tuple[float, float]:
     """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and lower bounds
     (m) of the clearance of the cleared link-link and link-obstacle pairs (0 when a pair is not
@@ -345,8 +352,8 @@ def _judge(seg: Array, links: Array, pairs: Array, n_rr: int, kind: Array, obsta
 
 
 @kernel
-def _verdicts(world: Array, links: Array, pairs: Array, n_rr: int, kind: Array,
-              obstacles: Array, axes: Array, eps: float, margin: float) -> Array:
+def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
+              obstacles: Array, axes: Array, eps: float, margin: float) -> VerdictArray:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
     link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links` and
     :func:`prepare_obstacles`."""
@@ -363,8 +370,9 @@ def _verdicts(world: Array, links: Array, pairs: Array, n_rr: int, kind: Array,
 
 
 @kernel
-def classify(world: Array, radius: Array, half: Array, rr: Array, rs: Array,
-             kind: Array, pose: Array, size: Array, eps: float, margin: float) -> Array:
+def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: IndexArray,
+             kind: IndexArray, pose: Array, size: Array, eps: float, margin: float
+             ) -> VerdictArray:
     """Verdicts (N, P + Q) int8 (CLEAR, CONTACT, UNDECIDED) on every checked pair.
 
     ``world`` (N, L, 3, 4): link cylinder poses (axis = local z); ``radius``/``half`` (L,);
@@ -384,9 +392,9 @@ def classify(world: Array, radius: Array, half: Array, rr: Array, rs: Array,
 
 
 @kernel
-def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: Array, n_rr: int,
-          kind: Array, obstacles: Array, axes: Array, eps: float, margin: float
-          ) -> tuple[Array, Array]:
+def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
+          kind: IndexArray, obstacles: Array, axes: Array, eps: float, margin: float
+          ) -> tuple[Array, VerdictArray]:
     """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
     (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
     world = link_poses(qs, joints, zero, links)
@@ -395,8 +403,9 @@ def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: Array, n_r
 
 @kernel
 def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
-         links: Array, pairs: Array, n_rr: int, kind: Array, obstacles: Array, axes: Array,
-         eps: float, margin: float) -> tuple[int, int, Array, Array, Array]:
+         links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
+         axes: Array, eps: float, margin: float
+         ) -> tuple[int, int, IndexArray, Array, VerdictArray]:
     """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
     configurations, skipping those that the clearance already proves free.
 
@@ -454,12 +463,12 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     return -1, evaluated, where[:count], poses[:count], verdicts[:count]
 
 
-Packed = tuple[Array, Array, Array, Array, int, Array, Array, Array]
+Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array]
 
 
-def pack(axes: Array, points: Array, revolute: Array, zero: Array, radius: Array,
-         half: Array, moved_by: Array, rr: Array, rs: Array, kind: Array, pose: Array,
-         size: Array) -> Packed:
+def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: Array,
+         half: Array, moved_by: IndexArray, rr: IndexArray, rs: IndexArray, kind: IndexArray,
+         pose: Array, size: Array) -> Packed:
     """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once."""
     joints = np.ascontiguousarray(np.hstack([
         axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))

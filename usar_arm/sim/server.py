@@ -289,8 +289,8 @@ class SimServer:
 
     def _frame_locked(self) -> None:
         world = self.world
-        spawning = [c.session for c in self._clients.values()
-                    if c.session is not None and c.session.pending is not None]
+        sessions = [c.session for c in self._clients.values() if c.session is not None]
+        spawning = [s for s in sessions if s.pending is not None]
         if spawning or self._leaving:
             try:
                 with world.batch():  # one model rebuild for all of them
@@ -312,9 +312,10 @@ class SimServer:
         while due and due[0][0] <= world.time + 1e-9:
             _, key = heapq.heappop(due)
             conn = self._clients.get(key)
-            session = conn.session if conn is not None else None
-            if session is None or session.robot is None:
+            client = conn.session if conn is not None else None
+            if client is None or client.robot is None:
                 continue  # gone
+            session = client
             try:
                 msgs = session.status(world)
                 conn.send_all(msgs)  # type: ignore[union-attr]

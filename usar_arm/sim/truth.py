@@ -56,24 +56,27 @@ def _smallest_rotation_from_x(direction: Array) -> Array:
 def tool0_in_tip(act: ActuatorSpec) -> Array:
     """tool0's pose (4x4) in the Tip frame of ``act`` (both with REP-103 axes), from the spec:
     constant, because both are carried rigidly by the last part."""
-    zero = np.zeros(len(act.joints))
-    tip = _FLIP @ tip_pose(act, zero) @ _FLIP
+    zero = [0.0] * len(act.joints)
+    tip: Array = _FLIP @ tip_pose(act, zero) @ _FLIP
     joints = [(_FLIP @ f)[:3, 3] for f in joint_frames(act, zero)]
     outward = tip[:3, 3] - joints[-1]
     if np.linalg.norm(outward) < 1e-6:  # a Tip on the last joint: along the last link
         outward = joints[-1] - joints[-2] if len(joints) > 1 else np.array([1.0, 0.0, 0.0])
     turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # +90 deg about y
-    tool0 = transform(_smallest_rotation_from_x(outward) @ turn, tip[:3, 3])
-    return invert(tip) @ tool0
+    tool0 = transform(_smallest_rotation_from_x(outward) @ turn, tip[:3, 3].tolist())
+    out: Array = invert(tip) @ tool0
+    return out
 
 
 def tool0_in_base(act: ActuatorSpec, platform_world: Array, tip_world: Array) -> Array:
     """tool0 (4x4, base_link) from the platform's and the Tip's world poses (USARSim frame)."""
-    base = platform_world @ act.mount()
-    return _FLIP @ invert(base) @ tip_world @ _FLIP @ tool0_in_tip(act)
+    base: Array = platform_world @ act.mount()
+    out: Array = _FLIP @ invert(base) @ tip_world @ _FLIP @ tool0_in_tip(act)
+    return out
 
 
 def tool0_by_spec(act: ActuatorSpec, q: Array) -> Array:
     """tool0 (4x4, base_link) at joint values ``q`` by the spec's geometry alone."""
-    return _FLIP @ tip_pose(act, q) @ _FLIP @ tool0_in_tip(act)
+    out: Array = _FLIP @ tip_pose(act, [float(x) for x in q]) @ _FLIP @ tool0_in_tip(act)
+    return out
 
