@@ -32,6 +32,7 @@ from usar_arm.discover.session import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
+from usar_arm.planning.bounds import warm_up
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
@@ -102,6 +103,10 @@ class Arm:
             # Imported here, not at the top: offline arms (from_files) never load the simulator.
             from usar_arm.embedded import known_classes, start_simulator
 
+            # Load the compiled collision kernels first: linking them from numba's cache makes
+            # thousands of short calls that, beside the simulator's busy thread, each wait for
+            # the GIL (measured: a 2.6 s first plan instead of 0.1 s).
+            warm_up()
             simulator = start_simulator(wire_precision, sim_speed)
             server, known = simulator, known_classes()
             assert simulator.port is not None
