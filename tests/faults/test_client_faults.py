@@ -42,7 +42,7 @@ from usar_arm.errors import (
     EXIT_OK,
     EXIT_UNAVAILABLE,
 )
-from usar_arm.sim.server import SimOptions, SimServer
+from usar_arm.sim.server import SimOptions, SimServer, Truth
 
 REPO = Path(__file__).resolve().parents[2]
 URDF = str(REPO / "robots" / "generated" / "KR60.urdf")
@@ -234,14 +234,20 @@ class JointRecorder:
         self._thread = threading.Thread(target=self._loop, daemon=True)
         self._thread.start()
 
+    def _truth(self) -> Truth | None:
+        """The simulator's state of the robot of the proxied connection, if it has one."""
+        for port in {lk.upstream_port for lk in self.proxy.links} - {None}:
+            truth = self.sim.truth(port)
+            if truth is not None:
+                return truth
+        return None
+
     def _loop(self) -> None:
         while not self._stop.wait(0.02):
-            for port in {lk.upstream_port for lk in self.proxy.links} - {None}:
-                truth = self.sim.truth(port)
-                if truth is not None:
-                    self.samples.append((time.monotonic(), truth.sim_time,
-                                         np.array(truth.joints["KR60Arm"])))
-                    break
+            truth = self._truth()
+            if truth is not None:
+                self.samples.append((time.monotonic(), truth.sim_time,
+                                     np.array(truth.joints["KR60Arm"])))
 
     def at(self, when: float) -> tuple[float, np.ndarray]:
         """The simulated time and the joints of the last sample before wall time ``when``."""
@@ -261,7 +267,7 @@ class JointRecorder:
         raise AssertionError(f"the simulation did not reach t = {sim_time:.2f} s")
 
     def robot_exists(self) -> bool:
-        return self._session_key() is not None
+        return self._truth() is not None
 
     def stop(self) -> None:
         self._stop.set()
