@@ -1,8 +1,8 @@
 """Joint-space path planning with OMPL (the ``ompl`` 2.x wheels, nanobind bindings).
 
-States are checked one by one; edges by a Python motion validator that checks every
-configuration along the edge at a stated resolution in one batched call (coarse points first,
-so a blocked edge usually costs one small batch). OMPL's RNG is process-global and can only be
+States are checked one by one; edges by a Python motion validator that answers, in one call
+per edge, whether every configuration along it at a stated resolution is free (the collision
+world walks the edge and skips the configurations its clearance proves free). OMPL's RNG is process-global and can only be
 seeded before the first sample (an OMPL 2.x limitation): the first plan of a process seeds it,
 so a process's sequence of plans is reproducible.
 
@@ -11,7 +11,6 @@ This is the only module that imports ``ompl``.
 
 from __future__ import annotations
 
-import itertools
 import logging
 import math
 import time
@@ -122,24 +121,17 @@ def edge_configurations(a: Array, b: Array, resolution: float, levers: Array | N
     return a + (b - a) * fractions[order][:, None]
 
 
-def stages(count: int) -> list[tuple[int, int]]:
-    """Index ranges of growing batches (8, 32, the rest) over coarse-to-fine configurations."""
-    bounds = [0, min(8, count), min(40, count), count]
-    return [(a, b) for a, b in itertools.pairwise(bounds) if b > a]
-
-
 def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
-              state_valid: Callable[[Array], bool], states_valid: Callable[[Array], Array],
-              options: OmplOptions, levers: Array | None = None,
-              segment_free: Callable[[Array, Array, int], bool] | None = None) -> OmplResult:
+              state_valid: Callable[[Array], bool],
+              segment_free: Callable[[Array, Array, int], bool], options: OmplOptions,
+              levers: Array | None = None) -> OmplResult:
     """A collision-free joint path from ``start`` to ``goal``.
 
     Args:
         state_valid: True when one configuration is allowed.
-        states_valid: for (m, n) configurations, True where each is allowed (batched).
         segment_free: given a, b and a number of steps, True when every configuration of the
-            evenly stepped segment is allowed (the edge check; without it, ``states_valid`` on
-            the segment's configurations, coarse to fine).
+            evenly stepped segment is allowed (the edge check, one call per edge; see
+            ``CollisionWorld.segment_free``).
         levers: per joint, how far (m) a point of the robot moves per unit of the joint; with
             them, edges are checked every ``options.max_step`` m of motion as well.
 
@@ -176,15 +168,8 @@ def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
         def checkMotion(self, *args: object) -> bool:
             counts["edges"] += 1
             a, b = to_array(args[0]), to_array(args[1])
-            if segment_free is not None:
-                return segment_free(a, b, edge_steps(a, b, options.resolution, levers,
-                                                     options.max_step))
-            qs = edge_configurations(a, b, options.resolution, levers, options.max_step)
-            # Coarse-to-fine in stages: a blocked edge is usually caught by the first batch.
-            for lo, hi in stages(len(qs)):
-                if not np.all(states_valid(qs[lo:hi])):
-                    return False
-            return True
+            return segment_free(a, b, edge_steps(a, b, options.resolution, levers,
+                                                 options.max_step))
 
     validator = EdgeValidator(si)
     si.setMotionValidator(validator)

@@ -75,19 +75,15 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     def state_valid(q: Array) -> bool:
         return not world.in_collision(q)
 
-    def states_valid(qs: Array) -> Array:
-        return ~world.in_collision_many(qs)
-
-    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options,
-                       segment_free=world.segment_free)
+    result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options)
     blocked = _first_blocked(world, result.waypoints, options, levers)
     if blocked is None:
         return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin)
     log.info("the path clips an obstacle between the planner's checks on segment %d of %d; "
              "planning again with edges checked every %g m", blocked + 1,
              len(result.waypoints) - 1, options.max_step)
-    result = plan_path(lower, upper, start, goal, state_valid, states_valid, options, levers,
-                       segment_free=world.segment_free)
+    result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options,
+                       levers)
     blocked = _first_blocked(world, result.waypoints, options, levers)
     if blocked is not None:  # (cannot happen: the planner checked every edge that densely)
         raise NoPathError(options.planner, options.time_limit,
