@@ -2,9 +2,9 @@
 
 States are checked one by one; edges by a Python motion validator that answers, in one call
 per edge, whether every configuration along it at a stated resolution is free (the collision
-world walks the edge and skips the configurations its clearance proves free). OMPL's RNG is process-global and can only be
-seeded before the first sample (an OMPL 2.x limitation): the first plan of a process seeds it,
-so a process's sequence of plans is reproducible.
+world walks the edge and skips the configurations its clearance proves free). OMPL's RNG is
+process-global and can only be seeded before the first sample (an OMPL 2.x limitation): the
+first plan of a process seeds it, so a process's sequence of plans is reproducible.
 
 This is the only module that imports ``ompl``.
 """
