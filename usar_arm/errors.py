@@ -8,7 +8,7 @@ code the CLI uses for it, so that a script can tell failures apart without parsi
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 # Exit codes of the `usar-arm` command (documented in `usar-arm --help`).
 EXIT_OK = 0
@@ -302,7 +302,7 @@ class NoPathError(PlanningError):
 class LinBlockedError(PlanningError):
     """A straight-line (LIN) motion cannot be followed."""
 
-    def __init__(self, fraction: float, point_m: Sequence[float], reason: str):
+    def __init__(self, fraction: float, point_m: Iterable[float], reason: str):
         self.fraction = fraction
         self.point_m = tuple(float(x) for x in point_m)
         self.reason = reason

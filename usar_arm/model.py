@@ -8,13 +8,13 @@ link's frame; at q = 0 the child link's frame equals the joint frame.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
 
-from usar_arm.spatial import Array, exp_so3, transform, transform_from_xyz_rpy
+from usar_arm.spatial import Array, Vector, exp_so3, transform, transform_from_xyz_rpy
 
 Vec3 = tuple[float, float, float]
 
@@ -226,7 +226,7 @@ class KinematicChain:
         return path[::-1]
 
     # ------------------------------------------------------------------ kinematics
-    def link_poses(self, q: Sequence[float]) -> dict[str, Array]:
+    def link_poses(self, q: Vector) -> dict[str, Array]:
         """World (root-frame) 4x4 pose of every link at configuration ``q``.
 
         A straightforward reference implementation for checks and tests; the planner uses
@@ -240,7 +240,7 @@ class KinematicChain:
             poses[jt.child] = frame @ jt.motion(values.get(jt.name, 0.0))
         return poses
 
-    def joint_frames(self, q: Sequence[float]) -> Iterator[tuple[Joint, Array]]:
+    def joint_frames(self, q: Vector) -> Iterator[tuple[Joint, Array]]:
         """Each joint with its world frame (before its own motion) at configuration ``q``."""
         values = dict(zip(self.joint_names, (float(v) for v in q), strict=True))
         poses: dict[str, Array] = {self.root: np.eye(4)}
@@ -249,7 +249,7 @@ class KinematicChain:
             poses[jt.child] = frame @ jt.motion(values.get(jt.name, 0.0))
             yield jt, frame
 
-    def frame_pose(self, role_or_link: str, q: Sequence[float]) -> Array:
+    def frame_pose(self, role_or_link: str, q: Vector) -> Array:
         """World pose of a REP-199 frame role (``tool0``) or a link name at ``q``."""
         name = self.frames.get(role_or_link, role_or_link)
         return self.link_poses(q)[name]

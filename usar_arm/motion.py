@@ -167,6 +167,7 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
             plan = plan_to_pose(world, ik, start, pose, options.ompl)
             details["ik_solutions_tried"] = plan.goals_tried
         else:
+            assert goal is not None  # exactly one of goal and pose, checked above
             plan = plan_to_joints(world, names, chain.lower(), chain.upper(), start, goal,
                                   options.ompl)
         if plan.ompl is not None:
@@ -184,7 +185,11 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
     else:
         check_state(world, names, chain.lower(), chain.upper(), start, "start")
         start_pose = robot.kinematics.frame_pose(start, "tool0")
-        target = pose if pose is not None else robot.kinematics.frame_pose(goal, "tool0")
+        if pose is not None:
+            target = pose
+        else:
+            assert goal is not None  # exactly one of goal and pose, checked above
+            target = robot.kinematics.frame_pose(goal, "tool0")
         path = plan_lin(ik, world, start, start_pose, target, options.lin)
         planning = time.perf_counter() - begin
         waypoints, goal_q = path.q, path.q[-1]

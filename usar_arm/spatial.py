@@ -13,6 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
+# A vector argument: a sequence of floats or any float numpy array (metres or radians).
+Vector = Sequence[float] | NDArray[np.floating]
 
 
 def rot_x(angle: float) -> Array:
@@ -33,7 +35,7 @@ def rot_z(angle: float) -> Array:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def rpy_to_matrix(rpy: Sequence[float]) -> Array:
+def rpy_to_matrix(rpy: Vector) -> Array:
     """Rotation matrix of fixed-axis roll, pitch, yaw (rad): Rz(yaw) Ry(pitch) Rx(roll)."""
     r, p, y = (float(v) for v in rpy)
     return rot_z(y) @ rot_y(p) @ rot_x(r)
@@ -57,7 +59,7 @@ def matrix_to_rpy(rot: Array) -> tuple[float, float, float]:
     return roll, pitch, yaw
 
 
-def transform(rot: Array | None = None, pos: Sequence[float] | None = None) -> Array:
+def transform(rot: Array | None = None, pos: Vector | None = None) -> Array:
     """A 4x4 homogeneous transform from a rotation matrix and a position (m)."""
     t = np.eye(4)
     if rot is not None:
@@ -67,7 +69,7 @@ def transform(rot: Array | None = None, pos: Sequence[float] | None = None) -> A
     return t
 
 
-def transform_from_xyz_rpy(xyz: Sequence[float], rpy: Sequence[float]) -> Array:
+def transform_from_xyz_rpy(xyz: Vector, rpy: Vector) -> Array:
     """A 4x4 transform from a position (m) and fixed-axis roll, pitch, yaw (rad)."""
     return transform(rpy_to_matrix(rpy), xyz)
 
@@ -92,7 +94,7 @@ def rotation_distance(a: Array, b: Array) -> float:
     return rotation_angle(a.T @ b)
 
 
-def angle_between(u: Sequence[float], v: Sequence[float]) -> float:
+def angle_between(u: Vector, v: Vector) -> float:
     """Angle (rad) between two non-zero vectors."""
     a = np.asarray(u, dtype=float)
     b = np.asarray(v, dtype=float)
@@ -121,7 +123,7 @@ def log_so3(rot: Array) -> Array:
     return w * (angle / (2.0 * np.sin(angle)))
 
 
-def exp_so3(w: Sequence[float]) -> Array:
+def exp_so3(w: Vector) -> Array:
     """Rotation matrix of a rotation vector (axis * angle, rad)."""
     v = np.asarray(w, dtype=float)
     angle = float(np.linalg.norm(v))
@@ -156,7 +158,7 @@ def quat_from_matrix(rot: Array) -> Array:
     return q if q[0] >= 0 else -q
 
 
-def matrix_from_quat(q: Sequence[float]) -> Array:
+def matrix_from_quat(q: Vector) -> Array:
     """Rotation matrix of a quaternion (w, x, y, z); normalised first."""
     w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
     return np.array([
@@ -171,7 +173,7 @@ def matrix_from_quat(q: Sequence[float]) -> Array:
 FLIP_X = np.diag([1.0, -1.0, -1.0])
 
 
-def zdown_to_zup_point(p: Sequence[float]) -> Array:
+def zdown_to_zup_point(p: Vector) -> Array:
     """A position (m) in the USARSim z-down frame expressed in the REP-103 z-up frame."""
     return FLIP_X @ np.asarray(p, dtype=float)
 

@@ -47,7 +47,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 
 def _joint_rows(desc: Description) -> list[dict[str, object]]:
-    rows = []
+    rows: list[dict[str, object]] = []
     for jt, src in zip(desc.chain.actuated_joints, desc.limit_sources, strict=True):
         lim = jt.limits
         assert lim is not None

@@ -20,6 +20,7 @@ point that breaks them least (the Chebyshev centre with a negative radius), and
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -115,7 +116,7 @@ def _constraints(readings: list[Reading], w: Array) -> tuple[Array, Array]:
             lo, hi = interval(r.orientation[j], r.step_rad)
             centre = (lo + hi) / 2
             half = (hi - lo) / 2 + float(np.linalg.norm(jac[j])) * r.model_tol_rad
-            g = float(wrap(rpy[j] - centre))
+            g = float(wrap(np.array(rpy[j] - centre)))
             rows += [jac[j], -jac[j]]
             bounds += [half - g, half + g]
     return np.array(rows), np.array(bounds)
@@ -144,7 +145,7 @@ def _analytic_centre(a: Array, b: Array, x: Array, iterations: int = 100) -> Arr
         grad = a.T @ (1 / s)
         hess = (a / s[:, None] ** 2).T @ a
         dx = -np.linalg.lstsq(hess, grad, rcond=None)[0]
-        decrement = float(np.sqrt(max(-grad @ dx, 0.0)))
+        decrement = math.sqrt(max(float(-grad @ dx), 0.0))
         if decrement < 1e-9:
             break
         x = x + dx / (1 + decrement)

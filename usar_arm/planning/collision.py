@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import fcl
 import numpy as np
+from numpy.typing import NDArray
 
 from usar_arm.model import Cylinder, KinematicChain
 from usar_arm.planning import bounds
@@ -88,8 +89,8 @@ class CollisionWorld:
         links = [lk for lk in chain.links if lk.geometry is not None]
         self._links = [lk.name for lk in links]
         self._frame_ids = [kinematics.frame_id(n) for n in self._links]
-        self._local = np.array([lk.geometry.origin.matrix() for lk in links]).reshape(-1, 4, 4)
-        cyls: list[Cylinder] = [lk.geometry for lk in links]  # type: ignore[misc]
+        cyls: list[Cylinder] = [lk.geometry for lk in links if lk.geometry is not None]
+        self._local = np.array([c.origin.matrix() for c in cyls]).reshape(-1, 4, 4)
         self._radius = np.array([c.radius + self.padding for c in cyls])
         self._half = np.array([c.length / 2 + self.padding for c in cyls])
         self._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
@@ -141,7 +142,7 @@ class CollisionWorld:
         self._opose = np.array(poses, dtype=float).reshape(-1, 3, 4)
         self._osize = np.array(sizes, dtype=float).reshape(-1, 3)
 
-    def bounded_poses(self, qs: Array) -> tuple[Array, Array]:
+    def bounded_poses(self, qs: Array) -> tuple[Array, NDArray[np.int8]]:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
         (N, P + Q) verdicts of the compiled tests on the robot-robot then robot-scene pairs
         (order of ``_rr``/``_rs``): :data:`~.bounds.CLEAR`, :data:`~.bounds.CONTACT` or
@@ -347,14 +348,15 @@ class CollisionWorld:
         box = self._robot_boxes()
         jobs: list[tuple[float, int, int, bool]] = []
         for i, j in self._rr:
-            gap = np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - box[j, 1],
-                                                          box[j, 0] - box[i, 1])))
-            jobs.append((float(gap), int(i), int(j), False))
+            gap = float(np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - box[j, 1],
+                                                                box[j, 0] - box[i, 1]))))
+            jobs.append((gap, int(i), int(j), False))
         for i, k in self._rs:
             s = self._static_box[k]
-            gap = np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - s[1], s[0] - box[i, 1])))
-            jobs.append((float(gap), int(i), int(k), True))
-        best = np.inf
+            gap = float(np.linalg.norm(np.maximum(0, np.maximum(box[i, 0] - s[1],
+                                                                s[0] - box[i, 1]))))
+            jobs.append((gap, int(i), int(k), True))
+        best = float("inf")
         request = fcl.DistanceRequest()
         for gap, i, j, static in sorted(jobs):
             if gap > best:

@@ -125,13 +125,13 @@ def _shape(ctx: _Ctx, obj: dict[str, Any], kind: str, field: str, base: Path) ->
     try:
         import trimesh
 
-        mesh = trimesh.load(str(full), force="mesh")
+        mesh: Any = trimesh.load(str(full), force="mesh")
     except Exception as exc:  # trimesh raises many types for bad files
         raise ctx.fail(f"cannot load mesh {full}: {exc}", spec, "file", f"{where}.file") from None
     if len(mesh.faces) == 0:
         raise ctx.fail(f"mesh {full} has no triangles", spec, "file", f"{where}.file")
-    return Mesh(np.asarray(mesh.vertices, float) * scale, np.asarray(mesh.faces, np.int64),
-                str(file))
+    vertices = np.asarray(mesh.vertices, dtype=np.float64) * scale
+    return Mesh(vertices, np.asarray(mesh.faces, np.int64), str(file))
 
 
 def parse_scene(data: Any, path: str, base: Path) -> Scene:

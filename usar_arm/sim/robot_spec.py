@@ -11,7 +11,6 @@ The models are data: one YAML file per robot in ``usar_arm/sim/robots/``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -21,7 +20,7 @@ import numpy as np
 import yaml
 
 from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array, exp_so3, invert, rpy_to_matrix, transform
+from usar_arm.spatial import Array, Vector, exp_so3, invert, rpy_to_matrix, transform
 
 Vec3 = tuple[float, float, float]
 
@@ -132,7 +131,7 @@ class RobotSpec:
 # ------------------------------------------------------------------------------- ground truth
 
 
-def part_poses(act: ActuatorSpec, q: Sequence[float]) -> dict[str, Array]:
+def part_poses(act: ActuatorSpec, q: Vector) -> dict[str, Array]:
     """Pose (4x4, actuator frame) of every part's frame at joint values ``q``.
 
     A part's frame is the frame of the joint whose child it is; the body part's frame is the
@@ -153,7 +152,7 @@ def part_poses(act: ActuatorSpec, q: Sequence[float]) -> dict[str, Array]:
     return poses
 
 
-def joint_frames(act: ActuatorSpec, q: Sequence[float]) -> list[Array]:
+def joint_frames(act: ActuatorSpec, q: Vector) -> list[Array]:
     """World-free joint frames (4x4, actuator frame, before each joint's own motion) at ``q``."""
     poses = part_poses(act, q)
     out = []
@@ -165,7 +164,7 @@ def joint_frames(act: ActuatorSpec, q: Sequence[float]) -> list[Array]:
     return out
 
 
-def tip_pose(act: ActuatorSpec, q: Sequence[float]) -> Array:
+def tip_pose(act: ActuatorSpec, q: Vector) -> Array:
     """Pose (actuator frame) of the tip frame: at ``offset_n + tip_offset`` at the zero pose,
     aligned with the actuator frame there, and carried rigidly by the last part."""
     poses = part_poses(act, q)

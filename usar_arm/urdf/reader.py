@@ -88,7 +88,8 @@ def parse_urdf(text: str, path: str = "<urdf>") -> tuple[KinematicChain, list[st
         if jtype is None:
             raise FileFormatError(path, f"joint {name}: type '{kind}' is not supported "
                                   "(revolute, continuous, prismatic, fixed)")
-        axis = _floats((el.find("axis").get("xyz") if el.find("axis") is not None else None),
+        axis_el = el.find("axis")
+        axis = _floats((axis_el.get("xyz") if axis_el is not None else None),
                        3, f"joint {name} axis", path, "1 0 0")
         norm = float(np.linalg.norm(axis))
         limits = None

@@ -68,13 +68,13 @@ def semantic_problems(chain: KinematicChain) -> list[str]:
                             f"(|a| = {norm:.6f})")
     first = chain.actuated_joints[0].parent if chain.actuated_joints else None
     for role in REQUIRED_FRAMES:
-        name = chain.frames.get(role)
-        if name is None or name not in known:
+        frame = chain.frames.get(role)
+        if frame is None or frame not in known:
             problems.append(f"REP-199 frame '{role}' is missing")
-        elif role == "base" and name == first:
+        elif role == "base" and frame == first:
             continue  # the 2012 tree: the actuator base is a body carrying joint 1
-        elif role != "base_link" and chain.link(name).geometry is not None:
-            problems.append(f"REP-199 frame '{role}' ({name}) must not carry geometry")
+        elif role != "base_link" and chain.link(frame).geometry is not None:
+            problems.append(f"REP-199 frame '{role}' ({frame}) must not carry geometry")
     for lk in chain.links:
         if lk.geometry is not None:
             if lk.material is None or lk.color is None:

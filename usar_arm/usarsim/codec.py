@@ -99,7 +99,7 @@ class _Reader:
             raise ProtocolError(self.line, len(self.line), f"{self.head} needs {{{key} {example}}}")
         return b
 
-    def float(self, b: RawBlock) -> float:
+    def number(self, b: RawBlock) -> float:
         try:
             value = float(b.value)
         except ValueError:
@@ -132,7 +132,7 @@ class _Reader:
 
     def opt_float(self, key: str) -> float | None:
         b = self.find(key)
-        return None if b is None else self.float(b)
+        return None if b is None else self.number(b)
 
     def opt_str(self, key: str) -> str | None:
         b = self.find(key)
@@ -212,7 +212,7 @@ def _pairs(r: _Reader, case_sensitive: bool) -> tuple[list[tuple[int, float]], l
     while i < len(blocks):
         b = blocks[i]
         if is_key(b, "Link") and i + 1 < len(blocks) and is_key(blocks[i + 1], "Value"):
-            pairs.append((r.int(b), r.float(blocks[i + 1])))
+            pairs.append((r.int(b), r.number(blocks[i + 1])))
             i += 2
         else:
             rest.append(b)
@@ -277,10 +277,10 @@ def _parse_conf(r: _Reader) -> m.Conf | m.PlatformConf:
             jt = link.get("jointtype")
             links.append(m.LinkConf(
                 link=r.int(lb), joint_type=jt.value if jt else "Unknown",
-                max_torque=r.float(link["maxtorque"]) if "maxtorque" in link else None,
-                min_value=r.float(link["minvalue"]) if "minvalue" in link else None,
-                max_value=r.float(link["maxvalue"]) if "maxvalue" in link else None,
-                max_speed=r.float(link["maxspeed"]) if "maxspeed" in link else None,
+                max_torque=r.number(link["maxtorque"]) if "maxtorque" in link else None,
+                min_value=r.number(link["minvalue"]) if "minvalue" in link else None,
+                max_value=r.number(link["maxvalue"]) if "maxvalue" in link else None,
+                max_speed=r.number(link["maxspeed"]) if "maxspeed" in link else None,
                 extra=tuple(link_extra)))
         link, link_extra = None, []
 
@@ -384,7 +384,7 @@ def _parse_asta(r: _Reader) -> m.Asta:
     name = _take_first(rest, "Name")
     if time is None or name is None:
         raise ProtocolError(r.line, len(r.line), "ASTA needs {Time t} and {Name arm}")
-    return m.Asta(r.float(time), name.value, tuple(pairs), tuple((b.key, b.value) for b in rest))
+    return m.Asta(r.number(time), name.value, tuple(pairs), tuple((b.key, b.value) for b in rest))
 
 
 def _battery(r: _Reader, b: RawBlock) -> int:
@@ -392,13 +392,13 @@ def _battery(r: _Reader, b: RawBlock) -> int:
     try:
         return int(b.value)
     except ValueError:
-        return int(r.float(b))
+        return int(r.number(b))
 
 
 def _parse_sta(r: _Reader) -> m.Sta:
     battery = r.find("Battery")
     return m.Sta(
-        time=r.float(r.require("Time", "12.5")),
+        time=r.number(r.require("Time", "12.5")),
         battery=None if battery is None else _battery(r, battery),
         type=r.opt_str("Type"),
         extra=r.extra("Time", "Battery", "Type"),
