@@ -40,7 +40,6 @@ from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot, robot_from_files, robot_from_record
 from usar_arm.spatial import Array
 from usar_arm.usarsim.client import UsarClient
-from usar_arm.usarsim.numbers import printed_resolution
 
 log = logging.getLogger("usar_arm.arm")
 
@@ -303,8 +302,8 @@ class Arm:
 
     def _joint_step(self) -> float:
         """The resolution the server prints joint values with (0 = full precision)."""
-        line = self._live().latest_line("ASTA", str(self.robot.actuator)) or ""
-        return printed_resolution(line, "Value")
+        rec = self._live().latest("ASTA", str(self.robot.actuator))
+        return rec.step("Value") if rec is not None else 0.0
 
     def _sensor_world(self, sensor: TipSensor, q: Array) -> Array:
         """The tip sensor frame's world pose (z-down) by the model at ``q``."""

@@ -50,6 +50,26 @@ def test_lines_are_framed_across_partial_reads_and_mixed_terminators() -> None:
     assert kinds.count("Asta") >= 1 and "Sen" in kinds
 
 
+def test_each_received_line_carries_the_precision_it_was_printed_with() -> None:
+    """Callers learn a reading's printed step from the reading, not by re-reading its text."""
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        conn.sendall(b"SEN {Time 0.10} {Type GroundTruth} {Name Tip} {Location 1.250,2.000,-0.5}"
+                     b" {Orientation 0.01,3.14,0.00}\r\n"
+                     b"ASTA {Time 0.1} {Name Arm} {Link 0} {Value 1.25e-07} {Link 1} {Value 2}\r\n")
+        time.sleep(1.0)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client:
+        sen = client.wait_stream("SEN", "Tip")
+        asta = client.wait_stream("ASTA", "Arm")
+    assert isinstance(sen.message, m.Sen)
+    assert sen.step("Location") == pytest.approx(0.001)
+    assert sen.step("orientation") == pytest.approx(0.01)
+    assert sen.step("Time") == pytest.approx(0.01)
+    assert sen.step("Missing") == 0.0
+    assert asta.step("Value") == 0.0  # exponent notation: a full-precision server
+
+
 def test_a_getconf_that_matches_nothing_fails_after_the_timeout_naming_known_components() -> None:
     def script(conn: socket.socket) -> None:
         conn.sendall(NFO)

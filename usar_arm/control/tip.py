@@ -22,8 +22,9 @@ from usar_arm.spatial import (
     rpy_to_matrix,
     transform,
 )
+from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
-from usar_arm.usarsim.numbers import printed_resolution, truncated_midpoint
+from usar_arm.usarsim.numbers import truncated_midpoint
 
 
 @dataclass(frozen=True)
@@ -52,10 +53,10 @@ class TipReading:
 
 def _pose(client: UsarClient, name: str, after: float | None, timeout: float
           ) -> tuple[Array, float, float, float]:
-    sen = client.wait_sen(name, after_time=after, timeout=timeout)
-    line = client.latest_line("SEN", name) or ""
-    step_m = printed_resolution(line, "Location")
-    step_rad = printed_resolution(line, "Orientation")
+    rec = client.wait_stream("SEN", name, after_time=after, timeout=timeout)
+    sen = rec.message
+    assert isinstance(sen, m.Sen), "the SEN stream holds SEN lines"
+    step_m, step_rad = rec.step("Location"), rec.step("Orientation")
     if sen.location is None or sen.orientation is None:
         raise ResponseTimeoutError(f"a pose from sensor {name}", timeout,
                                    "its SEN lines carry no Location/Orientation")
@@ -97,16 +98,16 @@ class TipSensor:
 
     def read_raw(self, after: float | None = None, timeout: float = 2.0) -> RawReading:
         """The next reading newer than simulated time ``after``, as printed."""
-        sen = self.client.wait_sen(self.tip_sensor, after_time=after, timeout=timeout)
-        line = self.client.latest_line("SEN", self.tip_sensor) or ""
+        rec = self.client.wait_stream("SEN", self.tip_sensor, after_time=after, timeout=timeout)
+        sen = rec.message
+        assert isinstance(sen, m.Sen), "the SEN stream holds SEN lines"
         platform, _, _, _ = _pose(self.client, self.platform_sensor, None, timeout)
         self._platform = platform
         if sen.location is None or sen.orientation is None:
             raise ResponseTimeoutError(f"a pose from sensor {self.tip_sensor}", timeout,
                                        "its SEN lines carry no Location/Orientation")
-        return RawReading(sen.location, sen.orientation, platform,
-                          printed_resolution(line, "Location"),
-                          printed_resolution(line, "Orientation"), float(sen.time or 0.0))
+        return RawReading(sen.location, sen.orientation, platform, rec.step("Location"),
+                          rec.step("Orientation"), float(sen.time or 0.0))
 
     def tool0_from_raw(self, raw: RawReading) -> Array:
         """tool0 in base_link from a raw reading, each number at the middle of its interval."""

@@ -157,6 +157,29 @@ def printed_resolution(line: str, key: str) -> float:
     return 10.0 ** -decimals
 
 
+_BLOCK = re.compile(r"\{(\w+)\s+([^}]*)\}")
+
+
+def printed_steps(line: str) -> dict[str, float]:
+    """:func:`printed_resolution` of every block key of ``line`` at once, keys lower-cased.
+
+    >>> printed_steps("SEN {Time 1.50} {Name Tip} {Location 0.070,0.010,-0.413}")
+    {'time': 0.01, 'name': 1.0, 'location': 0.001}
+    """
+    decimals: dict[str, int] = {}
+    for key, block in _BLOCK.findall(line):
+        key = key.lower()
+        best = decimals.get(key, 0)
+        for number in block.split(","):
+            text = number.strip().lower()
+            if "e" in text and any(c.isdigit() for c in text):
+                best = 99  # exponent notation: full precision
+            elif "." in text:
+                best = max(best, len(text.split(".")[1]))
+        decimals[key] = best
+    return {key: (0.0 if d > 4 else 10.0 ** -d) for key, d in decimals.items()}
+
+
 def truncated_midpoint(values: Sequence[float], step: float) -> list[float]:
     """Best estimates of values printed truncated (toward zero) to ``step``: the middle of the
     interval each printed value stands for (a printed 0 stays 0)."""
