@@ -18,8 +18,8 @@ with Arm.connect("KR60") as arm:
     print(f"{report.rate_hz:.1f} Hz, p99 jitter {report.jitter_p99_ms:.2f} ms")
     print(f"max tracking error {report.max_tracking_error_rad * 1000:.2f} mrad")
     print(f"final joint error {np.max(report.final_joint_error_rad):.5f} rad")
-    print(f"tool0 error {report.tip['tip_error_m'] * 1000:.2f} mm "
-          f"({report.tip['tip_source']})")
+    if report.tip is not None:
+        print(f"tool0 error {report.tip.error_m * 1000:.2f} mm ({report.tip.source})")
 
     # A motion that cannot be tracked is stopped, and the arm holds where it is.
     from usar_arm.control.executor import ExecutionOptions

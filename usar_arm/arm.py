@@ -26,6 +26,7 @@ import numpy as np
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
 from usar_arm.control.tip import TipSensor, platform_sensor_name, pose_error
 from usar_arm.control.tip_correction import correct_tip
+from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.description import DescribeOptions
 from usar_arm.discover.session import discover
@@ -266,13 +267,11 @@ class Arm:
                 f"{', '.join(self._live().known_components()) or 'no sensors'})")
         report = executor.execute(trajectory)
         target = self.fk(trajectory.q[-1]) if goal_pose is None else np.asarray(goal_pose)
-        tip: dict[str, Any] = {}
         goal = report.goal
         if sensor is not None:
             reading = sensor.read()
             _, err_m, err_rad = pose_error(target, reading.pose)
-            tip = {"tip_source": sensor.source, "tip_error_m": err_m, "tip_error_rad": err_rad,
-                   "tip_sensor_step_m": reading.step_m}
+            tip = ToolAccuracy(sensor.source, err_m, err_rad, sensor_step_m=reading.step_m)
             if tip_correction:
                 fix = correct_tip(sensor, lambda q: self._sensor_world(sensor, q),
                                   lambda pose, seed: np.array(
@@ -280,23 +279,21 @@ class Arm:
                                   executor.settle, lambda: executor.measure()[0], report.goal,
                                   target, joint_step=self._joint_step())
                 goal = fix.goal
-                tip.update(tip_error_before_correction_m=fix.before_m,
-                           tip_error_before_correction_rad=fix.before_rad,
-                           tip_error_m=fix.after_m, tip_error_rad=fix.after_rad,
-                           tip_readings=fix.readings,
-                           tip_bias_m=float(np.linalg.norm(fix.bias.position)),
-                           tip_bias_rad=float(np.linalg.norm(fix.bias.rotation)),
-                           tip_bias_consistent=fix.bias.consistent,
-                           tip_correction_rounds=fix.rounds, tip_verified=fix.verified)
+                figures = TipCorrectionFigures(
+                    fix.before_m, fix.before_rad, fix.readings,
+                    float(np.linalg.norm(fix.bias.position)),
+                    float(np.linalg.norm(fix.bias.rotation)), fix.bias.consistent, fix.rounds,
+                    fix.verified)
+                tip = replace(tip, error_m=fix.after_m, error_rad=fix.after_rad,
+                              correction=figures)
         else:
             q, _ = executor.measure()
             _, err_m, err_rad = pose_error(target, self.fk(q))
-            tip = {"tip_source": "forward kinematics of the final ASTA values",
-                   "tip_error_m": err_m, "tip_error_rad": err_rad}
+            tip = ToolAccuracy("forward kinematics of the final ASTA values", err_m, err_rad)
         truth = self._true_tool0()
         if truth is not None:
             _, true_m, true_rad = pose_error(target, truth)
-            tip.update(true_tip_error_m=true_m, true_tip_error_rad=true_rad)
+            tip = replace(tip, true_error_m=true_m, true_error_rad=true_rad)
         final, _ = executor.measure()
         return replace(report, tip=tip, goal=goal, final_joint_error_rad=np.abs(final - goal))
 

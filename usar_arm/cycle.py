@@ -69,7 +69,7 @@ class MoveResult:
 
     def row(self) -> dict[str, Any]:
         """The figures the demo's table and the benchmark print (SI units)."""
-        tip = self.report.tip
+        tip = self.report.tip.as_json() if self.report.tip is not None else {}
         return {"move": self.move.name, "motion": self.move.motion,
                 "planning_s": self.plan.planning_seconds,
                 "duration_s": self.plan.trajectory.duration,

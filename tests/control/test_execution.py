@@ -35,7 +35,8 @@ def test_a_ptp_motion_is_tracked_and_settles_on_its_goal(arm: Arm) -> None:
     assert report.max_tracking_error_rad < 0.02  # feedforward removes the drives' lag
     assert report.rate_hz == pytest.approx(100, rel=0.1)
     assert len(report.executed.t) >= 10 * plan.trajectory.duration - 2
-    tip = report.tip
+    assert report.tip is not None
+    tip = report.tip.as_json()
     assert tip["tip_source"].startswith("GroundTruth sensor")
     # Without correction the UDK-learnt model is off by about a millimetre at the tool.
     assert tip["true_tip_error_m"] < 2.5e-3 and tip["true_tip_error_rad"] < 2e-3
@@ -50,7 +51,8 @@ def test_tip_correction_brings_the_real_tool_within_a_millimetre_and_a_milliradi
     target = transform(DOWN, (1.45, -0.45, 1.0))
     plan = arm.plan(pose=target, scene="table")
     report = arm.execute(plan.trajectory, goal_pose=target, tip_correction=True)
-    tip = report.tip
+    assert report.tip is not None
+    tip = report.tip.as_json()
     assert tip["tip_bias_consistent"]
     assert tip["true_tip_error_m"] <= 1e-3 and tip["true_tip_error_rad"] <= 1e-3
     # The estimate after correction agrees with the simulator's truth.

@@ -78,7 +78,7 @@ def print_report(report: ExecutionReport, names: tuple[str, ...]) -> None:
     final = float(np.max(report.final_joint_error_rad))
     out(f"{'settled' if report.settled else 'NOT settled'} in {report.settle_seconds:.2f} s; "
         f"final joint error {final:.5f} rad")
-    tip = report.tip
+    tip = report.tip.as_json() if report.tip is not None else {}
     line = (f"tool0 error {_mm(tip.get('tip_error_m'))}, {_mrad(tip.get('tip_error_rad'))} "
             f"({tip.get('tip_source', 'unknown source')})")
     if "tip_error_before_correction_m" in tip:

@@ -22,12 +22,13 @@ import gc
 import logging
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from usar_arm.control.drive import DriveModel, excitation, fit
+from usar_arm.control.tool_accuracy import ToolAccuracy
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
 from usar_arm.errors import (
     ConnectionLostError,
@@ -82,7 +83,7 @@ class ExecutionReport:
         settled: every joint reached the tolerance; settle_seconds: how long that took.
         goal: the joint goal held at the end (the trajectory's last point, plus any tip
             correction); executed: the ASTA samples (time since the start, joints).
-        tip: tip figures added by the caller (tip_error_m, tip_error_rad, ...).
+        tip: tool0's error at the end, added by the caller (None until then).
         started_at: when the first ACT was sent (time.perf_counter s): to place the motion
             on a longer timeline.
     """
@@ -99,7 +100,7 @@ class ExecutionReport:
     settle_seconds: float
     goal: Array
     executed: ExecutedSamples
-    tip: dict[str, Any] = field(default_factory=dict)
+    tip: ToolAccuracy | None = None
     started_at: float = 0.0
 
     def as_json(self) -> dict[str, Any]:
@@ -111,9 +112,8 @@ class ExecutionReport:
                 "rate_hz": self.rate_hz, "jitter_p50_ms": self.jitter_p50_ms,
                 "jitter_p99_ms": self.jitter_p99_ms, "duration_s": self.duration_s,
                 "settled": self.settled, "settle_seconds": self.settle_seconds,
-                "tip_error_m": self.tip.get("tip_error_m"),
-                "tip_error_rad": self.tip.get("tip_error_rad"),
-                **{k: v for k, v in self.tip.items() if k not in ("tip_error_m", "tip_error_rad")}}
+                "tip_error_m": None, "tip_error_rad": None,
+                **(self.tip.as_json() if self.tip is not None else {})}
 
 
 class _Feedback:
