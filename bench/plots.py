@@ -207,7 +207,7 @@ def describe(doc: dict[str, Any], folder: Path) -> Path:
     ax.set_title("describe(): time to learn and describe an arm", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    return _save(fig, folder / "describe.png")
+    return _save(fig, folder / "discovery.png")
 
 
 def execution(doc: dict[str, Any], folder: Path) -> Path:
@@ -242,7 +242,7 @@ def draw_all(docs: dict[str, Any], folder: Path) -> list[Path]:
     """Every plot the present stage files allow."""
     out: list[Path | None] = []
     simple = {"ik": ik, "collision": collision, "plan": plan, "timing": timing,
-              "describe": describe, "execution": execution}
+              "discovery": describe, "execution": execution}
     for stage, fn in simple.items():
         if stage in docs:
             out.append(fn(docs[stage], folder))

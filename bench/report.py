@@ -20,7 +20,7 @@ import plots
 
 STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "plan": "Motion planning", "timing": "Time-parameterisation",
-                "describe": "Discovery + URDF", "execution": "Execution (embedded simulator)"}
+                "discovery": "Discovery + URDF", "execution": "Execution (embedded simulator)"}
 PUBLISHED = {
     ("ik", "pytracik"): "99.35 %, 0.92 ms mean (peers.md, 2,000 poses); TRAC-IK README: "
                         "99.56-100 %, 0.18-0.46 ms",
@@ -278,7 +278,7 @@ def describe_section(doc: dict[str, Any]) -> list[str]:
             *table(["robot (wire)", "runs", "total median", "discovery (TCP)",
                     "build + checks + ACM", "max flange error", "max joint-origin error",
                     "max joint-axis error", "configurations"], rows),
-            "![Discovery](describe.png)", ""]
+            "![Discovery](discovery.png)", ""]
 
 
 def execution_section(doc: dict[str, Any]) -> list[str]:
@@ -313,7 +313,7 @@ def execution_section(doc: dict[str, Any]) -> list[str]:
 
 
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,
-            "timing": timing_section, "describe": describe_section,
+            "timing": timing_section, "discovery": describe_section,
             "execution": execution_section}
 
 

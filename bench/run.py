@@ -30,9 +30,9 @@ from pathlib import Path
 import common
 import problems as problem_sets
 
-STAGES = ("ik", "collision", "plan", "timing", "describe", "execution")
+STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution")
 MODULES = {"ik": "ik", "collision": "collision", "plan": "plan", "timing": "timing",
-           "describe": "describe", "execution": "execution"}
+           "discovery": "discovery", "execution": "execution"}
 ROUNDS = {"quick": 1, "full": 3}
 
 

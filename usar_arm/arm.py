@@ -29,7 +29,7 @@ from usar_arm.control.tip_correction import correct_tip
 from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.description import DescribeOptions
-from usar_arm.discover.session import discover
+from usar_arm.discover.interview import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
@@ -180,11 +180,11 @@ class Arm:
         asta = client.wait_asta(str(self.robot.actuator), after_time=newer_than,
                                 timeout=timeout)
         values = dict(asta.values)
-        missing = [k for k in self.robot.links if k not in values]
+        missing = [k for k in self.robot.wire_links if k not in values]
         if missing:
             raise ConnectionLostError("reading joint values",
                                       f"ASTA lacks links {missing}: {asta}")
-        return np.array([values[k] for k in self.robot.links])
+        return np.array([values[k] for k in self.robot.wire_links])
 
     def _live(self) -> UsarClient:
         if self.client is None:
@@ -236,7 +236,7 @@ class Arm:
         client = self._live()
         if self._executor is None:
             chain = self.robot.chain
-            self._executor = Executor(client, str(self.robot.actuator), self.robot.links,
+            self._executor = Executor(client, str(self.robot.actuator), self.robot.wire_links,
                                       chain.joint_names, chain.lower(), chain.upper(), options)
         elif options is not None:
             self._executor.options = options

@@ -18,7 +18,7 @@ import numpy as np
 
 from usar_arm.arm import Arm
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport
-from usar_arm.control.timeline import join_executed, join_trajectories
+from usar_arm.control.splice import join_executed, join_trajectories
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
 from usar_arm.motion import MotionOptions, MotionPlan
 from usar_arm.spatial import Array, rpy_to_matrix, transform

@@ -20,9 +20,9 @@ from typing import Any
 
 from usar_arm.discover.build import build_chain
 from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
+from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.discover.limits import home_state, load_limits_file, resolve
 from usar_arm.discover.naming import Naming
-from usar_arm.discover.session import DiscoveryRecord
 from usar_arm.discover.wire_arm import WireArm
 from usar_arm.errors import InvalidInputError
 from usar_arm.fileio import write_tree_atomic

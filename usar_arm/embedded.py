@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm.description import DescribeOptions, Description, describe_arm
-from usar_arm.discover.session import DiscoveryRecord, discover
+from usar_arm.discover.interview import DiscoveryRecord, discover
 from usar_arm.model import KinematicChain
 from usar_arm.sim.robot_spec import ActuatorSpec, builtin_robots, joint_frames, tip_pose
 from usar_arm.sim.server import SimOptions, SimServer

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_arm.description import DescribeOptions, Description, describe_arm, write_description
-from usar_arm.discover.session import DiscoveryRecord
+from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.errors import FileFormatError
 from usar_arm.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld, Pair
@@ -48,7 +48,7 @@ class Robot:
     states: dict[str, dict[str, float]] = field(default_factory=dict)
     actuator: str | None = None
     source: str = ""
-    links: tuple[int, ...] = ()
+    wire_links: tuple[int, ...] = ()
     """USARSim link number (1-based, as in ASTA) of each joint, in joint order."""
     tip_sensor: str | None = None
     """Name of the server's tip GroundTruth sensor (and of its URDF frame), when it has one."""

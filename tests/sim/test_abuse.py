@@ -23,8 +23,8 @@ import pytest
 
 from usar_arm.errors import ProtocolError
 from usar_arm.sim.connection import MAX_WRITE_BUFFER, fast_act
+from usar_arm.sim.robot_session import LOG_FIRST
 from usar_arm.sim.server import SimServer
-from usar_arm.sim.session import LOG_FIRST
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.codec import MAX_LINE_BYTES, parse_line
 

@@ -7,7 +7,6 @@ import argparse
 import numpy as np
 
 from usar_arm.cli.common import add_verbosity, out, print_json, setup_logging, verbosity
-from usar_arm.cli.describe_args import add_server_args
 from usar_arm.cli.execution_args import (
     add_execution_args,
     check_bag_target,
@@ -16,6 +15,7 @@ from usar_arm.cli.execution_args import (
     save_bag,
 )
 from usar_arm.cli.plan_cmd import open_arm
+from usar_arm.cli.robot_args import add_server_args
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.errors import EXIT_OK, InvalidInputError
 

@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
-from usar_arm.cli.describe_args import add_robot_args, robot_from_args
+from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.export.plot import plot_trajectory

@@ -8,7 +8,6 @@ import numpy as np
 
 from usar_arm.arm import Arm
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
-from usar_arm.cli.describe_args import add_server_args
 from usar_arm.cli.execution_args import (
     add_execution_args,
     check_bag_target,
@@ -16,6 +15,7 @@ from usar_arm.cli.execution_args import (
     print_report,
     save_bag,
 )
+from usar_arm.cli.robot_args import add_server_args
 from usar_arm.cli.units import UNITS, pose_from_args
 from usar_arm.control.executor import ExecutionOptions
 from usar_arm.errors import EXIT_OK, InvalidInputError

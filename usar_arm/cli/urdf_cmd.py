@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
-from usar_arm.cli.describe_args import add_description_args, add_server_args, options_from
+from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
 from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK

@@ -24,7 +24,7 @@ from collections import deque
 from typing import Protocol
 
 from usar_arm.errors import ProtocolError
-from usar_arm.sim.session import Session
+from usar_arm.sim.robot_session import Session
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import MAX_LINE_BYTES, format_message, parse_line
 from usar_arm.usarsim.numbers import NumberStyle

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 from usar_arm.sim.connection import MAX_WRITE_BUFFER, Connection
 from usar_arm.sim.physics import PhysicsWorld
+from usar_arm.sim.robot_session import Session
 from usar_arm.sim.robot_spec import RobotSpec, builtin_robots
-from usar_arm.sim.session import Session
 from usar_arm.sim.truth import Truth, tool0_in_base
 from usar_arm.sim.world_spec import WorldSpec, load_world
 from usar_arm.usarsim import messages as m

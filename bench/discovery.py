@@ -5,7 +5,7 @@ simulator's own model. No peer does this; our figures only.
 
 As a solver (its own process)::
 
-    python bench/describe.py PROBLEMS.json RESULTS.json
+    python bench/discovery.py PROBLEMS.json RESULTS.json
 
 Each problem names a robot and a wire precision (``udk``: the UDK number format, the default;
 ``full``: every digit). Timed: ``run_discovery`` (the TCP exchanges), ``describe_discovered``
@@ -55,7 +55,7 @@ def solver_main(argv: list[str] | None = None) -> int:
                                      if k != "checked_pairs"},
                 "warnings": list(desc.warnings)}
 
-    peerio.write(out, peer="usar-arm", dist="usar-arm", stage="describe",
+    peerio.write(out, peer="usar-arm", dist="usar-arm", stage="discovery",
                  results=peerio.solve_all(spec["problems"], solve, warmup=0))
     return 0
 
@@ -69,12 +69,12 @@ def run(ctx: Context) -> dict[str, Any]:
                 for i, (r, w, k) in enumerate((r, w, k) for r in ROBOTS[ctx.mode]
                                               for w in precisions
                                               for k in range(REPEATS[ctx.mode, w]))]
-    spec = {"stage": "describe", "problems": problems}
+    spec = {"stage": "discovery", "problems": problems}
     path = ctx.work / "describe_problems.json"
     common.write_json(path, spec)
     solver = common.ours("usar-arm", "describe.py",
                          note="run_discovery + describe_discovered + write_description")
-    outcome = common.run_alternating(spec, [solver], ctx.work, 1, "describe")["usar-arm"]
+    outcome = common.run_alternating(spec, [solver], ctx.work, 1, "discovery")["usar-arm"]
     cases = {}
     for robot in ROBOTS[ctx.mode]:
         for wire in precisions:
@@ -99,7 +99,7 @@ def run(ctx: Context) -> dict[str, Any]:
                                           "acm_samples": DescribeOptions().acm_samples}},
                 "solvers": {"usar-arm": common.solver_record(outcome, raw, summary)},
                 "ratios": {}}
-    return common.stage_document("describe", ctx.mode,
+    return common.stage_document("discovery", ctx.mode,
                                  {"repeats": {w: REPEATS[ctx.mode, w] for w in precisions},
                                   "precisions": list(precisions)},
                                  cases, [], started)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from usar_arm.sim import describe
+from usar_arm.sim import replies
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
 from usar_arm.sim.world_spec import WorldSpec
@@ -188,7 +188,7 @@ class Session:
         self.robot, self.robot_name = p.spec, p.name
         self.targets = {a.name: [0.0] * len(a.joints) for a in p.spec.actuators}
         self._actuators = {a.name.lower(): a for a in p.spec.actuators}
-        self.next_status = world.time + describe.SCAN_INTERVAL
+        self.next_status = world.time + replies.SCAN_INTERVAL
         log.info("%s: spawned %s '%s' at %s", self.peer, p.spec.class_name, p.name,
                  ",".join(f"{v:g}" for v in p.location))
 
@@ -200,16 +200,16 @@ class Session:
             reply = self._replies[key]
         else:
             if isinstance(msg, m.GetConf):
-                reply = describe.conf_reply(self.robot, self.robot_name, msg.type, msg.name)
+                reply = replies.conf_reply(self.robot, self.robot_name, msg.type, msg.name)
             else:
-                reply = describe.geo_reply(self.robot, self.robot_name, msg.type, msg.name, style)
+                reply = replies.geo_reply(self.robot, self.robot_name, msg.type, msg.name, style)
             if len(self._replies) < MAX_CACHED_REPLIES:
                 self._replies[key] = reply
         if reply is None:
             self.rejections.reject(
                 "matches nothing", "%s {Type %s} {Name %s} matches nothing; no reply, as UDK "
                 "does (components: %s)", type(msg).__name__.upper(), msg.type[:80],
-                (msg.name or "")[:80], ", ".join(describe.known_components(self.robot)),
+                (msg.name or "")[:80], ", ".join(replies.known_components(self.robot)),
                 level=logging.INFO)
             return
         self.send(reply)
@@ -247,7 +247,7 @@ class Session:
         The caller sends them (in one write)."""
         if self.robot is None or world.time + 1e-9 < self.next_status:
             return []
-        self.next_status += describe.SCAN_INTERVAL
+        self.next_status += replies.SCAN_INTERVAL
         t = world.time
         spec = self.robot
         out: list[m.Message] = [m.Sta(t, spec.battery, spec.platform_type)]
