@@ -42,24 +42,19 @@ from simharness import (
     midline_disconnects,
     process_summary,
     summarise_bots,
+    tool_parser,
 )
 
 PHASES = ("baseline", "junk", "midline", "flood-act", "flood-junk", "recovery")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None,
-                                formatter_class=argparse.RawDescriptionHelpFormatter,
-                                epilog="\n\n".join(__doc__.split("\n\n")[1:3]) if __doc__ else "")
-    p.add_argument("--clients", type=int, default=8, help="well-behaved clients (default 8)")
-    p.add_argument("--rate", type=float, default=100.0, help="their ACT lines/s (default 100)")
+    p = tool_parser(__doc__, clients=8, rate=100.0)
     p.add_argument("--phase-seconds", type=float, default=4.0, help="length of each phase (4)")
     p.add_argument("--flood", type=float, default=10_000.0,
                    help="lines/s of the flooding clients (default 10000)")
     p.add_argument("--midline-clients", type=int, default=20,
                    help="clients that vanish mid-line (default 20)")
-    p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
-    p.add_argument("--json", type=Path, help="write the results to this file")
     return p.parse_args(argv)
 
 

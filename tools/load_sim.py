@@ -33,15 +33,14 @@ from simharness import (
     machine_load,
     process_summary,
     summarise_bots,
+    tool_parser,
 )
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None,
-                                epilog="Results: one JSON object (--json FILE, else stdout); "
-                                       "a short summary on stderr.")
-    p.add_argument("--clients", type=int, default=64, help="well-behaved clients (default 64)")
-    p.add_argument("--rate", type=float, default=100.0, help="ACT lines/s per client (100)")
+    p = tool_parser(__doc__, clients=64, rate=100.0,
+                    epilog="Results: one JSON object (--json FILE, else stdout); "
+                           "a short summary on stderr.")
     p.add_argument("--seconds", type=float, default=60.0,
                    help="streaming time once every robot exists (default 60)")
     p.add_argument("--warmup", type=float, default=5.0,
@@ -57,8 +56,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="one more client sends this many lines/s (e.g. 10000)")
     p.add_argument("--flood-kind", choices=FLOOD_KINDS, default="act",
                    help="what the flooding client sends (default act: valid ACT lines)")
-    p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
-    p.add_argument("--json", type=Path, help="write the results to this file")
     return p.parse_args(argv)
 
 

@@ -14,6 +14,7 @@ Wall times are ``time.monotonic()`` seconds; simulated times are the ``{Time t}`
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import contextlib
 import itertools
@@ -475,3 +476,21 @@ def machine_load() -> str:
     """The load averages (1, 5, 15 min) and CPU count, for reports."""
     one, five, fifteen = os.getloadavg()
     return f"{one:.2f} {five:.2f} {fifteen:.2f} on {os.cpu_count()} CPUs"
+
+
+def tool_parser(doc: str | None, clients: int, rate: float,
+                epilog: str | None = None) -> argparse.ArgumentParser:
+    """The parser every simulator campaign starts from: its description (the docstring's first
+    paragraph) and epilog (the next two, unless given), ``--clients`` and ``--rate`` with this
+    tool's defaults, and the ``--server-log`` / ``--json`` outputs."""
+    paragraphs = (doc or "").split("\n\n")
+    p = argparse.ArgumentParser(
+        description=paragraphs[0] or None, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=epilog if epilog is not None else "\n\n".join(paragraphs[1:3]))
+    p.add_argument("--clients", type=int, default=clients,
+                   help=f"well-behaved clients (default {clients})")
+    p.add_argument("--rate", type=float, default=rate,
+                   help=f"ACT lines/s per client (default {rate:g})")
+    p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
+    p.add_argument("--json", type=Path, help="write the results to this file")
+    return p

@@ -39,16 +39,13 @@ from simharness import (
     process_summary,
     quantiles,
     summarise_bots,
+    tool_parser,
 )
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None,
-                                formatter_class=argparse.RawDescriptionHelpFormatter,
-                                epilog="\n\n".join(__doc__.split("\n\n")[1:3]) if __doc__ else "")
+    p = tool_parser(__doc__, clients=4, rate=50.0)
     p.add_argument("--minutes", type=float, default=10.0, help="length of the run (default 10)")
-    p.add_argument("--clients", type=int, default=4, help="steady clients (default 4)")
-    p.add_argument("--rate", type=float, default=50.0, help="their ACT lines/s (default 50)")
     p.add_argument("--churn-every", type=float, default=5.0,
                    help="seconds between short-lived clients (default 5; 0: none)")
     p.add_argument("--churn-seconds", type=float, default=2.0,
@@ -59,8 +56,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="seconds between RSS/thread/CPU samples (default 5)")
     p.add_argument("--warmup", type=float, default=2.0,
                    help="minutes left out of the slopes (default 2)")
-    p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
-    p.add_argument("--json", type=Path, help="write the results to this file")
     return p.parse_args(argv)
 
 

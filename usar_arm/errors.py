@@ -250,26 +250,29 @@ class PlanningError(UsarArmError):
     exit_code = EXIT_NO_PLAN
 
 
-class StartInCollisionError(PlanningError):
+class _EndInCollisionError(PlanningError):
+    """An end of the motion (``end``: start or goal) is in collision; ``pairs`` are the
+    colliding (link or obstacle) name pairs."""
+
+    exit_code = EXIT_IN_COLLISION
+    end = ""
+
+    def __init__(self, pairs: Sequence[tuple[str, str]]):
+        self.pairs = tuple(pairs)
+        shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
+        super().__init__(f"the {self.end} configuration is in collision: {shown}")
+
+
+class StartInCollisionError(_EndInCollisionError):
     """The start configuration is in collision."""
 
-    exit_code = EXIT_IN_COLLISION
-
-    def __init__(self, pairs: Sequence[tuple[str, str]]):
-        self.pairs = tuple(pairs)
-        shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
-        super().__init__(f"the start configuration is in collision: {shown}")
+    end = "start"
 
 
-class GoalInCollisionError(PlanningError):
+class GoalInCollisionError(_EndInCollisionError):
     """The goal configuration is in collision."""
 
-    exit_code = EXIT_IN_COLLISION
-
-    def __init__(self, pairs: Sequence[tuple[str, str]]):
-        self.pairs = tuple(pairs)
-        shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
-        super().__init__(f"the goal configuration is in collision: {shown}")
+    end = "goal"
 
 
 class OutOfLimitsError(PlanningError):
