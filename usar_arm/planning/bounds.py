@@ -56,6 +56,57 @@ def _dot(a: Array, b: Array) -> float:
 
 
 @kernel
+def _poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array,
+                out: Array) -> None:
+    """:func:`link_poses` of one configuration ``q`` (n,) into ``out`` (L, 3, 4), with
+    ``frames`` (n + 1, 3, 4) as scratch: no allocation, for the hot loops."""
+    n = q.shape[0]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+    t0 = t1 = t2 = 0.0
+    frames[0] = 0.0
+    frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
+    for i in range(n):
+        w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
+        if joints[i, 6] > 0.5:
+            a = q[i]
+            sn, co = math.sin(a), math.cos(a)
+            v = 1.0 - co
+            e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
+            e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
+            e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
+            p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
+            # t += R p - (R E) p = R (p - E p)
+            d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
+            d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
+            d2 = p2 - (e20 * p0 + e21 * p1 + e22 * p2)
+            t0 += r00 * d0 + r01 * d1 + r02 * d2
+            t1 += r10 * d0 + r11 * d1 + r12 * d2
+            t2 += r20 * d0 + r21 * d1 + r22 * d2
+            r00, r01, r02 = (r00 * e00 + r01 * e10 + r02 * e20, r00 * e01 + r01 * e11
+                             + r02 * e21, r00 * e02 + r01 * e12 + r02 * e22)
+            r10, r11, r12 = (r10 * e00 + r11 * e10 + r12 * e20, r10 * e01 + r11 * e11
+                             + r12 * e21, r10 * e02 + r11 * e12 + r12 * e22)
+            r20, r21, r22 = (r20 * e00 + r21 * e10 + r22 * e20, r20 * e01 + r21 * e11
+                             + r22 * e21, r20 * e02 + r21 * e12 + r22 * e22)
+        else:
+            x = q[i]
+            t0 += (r00 * w0 + r01 * w1 + r02 * w2) * x
+            t1 += (r10 * w0 + r11 * w1 + r12 * w2) * x
+            t2 += (r20 * w0 + r21 * w1 + r22 * w2) * x
+        f = frames[i + 1]
+        f[0, 0], f[0, 1], f[0, 2], f[0, 3] = r00, r01, r02, t0
+        f[1, 0], f[1, 1], f[1, 2], f[1, 3] = r10, r11, r12, t1
+        f[2, 0], f[2, 1], f[2, 2], f[2, 3] = r20, r21, r22, t2
+    for k in range(zero.shape[0]):
+        f = frames[int(links[k, MOVED])]
+        for row in range(3):
+            for col in range(4):
+                out[k, row, col] = (f[row, 0] * zero[k, 0, col] + f[row, 1] * zero[k, 1, col]
+                                    + f[row, 2] * zero[k, 2, col])
+            out[k, row, 3] += f[row, 3]
+
+
+@kernel
 def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
 
@@ -64,53 +115,10 @@ def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     (L, LINK_WIDTH) with how many joints (a prefix of the chain) move each body at MOVED.
     """
     n_cfg, n = qs.shape
-    n_body = zero.shape[0]
-    out = np.empty((n_cfg, n_body, 3, 4))
+    out = np.empty((n_cfg, zero.shape[0], 3, 4))
     frames = np.empty((n + 1, 3, 4))  # rotation | position after the first i joints
     for c in range(n_cfg):
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
-        t0 = t1 = t2 = 0.0
-        frames[0] = 0.0
-        frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
-        for i in range(n):
-            w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
-            if joints[i, 6] > 0.5:
-                a = qs[c, i]
-                sn, co = math.sin(a), math.cos(a)
-                v = 1.0 - co
-                e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
-                e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
-                e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
-                p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
-                # t += R p - (R E) p = R (p - E p)
-                d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
-                d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
-                d2 = p2 - (e20 * p0 + e21 * p1 + e22 * p2)
-                t0 += r00 * d0 + r01 * d1 + r02 * d2
-                t1 += r10 * d0 + r11 * d1 + r12 * d2
-                t2 += r20 * d0 + r21 * d1 + r22 * d2
-                r00, r01, r02 = (r00 * e00 + r01 * e10 + r02 * e20, r00 * e01 + r01 * e11
-                                 + r02 * e21, r00 * e02 + r01 * e12 + r02 * e22)
-                r10, r11, r12 = (r10 * e00 + r11 * e10 + r12 * e20, r10 * e01 + r11 * e11
-                                 + r12 * e21, r10 * e02 + r11 * e12 + r12 * e22)
-                r20, r21, r22 = (r20 * e00 + r21 * e10 + r22 * e20, r20 * e01 + r21 * e11
-                                 + r22 * e21, r20 * e02 + r21 * e12 + r22 * e22)
-            else:
-                x = qs[c, i]
-                t0 += (r00 * w0 + r01 * w1 + r02 * w2) * x
-                t1 += (r10 * w0 + r11 * w1 + r12 * w2) * x
-                t2 += (r20 * w0 + r21 * w1 + r22 * w2) * x
-            f = frames[i + 1]
-            f[0, 0], f[0, 1], f[0, 2], f[0, 3] = r00, r01, r02, t0
-            f[1, 0], f[1, 1], f[1, 2], f[1, 3] = r10, r11, r12, t1
-            f[2, 0], f[2, 1], f[2, 2], f[2, 3] = r20, r21, r22, t2
-        for k in range(n_body):
-            f = frames[int(links[k, MOVED])]
-            for row in range(3):
-                for col in range(4):
-                    out[c, k, row, col] = (f[row, 0] * zero[k, 0, col] + f[row, 1] * zero[k, 1, col]
-                                           + f[row, 2] * zero[k, 2, col])
-                out[c, k, row, 3] += f[row, 3]
+        _poses_into(qs[c], joints, zero, links, frames, out[c])
     return out
 
 
@@ -322,14 +330,20 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
     for p in range(n_rr, pairs.shape[0]):
         i, s = pairs[p, 0], pairs[p, 1]
         o = obstacles[s]
-        gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2 + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
-                        + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2) - links[i, BOUND] - o[O_BOUND]
-        if gap <= eps:
-            if kind[s] == BOX or kind[s] == HULL:
-                gap = _cylinder_box_gap(seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
-                                        o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3],
-                                        cand)
-            else:
+        if kind[s] == BOX or kind[s] == HULL:
+            # The link's centre against the solid box, less the link's bounding radius: tighter
+            # than two bounding spheres for the large flat boxes of a cell; then the SAT.
+            gap = (_point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
+                                       o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
+            if gap <= eps:
+                gap = max(gap, _cylinder_box_gap(seg[5, i], seg[4, i], links[i, RADIUS],
+                                                 links[i, HALF], o[O_START:O_START + 3], axes[s],
+                                                 o[O_SIZE:O_SIZE + 3], cand))
+        else:
+            gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
+                            + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
+                            + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2) - links[i, BOUND] - o[O_BOUND]
+            if gap <= eps:
                 gap = (segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
                                         o[O_DIR:O_DIR + 3]) - links[i, RADIUS] - o[O_SIZE])
         if gap > eps:
@@ -424,7 +438,9 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     motion = 0.0
     for j in range(n):
         motion += levers[j] * abs(b[j] - a[j]) / steps
-    q = np.empty((1, n))
+    q = np.empty(n)
+    frames = np.empty((n + 1, 3, 4))
+    world = np.empty((n_link, 3, 4))
     seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
@@ -437,9 +453,9 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     while k <= steps:
         f = k / steps
         for j in range(n):
-            q[0, j] = a[j] + (b[j] - a[j]) * f
-        world = link_poses(q, joints, zero, links)
-        _segments(world[0], links, seg)
+            q[j] = a[j] + (b[j] - a[j]) * f
+        _poses_into(q, joints, zero, links, frames, world)
+        _segments(world, links, seg)
         self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, eps,
                                      margin, row, cand, scratch)
         evaluated += 1
@@ -451,7 +467,7 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
                 undecided = True
         if undecided:
             where[count] = k
-            poses[count] = world[0]
+            poses[count] = world
             verdicts[count] = row
             count += 1
             k += 1
