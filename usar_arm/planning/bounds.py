@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from usar_arm.planning import scene_tree
 from usar_arm.planning.jit import kernel
 from usar_arm.spatial import Array
 
@@ -309,12 +310,18 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 
 @kernel
 def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
-           obstacles: Array, axes: Array, eps: float, margin: float, out: VerdictArray,
-           cand: Array, scratch: Array
-           ) -> tuple[float, float]:
+           obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
+           pair_of: IndexArray, eps: float, margin: float, out: VerdictArray, cand: Array,
+           scratch: Array, stack: IndexArray) -> tuple[float, float]:
     """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and lower bounds
     (m) of the clearance of the cleared link-link and link-obstacle pairs (0 when a pair is not
-    cleared; inf when there is none)."""
+    cleared; inf when there is none).
+
+    With a sphere tree over the obstacles (``tree``, ``nodes``, ``order`` of
+    :func:`.scene_tree.build`, ``pair_of`` of :func:`.scene_tree.pair_table`; ``stack`` scratch
+    of at least M entries), each link visits only the subtrees its bounding sphere comes within
+    the current clearance bound (or ``eps``) of; the pairs below the others are CLEAR, farther
+    apart than that bound."""
     self_gap, scene_gap = math.inf, math.inf
     for p in range(n_rr):
         i, j = pairs[p, 0], pairs[p, 1]
@@ -328,62 +335,92 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
         out[p] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
         self_gap = 0.0
     for p in range(n_rr, pairs.shape[0]):
-        i, s = pairs[p, 0], pairs[p, 1]
-        o = obstacles[s]
-        if kind[s] == BOX or kind[s] == HULL:
-            # The link's centre against the solid box, less the link's bounding radius: tighter
-            # than two bounding spheres for the large flat boxes of a cell; then the SAT.
-            gap = (_point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
-                                       o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
-            if gap <= eps:
-                gap = max(gap, _cylinder_box_gap(seg[5, i], seg[4, i], links[i, RADIUS],
-                                                 links[i, HALF], o[O_START:O_START + 3], axes[s],
-                                                 o[O_SIZE:O_SIZE + 3], cand))
-        else:
-            gap = math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
-                            + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
-                            + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2) - links[i, BOUND] - o[O_BOUND]
-            if gap <= eps:
-                gap = (segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
-                                        o[O_DIR:O_DIR + 3]) - links[i, RADIUS] - o[O_SIZE])
-        if gap > eps:
-            out[p] = CLEAR
-            scene_gap = min(scene_gap, gap)
-            continue
-        scene_gap = 0.0
-        if kind[s] == BOX:
-            touching = _inner_box_contact(seg[5, i], seg[4, i], links[i, RHO], links[i, REACH],
-                                          o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3],
-                                          margin, scratch)
-        elif kind[s] == HULL:
-            touching = False
-        else:
-            inner = segment_distance(seg[2, i], seg[3, i], o[O_IN_START:O_IN_START + 3],
-                                     o[O_IN_DIR:O_IN_DIR + 3])
-            touching = inner < links[i, RHO] + o[O_RHO] - margin
-        out[p] = CONTACT if touching else UNDECIDED
+        out[p] = CLEAR
+    if nodes.shape[0] == 0:
+        return self_gap, scene_gap
+    for i in range(pair_of.shape[0]):
+        stack[0] = 0
+        top = 1
+        while top > 0:
+            top -= 1
+            nd = stack[top]
+            bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
+                               + (seg[5, i, 1] - tree[nd, 1]) ** 2
+                               + (seg[5, i, 2] - tree[nd, 2]) ** 2)
+                     - tree[nd, 3] - links[i, BOUND])
+            if bound > max(scene_gap, eps):
+                continue  # every pair below is farther apart than the bound already found
+            if nodes[nd, 0] >= 0:
+                stack[top] = nodes[nd, 0]
+                stack[top + 1] = nodes[nd, 1]
+                top += 2
+                continue
+            for k in range(nodes[nd, 2], nodes[nd, 3]):
+                s = order[k]
+                p = pair_of[i, s]
+                if p < 0:
+                    continue
+                # Written out here, not called: a kernel call per pair with these array
+                # arguments costs more than the test itself.
+                o = obstacles[s]
+                if kind[s] == BOX or kind[s] == HULL:
+                    # The link's centre against the solid box, less the link's bounding
+                    # radius: tighter than two bounding spheres for a cell's large flat boxes.
+                    gap = (_point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
+                                               o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
+                    if gap <= eps:
+                        gap = max(gap, _cylinder_box_gap(
+                            seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
+                            o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
+                else:
+                    gap = (math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
+                                     + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
+                                     + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
+                           - links[i, BOUND] - o[O_BOUND])
+                    if gap <= eps:
+                        gap = (segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
+                                                o[O_DIR:O_DIR + 3])
+                               - links[i, RADIUS] - o[O_SIZE])
+                if gap > eps:
+                    scene_gap = min(scene_gap, gap)
+                    continue
+                scene_gap = 0.0
+                if kind[s] == BOX:
+                    touching = _inner_box_contact(seg[5, i], seg[4, i], links[i, RHO],
+                                                  links[i, REACH], o[O_START:O_START + 3],
+                                                  axes[s], o[O_SIZE:O_SIZE + 3], margin,
+                                                  scratch)
+                elif kind[s] == HULL:
+                    touching = False
+                else:
+                    inner = segment_distance(seg[2, i], seg[3, i],
+                                             o[O_IN_START:O_IN_START + 3],
+                                             o[O_IN_DIR:O_IN_DIR + 3])
+                    touching = inner < links[i, RHO] + o[O_RHO] - margin
+                out[p] = CONTACT if touching else UNDECIDED
     return self_gap, scene_gap
 
 
 @kernel
 def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
-              obstacles: Array, axes: Array, eps: float, margin: float) -> VerdictArray:
+              obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
+              pair_of: IndexArray, eps: float, margin: float) -> VerdictArray:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
-    link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links` and
-    :func:`prepare_obstacles`."""
+    link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links`,
+    :func:`prepare_obstacles` and :mod:`.scene_tree`."""
     n_cfg, n_link = world.shape[0], world.shape[1]
     out = np.zeros((n_cfg, pairs.shape[0]), dtype=np.int8)
     seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
+    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
     for c in range(n_cfg):
         _segments(world[c], links, seg)
-        _judge(seg, links, pairs, n_rr, kind, obstacles, axes, eps, margin, out[c], cand,
-               scratch)
+        _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of, eps,
+               margin, out[c], cand, scratch, stack)
     return out
 
 
-@kernel
 def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: IndexArray,
              kind: IndexArray, pose: Array, size: Array, eps: float, margin: float
              ) -> VerdictArray:
@@ -399,27 +436,32 @@ def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: Index
     """
     links = prepare_links(radius, half, np.zeros(radius.shape[0], dtype=np.int64))
     obstacles, axes = prepare_obstacles(kind, pose, size)
-    pairs = np.empty((rr.shape[0] + rs.shape[0], 2), dtype=np.int64)
-    pairs[:rr.shape[0]] = rr
-    pairs[rr.shape[0]:] = rs
-    return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, eps, margin)
+    pairs = np.ascontiguousarray(np.vstack([rr.reshape(-1, 2), rs.reshape(-1, 2)]),
+                                 dtype=np.int64)
+    tree, nodes, order = scene_tree.build(obstacles[:, O_CENTRE:O_CENTRE + 3],
+                                          obstacles[:, O_BOUND])
+    pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
+    return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, tree, nodes, order,
+                     pair_of, eps, margin)
 
 
 @kernel
 def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
-          kind: IndexArray, obstacles: Array, axes: Array, eps: float, margin: float
+          kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
+          order: IndexArray, pair_of: IndexArray, eps: float, margin: float
           ) -> tuple[Array, VerdictArray]:
     """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
     (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
     world = link_poses(qs, joints, zero, links)
-    return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, eps, margin)
+    return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
+                            pair_of, eps, margin)
 
 
 @kernel
 def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
          links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
-         axes: Array, eps: float, margin: float
-         ) -> tuple[int, int, IndexArray, Array, VerdictArray]:
+         axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
+         eps: float, margin: float) -> tuple[int, int, IndexArray, Array, VerdictArray]:
     """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
     configurations, skipping those that the clearance already proves free.
 
@@ -444,6 +486,7 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
+    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
     row = np.zeros(n_pairs, dtype=np.int8)
     where = np.empty(steps + 1, dtype=np.int64)
     poses = np.empty((steps + 1, n_link, 3, 4))
@@ -456,8 +499,9 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
             q[j] = a[j] + (b[j] - a[j]) * f
         _poses_into(q, joints, zero, links, frames, world)
         _segments(world, links, seg)
-        self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, eps,
-                                     margin, row, cand, scratch)
+        self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree,
+                                     nodes, order, pair_of, eps, margin, row, cand, scratch,
+                                     stack)
         evaluated += 1
         undecided = False
         for p in range(n_pairs):
@@ -479,7 +523,8 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     return -1, evaluated, where[:count], poses[:count], verdicts[:count]
 
 
-Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array]
+Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array, Array,
+               IndexArray, IndexArray, IndexArray]
 
 
 def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: Array,
@@ -496,8 +541,11 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
     kind = np.ascontiguousarray(kind, dtype=np.int64)
     obstacles, obstacle_axes = prepare_obstacles(kind, np.ascontiguousarray(pose, dtype=float),
                                                  np.ascontiguousarray(size, dtype=float))
+    tree, nodes, order = scene_tree.build(obstacles[:, O_CENTRE:O_CENTRE + 3],
+                                          obstacles[:, O_BOUND])
+    pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
     return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
-            obstacles, obstacle_axes)
+            obstacles, obstacle_axes, tree, nodes, order, pair_of)
 
 
 def warm_up() -> None:

@@ -26,3 +26,12 @@ def kernel(function: F) -> F:
     """Compile ``function`` with numba (nopython, cached on disk, no fastmath, GIL released)."""
     compiled = njit(cache=True, nogil=True, fastmath=False, error_model="numpy")(function)
     return cast(F, compiled)
+
+
+def inline_kernel(function: F) -> F:
+    """:func:`kernel` for a small helper that other kernels call in their inner loops: inlined
+    into each caller (numba's IR-level inlining), so passing its array arguments costs nothing
+    per call."""
+    compiled = njit(cache=True, nogil=True, fastmath=False, error_model="numpy",
+                    inline="always")(function)
+    return cast(F, compiled)
