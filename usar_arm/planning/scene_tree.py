@@ -21,7 +21,7 @@ IndexArray = np.ndarray[Any, np.dtype[np.int64]]
 
 LEAF_SIZE = 4
 """Obstacles in a leaf at most."""
-MIN_OBSTACLES = 16
+MIN_OBSTACLES = 4
 """Scenes with fewer obstacles are checked pair by pair."""
 LEFT, RIGHT, START, END = range(4)
 """Columns of the tree's integer array: children (-1 for a leaf), then the leaf's range in the
