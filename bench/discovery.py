@@ -26,11 +26,14 @@ from common import Context, peerio
 
 from usar_arm.description import DescribeOptions, write_description
 from usar_arm.embedded import describe_discovered, run_discovery
+from usar_arm.planning.acm import compute_acm
+from usar_arm.robot import robot_from_description
 
 REPEATS = {("quick", "udk"): 1, ("full", "udk"): 3, ("full", "full"): 1}
 """Runs per (mode, wire precision): the full-precision run is for its accuracy figures."""
 ROBOTS = {"quick": ("KR60",), "full": ("KR60", "Fanuc_M16iB20")}
 ACCURACY_SAMPLES = 1000
+ACM_SAMPLES = 10_000
 
 
 def solver_main(argv: list[str] | None = None) -> int:
@@ -43,10 +46,12 @@ def solver_main(argv: list[str] | None = None) -> int:
         desc, t_build = peerio.timed(describe_discovered, record, options)
         with tempfile.TemporaryDirectory() as folder:
             _, t_write = peerio.timed(write_description, desc, folder)
+        robot = robot_from_description(desc)
+        _, t_acm = peerio.timed(compute_acm, robot.chain, robot.kinematics, ACM_SAMPLES)
         d = desc.discovery
         return {"success": True, "seconds": t_wire + t_build + t_write,
                 "discovery_seconds": t_wire, "build_seconds": t_build,
-                "write_seconds": t_write, "dof": desc.chain.dof,
+                "write_seconds": t_write, "acm_seconds": t_acm, "dof": desc.chain.dof,
                 "exchanges": len(d.get("exchanges", [])),
                 "accuracy": d.get("accuracy_vs_simulator"),
                 "precision": {k: v for k, v in d.get("precision", {}).items()
@@ -70,9 +75,9 @@ def run(ctx: Context) -> dict[str, Any]:
                                               for w in precisions
                                               for k in range(REPEATS[ctx.mode, w]))]
     spec = {"stage": "discovery", "problems": problems}
-    path = ctx.work / "describe_problems.json"
+    path = ctx.work / "discovery_problems.json"
     common.write_json(path, spec)
-    solver = common.ours("usar-arm", "describe.py",
+    solver = common.ours("usar-arm", "discovery.py",
                          note="run_discovery + describe_discovered + write_description")
     outcome = common.run_alternating(spec, [solver], ctx.work, 1, "discovery")["usar-arm"]
     cases = {}
@@ -83,7 +88,7 @@ def run(ctx: Context) -> dict[str, Any]:
             results = [r for _, r in rows]
             ok = [bool(r.get("success")) for r in results]
             summary = common.base_summary(results, ok)
-            for key in ("discovery_seconds", "build_seconds", "write_seconds"):
+            for key in ("discovery_seconds", "build_seconds", "write_seconds", "acm_seconds"):
                 summary[key] = common.stats([r.get(key) for r in results])
             last = next((r for r in reversed(results) if r.get("success")), {})
             summary.update(accuracy=last.get("accuracy"), precision=last.get("precision"),
@@ -91,7 +96,7 @@ def run(ctx: Context) -> dict[str, Any]:
                            warnings=last.get("warnings"), dof=last.get("dof"))
             raw = {k: [r.get(k) for r in results]
                    for k in ("id", "success", "seconds", "discovery_seconds", "build_seconds",
-                             "write_seconds")}
+                             "write_seconds", "acm_seconds")}
             cases[f"{robot} ({wire})"] = {
                 "robot": robot, "wire_precision": wire,
                 "problems": {"file": None, "count": len(results),
@@ -102,7 +107,14 @@ def run(ctx: Context) -> dict[str, Any]:
     return common.stage_document("discovery", ctx.mode,
                                  {"repeats": {w: REPEATS[ctx.mode, w] for w in precisions},
                                   "precisions": list(precisions)},
-                                 cases, [], started)
+                                 cases, _targets(cases), started)
+
+
+def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    kr60 = cases.get("KR60 (udk)", {}).get("solvers", {}).get("usar-arm", {}).get("summary", {})
+    return [common.target(f"SRDF collision matrix from {ACM_SAMPLES:,} sampled states (KR60), "
+                          "median", (kr60.get("acm_seconds") or {}).get("median"), 2.0, "<=",
+                          "s", "compute_acm, timed on its own after the description")]
 
 
 if __name__ == "__main__":

@@ -21,8 +21,12 @@ start, end at the goal, stay within the limits, and be collision-free at every c
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import common
@@ -123,9 +127,24 @@ def run(ctx: Context) -> dict[str, Any]:
         cases[case] = {"robot": spec["robot"], "dof": len(spec["joint_names"]),
                        "scenes": list(spec["scenes"]),
                        **common.build_case(path, spec, outcomes, check, _extra)}
-    return common.stage_document("plan", ctx.mode, {"rounds": ctx.rounds,
-                                                    "judge_step": verify.PATH_STEP},
-                                 cases, _targets(cases), started)
+    doc = common.stage_document("plan", ctx.mode, {"rounds": ctx.rounds,
+                                                   "judge_step": verify.PATH_STEP},
+                                cases, _targets(cases), started)
+    doc["profile"] = _profile(ctx)
+    return doc
+
+
+def _profile(ctx: Context) -> dict[str, Any]:
+    """Where a KR60 plan's time goes (``plan_profile.py``, its own process, untimed against the
+    peers)."""
+    path, _ = ctx.problem("plan_KR60")
+    out = ctx.work / "plan_profile.json"
+    proc = subprocess.run([sys.executable, str(Path(__file__).parent / "plan_profile.py"),
+                           str(path), str(out)], env={**os.environ, **common.ENVIRONMENT},
+                          capture_output=True, text=True, timeout=600, check=False)
+    if proc.returncode != 0:
+        return {"error": proc.stderr[-2000:]}
+    return dict(json.loads(out.read_text()))
 
 
 def _extra(raw: dict[str, list[Any]]) -> dict[str, Any]:

@@ -1,6 +1,6 @@
 """Run the benchmarks: usar-arm beside its peers, stage by stage, on one shared problem set.
 
-    python bench/run.py [--quick] [--stages ik,collision,plan,timing,describe,execution]
+    python bench/run.py [--quick] [--stages ik,collision,plan,timing,discovery,execution]
                         [--out bench/results] [--problems DIR] [--rounds R] [--peers a,b]
 
 1. Writes the problem set (``bench/problems.py``; default ``bench/problems/<quick|full>``).
