@@ -26,15 +26,17 @@ demo: $(DEMO_VENV)/.installed
 # The default suite: unit, integration and end-to-end tests against the embedded simulator
 # (everything not marked slow), on both cores.
 test: $(TEST_VENV)/.installed
-	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow" tests
+	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow and not realtime" tests
 
 # The long campaigns and slow end-to-end runs (marked slow): the 10-minute soak, the 64-client
 # load, the 1,000-plan invariants, the 1,000,000-configuration collision agreement, fuzzing, the
 # kill campaign, the demo, the examples and the quick benchmark (which needs the peers' venvs in
-# bench/.venvs). Three workers: the "simulator-load" group (soak, load) is mostly asleep.
+# bench/.venvs). Three workers: the "simulator-load" group (soak, load) is mostly asleep. Then the
+# realtime tests (the demo's 100 Hz rate and 10 mrad tracking) alone, on an otherwise idle machine.
 test-slow: $(TEST_VENV)/.installed
 	$(PYTHON) bench/peers/venvs.py
-	$(TEST_VENV)/bin/python -m pytest -n 3 --dist loadgroup -m slow tests
+	$(TEST_VENV)/bin/python -m pytest -n 3 --dist loadgroup -m "slow and not realtime" tests
+	$(TEST_VENV)/bin/python -m pytest -n 0 -m realtime tests
 
 test-all: test test-slow
 
