@@ -280,6 +280,32 @@ def topp_set(plan_doc: dict[str, Any], n: int, out: Path) -> dict[str, Any]:
                       "the first plan_KR60 problems", "problems": problems}
 
 
+def topp_neutral_set(plan_doc: dict[str, Any], n: int) -> dict[str, Any]:
+    """Paths no planner made: 3 to 7 random waypoints in the empty scene, each straight segment
+    free of self-collision at 0.01 rad steps (drawn with the set's seed). On these a spline that
+    leaves the polyline costs nothing, so every solver's durations compare on equal terms."""
+    robot = load_robot(plan_doc["urdf"])
+    lo, hi = robot.chain.lower(), robot.chain.upper()
+    world = robot.collision_world(scene("empty"))
+    rng = np.random.default_rng(SEED + 7)
+    problems: list[dict[str, Any]] = []
+    while len(problems) < n:
+        count = int(rng.integers(3, 8))
+        points = [rng.uniform(lo, hi)]
+        while len(points) < count:
+            step = np.clip(points[-1] + rng.normal(0.0, 0.6, len(lo)), lo, hi)
+            if not world.in_collision_many(edge_configurations(points[-1], step, 0.01)).any():
+                points.append(step)
+        if not world.in_collision(points[0]):
+            problems.append({"id": len(problems), "scene": "empty",
+                             "waypoints": np.array(points).tolist()})
+    keep = ("robot", "urdf", "srdf", "joint_names", "lower", "upper", "vmax", "amax", "jmax")
+    return {"stage": "topp", **{k: plan_doc[k] for k in keep}, "speed_scale": 1.0,
+            "scenes": {"empty": []},
+            "source": "random self-collision-free polylines, 3-7 waypoints, empty scene",
+            "problems": problems}
+
+
 def generate(sizes: Sizes, out: Path) -> dict[str, Path]:
     """Write every problem file into ``out``; returns set name -> path."""
     out.mkdir(parents=True, exist_ok=True)
@@ -293,6 +319,7 @@ def generate(sizes: Sizes, out: Path) -> dict[str, Path]:
     docs[f"plan_{KR60}_boxes"] = plan_boxes_set(sizes.plan_box_pairs, sizes.plan_box_counts,
                                                 out)
     docs[f"topp_{KR60}"] = topp_set(docs[f"plan_{KR60}"], sizes.topp, out)
+    docs[f"topp_{KR60}_neutral"] = topp_neutral_set(docs[f"plan_{KR60}"], sizes.topp)
     paths = {}
     for key, doc in docs.items():
         doc["generator"] = {"script": "bench/problems.py", "seed": SEED, "sizes": asdict(sizes),

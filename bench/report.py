@@ -284,8 +284,7 @@ def plan_section(doc: dict[str, Any]) -> list[str]:
     return out
 
 
-def timing_section(doc: dict[str, Any]) -> list[str]:
-    case = doc["cases"]["KR60"]
+def _timing_case(case: dict[str, Any]) -> list[list[str]]:
     rows = []
     for name, s in case["solvers"].items():
         if "skipped" in s:
@@ -307,10 +306,24 @@ def timing_section(doc: dict[str, Any]) -> list[str]:
                      f"{sm.get('in_collision', 0)} / {sm.get('over_limits', 0)}",
                      PUBLISHED.get(("timing", name), "") if s["kind"] == "peer"
                      else s["note"]])
-    return [f"### KR60, {case['problems']['count']} paths from our planner, full limits", "",
-            *table(["solver", "verified", "computation median / mean", "duration median",
-                    "duration / toppra (median / p90)",
-                    "trajectories in collision / over limits", "notes"], rows),
+    return rows
+
+
+TIMING_TITLES = {"KR60": "paths from our planner (the scene's obstacles count)",
+                 "KR60 neutral": "random polylines in the empty scene (nothing to hit)"}
+
+
+def timing_section(doc: dict[str, Any]) -> list[str]:
+    out = []
+    for name, case in doc["cases"].items():
+        out += [f"### {name}: {case['problems']['count']} "
+                f"{TIMING_TITLES.get(name, case.get('source', ''))}, full limits", "",
+                *table(["solver", "verified", "computation median / mean", "duration median",
+                        "duration / toppra (median / p90)",
+                        "trajectories in collision / over limits", "notes"],
+                       _timing_case(case))]
+    rule = doc.get("settings", {}).get("rule")
+    return [*out, *([f"The rule: {rule}", ""] if rule else []),
             "![Time-parameterisation](timing.png)", ""]
 
 
