@@ -10,14 +10,14 @@ $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
 	$(DEMO_VENV)/bin/pip install --quiet --upgrade pip
 	$(DEMO_VENV)/bin/pip install --quiet .
-	$(DEMO_VENV)/bin/python -c "from usar_arm.planning.bounds import warm_up; warm_up()"
+	$(DEMO_VENV)/bin/python -c "from usar_arm.planning.compiled import warm_up; warm_up()"
 	touch $@
 
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
 	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray]"
-	$(TEST_VENV)/bin/python -c "from usar_arm.planning.bounds import warm_up; warm_up()"
+	$(TEST_VENV)/bin/python -c "from usar_arm.planning.compiled import warm_up; warm_up()"
 	touch $@
 
 demo: $(DEMO_VENV)/.installed

@@ -33,8 +33,8 @@ from usar_arm.discover.interview import discover
 from usar_arm.errors import ConnectionLostError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
-from usar_arm.planning.bounds import warm_up
 from usar_arm.planning.collision import CollisionWorld
+from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene

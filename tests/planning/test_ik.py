@@ -85,8 +85,10 @@ def test_the_nearest_solution_is_the_one_nearest_the_seed(kr60: Robot) -> None:
         target = kr60.kinematics.frame_pose(q, "tool0")
         every = ik.solve(target, all_solutions=True).solutions
         best = ik.solve(target, seed).best
-        distances = [float(np.sum((np.array(s.q) - seed) ** 2)) for s in every]
-        assert float(np.sum((np.array(best.q) - seed) ** 2)) <= min(distances) + 1e-9
+        nearest = min(every, key=lambda s: float(np.sum((np.array(s.q) - seed) ** 2)))
+        # The same solution (the compiled path polishes by its own Newton steps, so the two
+        # agree within the tolerance, not to the last bit): closer than `distinct` apart.
+        assert np.max(np.abs(np.array(best.q) - nearest.q)) < ik.options.distinct
 
 
 def test_the_batch_solver_agrees_with_single_queries_and_misses_nothing(kr60: Robot) -> None:

@@ -28,10 +28,11 @@ from usar_arm.errors import (
     UnreachableError,
 )
 from usar_arm.model import KinematicChain
+from usar_arm.planning import ik_kernel
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.opw import NotOrthoParallel, OrthoParallelArm
-from usar_arm.planning.poe import PoeChain
+from usar_arm.planning.poe import PoeChain, PoeModel
 from usar_arm.spatial import Array
 
 log = logging.getLogger("usar_arm.planning")
@@ -170,6 +171,13 @@ class IKSolver:
                 log.info("analytic IK not available for %s: %s", chain.name, exc)
         self._rng = np.random.default_rng(self.options.seed)
         self._poe: PoeChain | None = None
+        self._fast: tuple[Array, ...] | None = None
+        if self.analytic is not None:
+            poe = PoeModel(chain)
+            self._fast = (ik_kernel.pack(self.analytic), self.lower, self.upper,
+                          self.revolute.astype(float), self.wide.astype(float), poe.axes,
+                          poe.points, np.ascontiguousarray(chain.frame_pose(self.frame,
+                                                                            np.zeros(6))))
 
     def _build_analytic(self) -> OrthoParallelArm:
         if not all(self.revolute) or len(self.names) != 6:
@@ -204,7 +212,12 @@ class IKSolver:
         self._collided: list[Array] = []
         rot = np.ascontiguousarray(target[:3, :3], dtype=float)
         pos = np.ascontiguousarray(target[:3, 3], dtype=float)
-        ref = np.zeros(len(self.names)) if seed is None else np.asarray(seed, dtype=float)
+        ref = (np.zeros(len(self.names)) if seed is None
+               else np.ascontiguousarray(seed, dtype=float))
+        if self._fast is not None and not all_solutions:
+            fast = self._nearest_compiled(rot, pos, ref, collision)
+            if fast is not None:
+                return IKResult((fast,), time.perf_counter() - start, "analytic+newton")
         sols: list[IKSolution] = []
         violation: _Violation | None = None
         starts: list[Array] = []
@@ -223,6 +236,23 @@ class IKSolver:
             self._raise_failure(rot, pos, ref, violation, collision, start)
         sols.sort(key=lambda s: float(np.sum((s.q - ref) ** 2)))
         return IKResult(tuple(sols), time.perf_counter() - start, method)
+
+    def _nearest_compiled(self, rot: Array, pos: Array, ref: Array,
+                          collision: CollisionWorld | None) -> IKSolution | None:
+        """The nearest analytic solution by the compiled path (:mod:`.ik_kernel`), or None
+        when the Python path must decide (a singular wrist, a limit, no branch, a collision)."""
+        assert self._fast is not None
+        q = np.empty(len(self.names))
+        opts = self.options
+        status, pe, re = ik_kernel.nearest(
+            rot, pos, ref, *self._fast, opts.position_tolerance, opts.orientation_tolerance,
+            opts.newton_steps, MAX_NEWTON_STEP, ANALYTIC_SLACK, WRIST_SINGULAR, q)
+        if status != ik_kernel.SOLVED:
+            return None
+        if collision is not None and collision.in_collision(q):
+            return None  # the Python path goes on to the next branch and reports collisions
+        q.setflags(write=False)
+        return IKSolution(q, pe, re)
 
     def nearest(self, target: Array, seed: Array | None = None) -> IKSolution:
         """The solution nearest ``seed``."""
