@@ -40,10 +40,11 @@ test-slow: $(TEST_VENV)/.installed
 
 test-all: test test-slow
 
+# ruff on everything, mypy (standard mode, every function annotated) on the package.
 lint: $(TEST_VENV)/.installed
 	$(TEST_VENV)/bin/ruff check usar_arm tests bench tools fuzz examples
+	$(TEST_VENV)/bin/mypy usar_arm
 
-# Not yet part of lint: mypy still reports errors (mostly numpy typing), see the README.
 typecheck: $(TEST_VENV)/.installed
 	$(TEST_VENV)/bin/mypy usar_arm
 

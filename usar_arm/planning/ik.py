@@ -17,8 +17,10 @@ import logging
 import math
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.linalg.lapack import dgesv
 
 from usar_arm.errors import (
@@ -133,6 +135,29 @@ def _frozen(q: Array) -> Array:
     return out
 
 
+class _ChainArrays(NamedTuple):
+    """The serial chain as the compiled kernels take it (:mod:`.ik_kernel`): joint axes and
+    points at zero (n, 3), 1.0 for revolute joints, the frame's pose at zero (4, 4)."""
+
+    axes: Array
+    points: Array
+    revolute: Array
+    tool: Array
+
+
+class _AnalyticArrays(NamedTuple):
+    """What :func:`.ik_kernel.nearest` takes besides the query."""
+
+    constants: Array
+    lower: Array
+    upper: Array
+    revolute: Array
+    wide: Array
+    axes: Array
+    points: Array
+    tool: Array
+
+
 class IKSolver:
     """IK of one frame of one arm.
 
@@ -153,8 +178,9 @@ class IKSolver:
         self.lower = chain.lower()
         self.upper = chain.upper()
         self.names = chain.joint_names
-        self.wide = (self.upper - self.lower) > TWO_PI + 1e-9
-        self.revolute = np.array([j.type.value == "revolute" for j in chain.actuated_joints])
+        self.wide: NDArray[np.bool_] = (self.upper - self.lower) > TWO_PI + 1e-9
+        self.revolute: NDArray[np.bool_] = np.array(
+            [j.type.value == "revolute" for j in chain.actuated_joints], dtype=bool)
         self._lo = [float(v) for v in self.lower]
         self._hi = [float(v) for v in self.upper]
         self._rev = [bool(v) for v in self.revolute]
@@ -171,13 +197,22 @@ class IKSolver:
                 log.info("analytic IK not available for %s: %s", chain.name, exc)
         self._rng = np.random.default_rng(self.options.seed)
         self._poe: PoeChain | None = None
-        self._fast: tuple[Array, ...] | None = None
+        self._fast: _AnalyticArrays | None = None
+        self._chain_arrays: _ChainArrays | None = None
+        try:
+            poe = PoeModel(chain)
+            if poe.joints_moving(self.frame) == poe.dof:
+                self._chain_arrays = _ChainArrays(
+                    poe.axes, poe.points, poe.revolute.astype(float),
+                    np.ascontiguousarray(chain.frame_pose(self.frame, np.zeros(chain.dof))))
+        except ValueError:  # not one serial path to the frame: Pinocchio's LM only
+            pass
         if self.analytic is not None:
             poe = PoeModel(chain)
-            self._fast = (ik_kernel.pack(self.analytic), self.lower, self.upper,
-                          self.revolute.astype(float), self.wide.astype(float), poe.axes,
-                          poe.points, np.ascontiguousarray(chain.frame_pose(self.frame,
-                                                                            np.zeros(6))))
+            self._fast = _AnalyticArrays(
+                ik_kernel.pack(self.analytic), self.lower, self.upper,
+                self.revolute.astype(float), self.wide.astype(float), poe.axes, poe.points,
+                np.ascontiguousarray(chain.frame_pose(self.frame, np.zeros(6))))
 
     def _build_analytic(self) -> OrthoParallelArm:
         if not all(self.revolute) or len(self.names) != 6:
@@ -244,9 +279,11 @@ class IKSolver:
         assert self._fast is not None
         q = np.empty(len(self.names))
         opts = self.options
+        f = self._fast
         status, pe, re = ik_kernel.nearest(
-            rot, pos, ref, *self._fast, opts.position_tolerance, opts.orientation_tolerance,
-            opts.newton_steps, MAX_NEWTON_STEP, ANALYTIC_SLACK, WRIST_SINGULAR, q)
+            rot, pos, ref, f.constants, f.lower, f.upper, f.revolute, f.wide, f.axes, f.points,
+            f.tool, opts.position_tolerance, opts.orientation_tolerance, opts.newton_steps,
+            MAX_NEWTON_STEP, ANALYTIC_SLACK, WRIST_SINGULAR, q)
         if status != ik_kernel.SOLVED:
             return None
         if collision is not None and collision.in_collision(q):
@@ -286,7 +323,7 @@ class IKSolver:
         return BatchIKResult(q_out, done, errs[:, 0], errs[:, 1], time.perf_counter() - start)
 
     def _batch_analytic(self, targets: Array, refs: Array, q_out: Array, errs: Array,
-                        done: Array) -> None:
+                        done: NDArray[np.bool_]) -> None:
         assert self.analytic is not None
         if self._poe is None:
             self._poe = PoeChain(self.chain, self.frame)
@@ -493,6 +530,13 @@ class IKSolver:
         (large far from the target, vanishing near it), steps capped at MAX_LM_STEP; the
         joints are free during the descent and wound into their limits at the end."""
         tol_p, tol_r = self.options.position_tolerance, self.options.orientation_tolerance
+        if self._chain_arrays is not None:  # compiled, on the product of exponentials
+            q = np.array(q, dtype=float)
+            c = self._chain_arrays
+            ok, pe, re = ik_kernel.levenberg_marquardt(
+                q, rot, pos, c.axes, c.points, c.revolute, c.tool, tol_p, tol_r, iterations,
+                LM_DAMPING, LM_FLOOR, MAX_LM_STEP)
+            return IKSolution(q, pe, re) if ok else None
         target = self.kin.target(rot, pos)
         diag = self._diag
         for it in range(iterations):

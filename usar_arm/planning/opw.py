@@ -24,6 +24,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from usar_arm.spatial import Array
 
@@ -33,6 +34,11 @@ TWO_PI = 2.0 * math.pi
 
 class NotOrthoParallel(ValueError):
     """The arm is not in the ortho-parallel/spherical-wrist class; the reason says why."""
+
+
+def _v3(x: Array) -> V:
+    """A 3-vector as a tuple of floats."""
+    return (float(x[0]), float(x[1]), float(x[2]))
 
 
 def _dot(a: V, b: V) -> float:
@@ -100,8 +106,8 @@ class OrthoParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w = [tuple(float(c) for c in a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
-        p = [tuple(float(c) for c in pt) for pt in np.asarray(points, float)]
+        w = [_v3(a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
+        p = [_v3(pt) for pt in np.asarray(points, float)]
         if len(w) != 6:
             raise NotOrthoParallel(f"needs 6 revolute joints, has {len(w)}")
         checks = [("joint 1 perpendicular to joint 2", abs(_dot(w[0], w[1]))),
@@ -144,7 +150,7 @@ class OrthoParallelArm:
         self.K = c[0] * e[0] + c[1] * e[1]
         self.J = c[0] * (-e[1]) + c[1] * e[0]
         # Constants of the per-query maths.
-        self._tw = tuple(float(x) for x in self._tool_to_wrist)
+        self._tw = _v3(self._tool_to_wrist)
         self._w1xu = _cross(w[0], self.u)
         self._p1_2d = self._2d(p[0])
         self._p3p2 = (p3[0] - p2[0], p3[1] - p2[1])
@@ -156,8 +162,8 @@ class OrthoParallelArm:
             v = _cross(w[5], (0.0, 1.0, 0.0))
         nv = math.sqrt(_dot(v, v))
         self._v: V = (v[0] / nv, v[1] / nv, v[2] / nv)
-        self._m6 = tuple(float(x) for x in self._rm_t @ np.array(w[5]))
-        self._mv = tuple(float(x) for x in self._rm_t @ np.array(self._v))
+        self._m6 = _v3(self._rm_t @ np.array(w[5]))
+        self._mv = _v3(self._rm_t @ np.array(self._v))
         self._c45 = _dot(w[3], w[4])
         self._w5w6 = _dot(w[4], w[5])
         self._w4xw5 = _cross(w[3], w[4])
@@ -189,7 +195,8 @@ class OrthoParallelArm:
             c1=_dot(w1, rel2), c2=math.sqrt(self.L2sq), c3=sign * _dot(across, fore),
             c4=float(np.linalg.norm(self._tool_to_wrist)), wrist_offset=self.wrist_offset)
 
-    def arm_branches(self, rot: Array, pos: Array) -> list[tuple[float, float, float]]:
+    def arm_branches(self, rot: Array | list[list[float]], pos: Array
+                     ) -> list[tuple[float, float, float]]:
         """(q1, q2, q3) of every arm branch (up to 4) placing the wrist centre for a tool pose."""
         r = rot.tolist() if isinstance(rot, np.ndarray) else rot
         tw = self._tw
@@ -226,7 +233,7 @@ class OrthoParallelArm:
                 out.append((_wrap(q1), _wrap(q2), _wrap(self.s3 * t3)))
         return out
 
-    def wrist_branches(self, rot: Array, q1: float, q2: float, q3: float
+    def wrist_branches(self, rot: Array | list[list[float]], q1: float, q2: float, q3: float
                        ) -> list[tuple[float, float, float]]:
         """(q4, q5, q6) of every wrist branch (up to 2) completing arm branch (q1, q2, q3).
 
@@ -274,7 +281,7 @@ class OrthoParallelArm:
 
 
     # ------------------------------------------------------------------ batches
-    def solve_batch(self, rot: Array, pos: Array) -> tuple[Array, Array]:
+    def solve_batch(self, rot: Array, pos: Array) -> tuple[Array, NDArray[np.bool_]]:
         """All 8 branches for N tool poses at once: joint values (N, 8, 6), wrapped to
         (-pi, pi], and which exist (N, 8). The same maths as :meth:`arm_branches` and
         :meth:`wrist_branches`, vectorised with numpy."""
@@ -358,7 +365,7 @@ def _closest_point(axes: Array, points: Array) -> tuple[Array, float]:
         proj = np.eye(3) - np.outer(w, w)
         a += proj
         rhs += proj @ p
-    x = np.linalg.lstsq(a, rhs, rcond=None)[0]
+    x = np.asarray(np.linalg.lstsq(a, rhs, rcond=None)[0], dtype=np.float64)
     miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - p)))
                for w, p in zip(axes, points, strict=True))
     return x, miss
