@@ -131,7 +131,7 @@ def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
     a = _dot(d1, d1)
     e = _dot(d2, d2)
     f = d2[0] * r0 + d2[1] * r1 + d2[2] * r2
-    tiny = 1e-18
+    tiny = 1e-300  # only a true zero length is a point: a 1e-9 m segment still counts
     if a <= tiny and e <= tiny:
         return math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
     if a <= tiny:

@@ -377,8 +377,8 @@ class IKSolver:
                           wide_v)
         wide_v = np.where(wide_v < lo, wide_v + TWO_PI * np.ceil((lo - wide_v) / TWO_PI),
                           wide_v)
-        up = (out < lo) & (out + TWO_PI <= hi + 1e-12)
-        down = (out > hi) & (out - TWO_PI >= lo - 1e-12)
+        up = (out < lo) & (out + TWO_PI - hi < lo - out)
+        down = (out > hi) & (lo - (out - TWO_PI) < out - hi)
         narrow_v = out + TWO_PI * up - TWO_PI * down
         return np.where(wide, wide_v, np.where(narrow, narrow_v, out))
 
@@ -477,20 +477,26 @@ class IKSolver:
 
     def _clamped(self, q: Array, rot: Array, pos: Array) -> IKSolution | None:
         """A solution with the joints a hair outside their limits held on the limit: Newton
-        (least squares) on the other joints, kept if it reaches the tolerance."""
+        (least squares) on the other joints, kept if it reaches the tolerance. A joint that a
+        step pushes beyond its limit is held there too (an active set), so a target whose
+        solution sits in a corner of the limits, several joints on their limits, is reached."""
         stuck = (q < self.lower) | (q > self.upper)
         q = np.clip(q, self.lower, self.upper)
-        free = ~stuck
         target = self.kin.target(rot, pos)
-        for _ in range(self.options.newton_steps):
+        for _ in range(2 * self.options.newton_steps):
             e, pe, re, jac = self.kin.local_error(q, self.fid, target)
             if pe < self.options.position_tolerance and re < self.options.orientation_tolerance:
                 return IKSolution(q, pe, re)
+            free = ~stuck
+            if not free.any():
+                return None
             step = np.linalg.lstsq(jac[:, free], e, rcond=None)[0]
             q = q.copy()
             q[free] += step
-            if np.any(q < self.lower - 1e-9) or np.any(q > self.upper + 1e-9):
-                return None
+            out = (q < self.lower - 1e-9) | (q > self.upper + 1e-9)
+            if out.any():
+                q = np.clip(q, self.lower, self.upper)
+                stuck |= out
         return None
 
     # ------------------------------------------------------------------ numeric
@@ -559,7 +565,8 @@ class IKSolver:
     # ------------------------------------------------------------------ limits and windings
     def _wind(self, q: Array, ref: Array) -> Array:
         """Each revolute angle moved by whole turns into its limits, to the winding nearest
-        ``ref`` where the range is wider than 2 pi."""
+        ``ref`` where the range is wider than 2 pi; where neither winding fits (a solution on
+        a limit, a hair outside it), the one less outside, for the clamping to finish."""
         return np.array(self._wind_list(list(map(float, q)), list(map(float, ref)), 0))
 
     def _wind_list(self, q: list[float], ref: list[float], offset: int) -> list[float]:
@@ -575,9 +582,9 @@ class IKSolver:
                     v -= TWO_PI
                 while v < lo:
                     v += TWO_PI
-            elif v < lo and v + TWO_PI <= hi + 1e-12:
-                v += TWO_PI
-            elif v > hi and v - TWO_PI >= lo - 1e-12:
+            elif v < lo and v + TWO_PI - hi < lo - v:
+                v += TWO_PI  # the other winding is inside, or less outside
+            elif v > hi and lo - (v - TWO_PI) < v - hi:
                 v -= TWO_PI
             q[k] = v
         return q

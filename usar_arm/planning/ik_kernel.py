@@ -178,9 +178,9 @@ def wind(q: Array, ref: Array, lo: Array, hi: Array, rev: Array, wide: Array) ->
                 v -= TWO_PI
             while v < lo[i]:
                 v += TWO_PI
-        elif v < lo[i] and v + TWO_PI <= hi[i] + 1e-12:
-            v += TWO_PI
-        elif v > hi[i] and v - TWO_PI >= lo[i] - 1e-12:
+        elif v < lo[i] and v + TWO_PI - hi[i] < lo[i] - v:
+            v += TWO_PI  # the other winding is inside, or less outside
+        elif v > hi[i] and lo[i] - (v - TWO_PI) < v - hi[i]:
             v -= TWO_PI
         q[i] = v
 
