@@ -39,6 +39,9 @@ IndexArray = np.ndarray[Any, np.dtype[np.int64]]
 VerdictArray = np.ndarray[Any, np.dtype[np.int8]]
 """Per-pair verdicts (CLEAR, CONTACT, UNDECIDED)."""
 
+REFINE = 8.0
+"""In a walk, a pair whose quick clearance bound would skip fewer than this many steps gets the
+tighter (and costlier) bound too."""
 EPS = 1e-9
 """Safety margin (m): a pair is cleared only when separated by more than this."""
 MARGIN = 1e-4
@@ -311,17 +314,23 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 @kernel
 def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
            obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
-           pair_of: IndexArray, eps: float, margin: float, out: VerdictArray, cand: Array,
-           scratch: Array, stack: IndexArray) -> tuple[float, float]:
-    """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and lower bounds
-    (m) of the clearance of the cleared link-link and link-obstacle pairs (0 when a pair is not
-    cleared; inf when there is none).
+           pair_of: IndexArray, eps: float, margin: float, move: Array, refine: float,
+           out: VerdictArray, cand: Array, scratch: Array, stack: IndexArray
+           ) -> tuple[float, float]:
+    """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and, over the
+    cleared link-link and link-obstacle pairs, the smallest lower bound of a pair's clearance
+    divided by how far the pair can close per unit of motion (``move`` (L,): per link, how
+    far its points can move; a link-link pair closes by the sum of both): how many units of
+    motion cannot bring any pair into contact (0 when a pair is not cleared; inf when there
+    is none). With ``move`` all ones, these are the clearance bounds themselves (m).
 
     With a sphere tree over the obstacles (``tree``, ``nodes``, ``order`` of
     :func:`.scene_tree.build`, ``pair_of`` of :func:`.scene_tree.pair_table`; ``stack`` scratch
     of at least M entries), each link visits only the subtrees its bounding sphere comes within
     the current clearance bound (or ``eps``) of; the pairs below the others are CLEAR, farther
-    apart than that bound."""
+    apart than that bound. A pair whose quick bound is below ``refine`` units of its link's
+    motion (at least ``eps`` m) gets the tighter test too, so a walk skips by a clearance bound
+    closer to the truth."""
     self_gap, scene_gap = math.inf, math.inf
     for p in range(n_rr):
         i, j = pairs[p, 0], pairs[p, 1]
@@ -329,7 +338,9 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
                - links[i, RADIUS] - links[j, RADIUS])
         if gap > eps:
             out[p] = CLEAR
-            self_gap = min(self_gap, gap)
+            closing = move[i] + move[j]
+            if closing > 0.0:
+                self_gap = min(self_gap, gap / closing)
             continue
         inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
         out[p] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
@@ -341,6 +352,7 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
     for i in range(pair_of.shape[0]):
         stack[0] = 0
         top = 1
+        refine_i = max(eps, refine * move[i])
         while top > 0:
             top -= 1
             nd = stack[top]
@@ -348,7 +360,7 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
                                + (seg[5, i, 1] - tree[nd, 1]) ** 2
                                + (seg[5, i, 2] - tree[nd, 2]) ** 2)
                      - tree[nd, 3] - links[i, BOUND])
-            if bound > max(scene_gap, eps):
+            if bound > max(scene_gap * move[i], eps):
                 continue  # every pair below is farther apart than the bound already found
             if nodes[nd, 0] >= 0:
                 stack[top] = nodes[nd, 0]
@@ -368,7 +380,7 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
                     # radius: tighter than two bounding spheres for a cell's large flat boxes.
                     gap = (_point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
                                                o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
-                    if gap <= eps:
+                    if gap <= refine_i:
                         gap = max(gap, _cylinder_box_gap(
                             seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
                             o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
@@ -377,12 +389,14 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
                                      + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
                                      + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
                            - links[i, BOUND] - o[O_BOUND])
-                    if gap <= eps:
-                        gap = (segment_distance(seg[0, i], seg[1, i], o[O_START:O_START + 3],
-                                                o[O_DIR:O_DIR + 3])
-                               - links[i, RADIUS] - o[O_SIZE])
+                    if gap <= refine_i:
+                        gap = max(gap, segment_distance(seg[0, i], seg[1, i],
+                                                        o[O_START:O_START + 3],
+                                                        o[O_DIR:O_DIR + 3])
+                                  - links[i, RADIUS] - o[O_SIZE])
                 if gap > eps:
-                    scene_gap = min(scene_gap, gap)
+                    if move[i] > 0.0:
+                        scene_gap = min(scene_gap, gap / move[i])
                     continue
                 scene_gap = 0.0
                 if kind[s] == BOX:
@@ -414,10 +428,11 @@ def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: In
     cand = np.empty((8, 3))
     scratch = np.empty(3)
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
+    move = np.ones(n_link)
     for c in range(n_cfg):
         _segments(world[c], links, seg)
         _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of, eps,
-               margin, out[c], cand, scratch, stack)
+               margin, move, 0.0, out[c], cand, scratch, stack)
     return out
 
 
@@ -465,11 +480,12 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
     configurations, skipping those that the clearance already proves free.
 
-    At a configuration whose pairs are all cleared, the smallest lower bound of the clearance
-    (link-obstacle, and half of it for link-link, where both links move) divided by how far
-    any point of the robot moves per step (``levers`` (n,), m per unit of each joint, see
-    ``CollisionWorld.lever_arms``) says how many next configurations cannot be in contact
-    either: they are skipped. Configurations with a pair left undecided are not skipped past.
+    At a configuration whose pairs are all cleared, each pair's clearance bound divided by how
+    far the pair can close per step (its link's motion, or both links' for a link-link pair;
+    ``levers`` (n, L): m per unit of joint j for the points of link cylinder k, see
+    ``CollisionWorld.link_levers``) says how many next configurations cannot bring it into
+    contact; the smallest over the pairs is skipped. Configurations with a pair left undecided
+    are not skipped past.
 
     Returns:
         The index of the first configuration with a proven contact (-1: none), how many
@@ -477,9 +493,13 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
         link poses (U, L, 3, 4) and verdicts (U, P + Q), for the exact judge.
     """
     n, n_link, n_pairs = a.shape[0], zero.shape[0], pairs.shape[0]
+    move = np.zeros(n_link)  # per link, how far its points move per step (m)
+    for k in range(n_link):
+        for j in range(n):
+            move[k] += levers[j, k] * abs(b[j] - a[j]) / steps
     motion = 0.0
-    for j in range(n):
-        motion += levers[j] * abs(b[j] - a[j]) / steps
+    for k in range(n_link):
+        motion = max(motion, move[k])
     q = np.empty(n)
     frames = np.empty((n + 1, 3, 4))
     world = np.empty((n_link, 3, 4))
@@ -500,8 +520,8 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
         _poses_into(q, joints, zero, links, frames, world)
         _segments(world, links, seg)
         self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree,
-                                     nodes, order, pair_of, eps, margin, row, cand, scratch,
-                                     stack)
+                                     nodes, order, pair_of, eps, margin, move, REFINE, row,
+                                     cand, scratch, stack)
         evaluated += 1
         undecided = False
         for p in range(n_pairs):
@@ -518,7 +538,7 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
             continue
         if motion <= 0.0:
             break  # a == b: every configuration is this one
-        free = min(scene_gap, 0.5 * self_gap) / motion  # steps that cannot reach a contact
+        free = min(scene_gap, self_gap)  # steps that cannot bring any pair into contact
         k += 1 + int(min(free * (1.0 - 1e-9), steps + 1.0))
     return -1, evaluated, where[:count], poses[:count], verdicts[:count]
 
@@ -560,4 +580,4 @@ def warm_up() -> None:
                   np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
-    walk(np.zeros(1), np.ones(1), 4, np.ones(1), *packed, EPS, MARGIN)
+    walk(np.zeros(1), np.ones(1), 4, np.ones((1, 1)), *packed, EPS, MARGIN)

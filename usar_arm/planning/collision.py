@@ -104,6 +104,7 @@ class CollisionWorld:
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self._levers: Array | None = None
+        self._link_levers: Array | None = None
         self.set_disabled(disabled)
 
     def _init_bounds(self, chain: KinematicChain, links: list, scene: Scene) -> None:
@@ -196,31 +197,41 @@ class CollisionWorld:
         edge_configurations`).
         """
         if self._levers is None:
+            levers = np.ascontiguousarray(self.link_levers().max(axis=1))
+            levers.setflags(write=False)
+            self._levers = levers
+        return self._levers
+
+    def link_levers(self) -> Array:
+        """:meth:`lever_arms` per link cylinder: (n, L), how far any point of cylinder k moves
+        per unit of joint j (m/rad, or 1 for a prismatic joint; 0 where joint j does not move
+        cylinder k)."""
+        if self._link_levers is None:
             joints = self.chain.actuated_joints
-            levers = np.zeros(len(joints))
+            levers = np.zeros((len(joints), len(self._links)))
             by_link = {lk.name: lk for lk in self.chain.links}
-            for i, jt in enumerate(joints):
-                if jt.type.value == "prismatic":
-                    levers[i] = 1.0
-                    continue
-                for name, radius, half in zip(self._links, self._radius, self._half,
-                                              strict=True):
-                    path = self.chain.path_to(name)
+            for k, (name, radius, half) in enumerate(zip(self._links, self._radius, self._half,
+                                                         strict=True)):
+                path = self.chain.path_to(name)
+                for i, jt in enumerate(joints):
                     if jt not in path:
                         continue
+                    if jt.type.value == "prismatic":
+                        levers[i, k] = 1.0
+                        continue
                     reach = 0.0
-                    for k in path[path.index(jt) + 1:]:
-                        reach += float(np.linalg.norm(k.origin.xyz))
-                        if k.type.value == "prismatic" and k.limits is not None:
-                            reach += max(abs(k.limits.lower), abs(k.limits.upper))
+                    for step in path[path.index(jt) + 1:]:
+                        reach += float(np.linalg.norm(step.origin.xyz))
+                        if step.type.value == "prismatic" and step.limits is not None:
+                            reach += max(abs(step.limits.lower), abs(step.limits.upper))
                     geom = by_link[name].geometry
                     assert geom is not None
                     reach += float(np.linalg.norm(geom.origin.xyz)) + float(np.hypot(radius,
                                                                                       half))
-                    levers[i] = max(levers[i], reach)
+                    levers[i, k] = reach
             levers.setflags(write=False)
-            self._levers = levers
-        return self._levers
+            self._link_levers = levers
+        return self._link_levers
 
     @property
     def link_names(self) -> tuple[str, ...]:
@@ -392,7 +403,7 @@ class CollisionWorld:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
         hit, _, _, poses, verdicts = bounds.walk(
             np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float),
-            int(steps), self.lever_arms(), *self._packed, bounds.EPS, bounds.MARGIN)
+            int(steps), self.link_levers(), *self._packed, bounds.EPS, bounds.MARGIN)
         if hit >= 0:
             return False
         return not any(self._exact(p, v, stop_at_first=True)
