@@ -473,6 +473,32 @@ def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray
 
 
 @kernel
+def summary(q: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
+            kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
+            order: IndexArray, pair_of: IndexArray, eps: float, margin: float) -> int:
+    """One configuration ``q`` (n,) in one call, nothing allocated for the caller: CLEAR when
+    every pair is cleared, CONTACT when one is proven in contact, else UNDECIDED (then
+    :func:`check` gives the poses and verdicts for the exact judge)."""
+    n, n_link = q.shape[0], zero.shape[0]
+    frames = np.empty((n + 1, 3, 4))
+    world = np.empty((n_link, 3, 4))
+    seg = np.empty((6, n_link, 3))
+    row = np.zeros(pairs.shape[0], dtype=np.int8)
+    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
+    _poses_into(q, joints, zero, links, frames, world)
+    _segments(world, links, seg)
+    _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of, eps,
+           margin, np.ones(n_link), 0.0, row, np.empty((8, 3)), np.empty(3), stack)
+    verdict = CLEAR
+    for p in range(row.shape[0]):
+        if row[p] == CONTACT:
+            return CONTACT
+        if row[p] == UNDECIDED:
+            verdict = UNDECIDED
+    return verdict
+
+
+@kernel
 def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
          links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
          axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
@@ -580,4 +606,5 @@ def warm_up() -> None:
                   np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
+    summary(np.zeros(1), *packed, EPS, MARGIN)
     walk(np.zeros(1), np.ones(1), 4, np.ones((1, 1)), *packed, EPS, MARGIN)

@@ -269,6 +269,11 @@ class CollisionWorld:
     # ------------------------------------------------------------------ queries
     def in_collision(self, q: Array) -> bool:
         """True when any checked pair overlaps at ``q``."""
+        q = np.asarray(q, dtype=float)
+        quick = bounds.summary(q if q.flags.c_contiguous else np.ascontiguousarray(q),
+                               *self._packed, bounds.EPS, bounds.MARGIN)
+        if quick != bounds.UNDECIDED:
+            return bool(quick == bounds.CONTACT)
         world, verdicts = self.bounded_poses(q)
         if not verdicts.any():
             return False
