@@ -23,18 +23,18 @@ STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "plan": "Motion planning", "timing": "Time-parameterisation",
                 "discovery": "Discovery + URDF", "execution": "Execution (embedded simulator)"}
 PUBLISHED = {
-    ("ik", "pytracik"): "99.35 %, 0.92 ms mean (peers.md, 2,000 poses); TRAC-IK README: "
+    ("ik", "pytracik"): "99.35 %, 0.92 ms mean (docs/peers.md, 2,000 poses); TRAC-IK README: "
                         "99.56-100 %, 0.18-0.46 ms",
-    ("ik", "mplib"): "100 %, 7.2 ms (peers.md)",
-    ("ik", "roboplan"): "90 %, 0.29 ms (peers.md)",
-    ("ik", "opw"): "100 %, 15 us with exact OPW parameters (peers.md)",
-    ("ik", "ikpy"): "84 %, 12 ms (peers.md)",
+    ("ik", "mplib"): "100 %, 7.2 ms (docs/peers.md)",
+    ("ik", "roboplan"): "90 %, 0.29 ms (docs/peers.md)",
+    ("ik", "opw"): "100 %, 15 us with exact OPW parameters (docs/peers.md)",
+    ("ik", "ikpy"): "84 %, 12 ms (docs/peers.md)",
     ("collision", "roboplan"): "coal default requests miss ~27 % of cylinder overlaps "
-                               "(peers.md)",
-    ("plan", "mplib"): "plan_qpos median 44 ms, one easy query (peers.md)",
-    ("plan", "roboplan"): "RRT-Connect 0.7 ms, one easy query (peers.md)",
-    ("timing", "toppra"): "20-24 ms per path (peers.md)",
-    ("timing", "roboplan"): "0.55 ms (peers.md)",
+                               "(docs/peers.md)",
+    ("plan", "mplib"): "plan_qpos median 44 ms, one easy query (docs/peers.md)",
+    ("plan", "roboplan"): "RRT-Connect 0.7 ms, one easy query (docs/peers.md)",
+    ("timing", "toppra"): "20-24 ms per path (docs/peers.md)",
+    ("timing", "roboplan"): "0.55 ms (docs/peers.md)",
 }
 
 

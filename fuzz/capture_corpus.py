@@ -6,8 +6,8 @@ command line sent, as one corpus file each (the exact bytes, with the CRLF termi
 
     python fuzz/capture_corpus.py            # writes fuzz/corpus/codec/sim-*
 
-The reference lines (``ref-*``) are copied by hand from
-/work/shared/reference/usarsim-protocol.md and are not touched.
+The reference lines (``ref-*``) are UDK's own lines as docs/protocol.md quotes them, kept by hand
+and not touched here.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The dependency rules of DESIGN.md, checked by reading every module's imports."""
+"""The dependency rules of docs/architecture.md ("Layers and their rules"), checked by reading
+every module's imports."""
 
 from __future__ import annotations
 

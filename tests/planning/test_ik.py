@@ -32,7 +32,7 @@ def test_the_kr60_uses_the_closed_form_with_parameters_from_its_own_axes(kr60: R
     ik = kr60.ik_solver()
     assert ik.method == "analytic"
     p = ik.analytic.parameters()  # type: ignore[union-attr]
-    # The USARSim KR60 (reference section 7): shoulder 0.796 m high and 0.424 m forward,
+    # The USARSim KR60 (docs/protocol.md section 7): shoulder 0.796 m high and 0.424 m forward,
     # upper arm ~1.004 m, forearm 0.983 m, wrist centre 0.169 m above the elbow; its wrist axes
     # miss each other by about a millimetre.
     assert p.c1 == pytest.approx(0.796, abs=1e-6) and p.a1 == pytest.approx(0.424, abs=1e-6)

@@ -13,7 +13,7 @@ from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 
-# The reference's KR60 numbers (usarsim-protocol.md sections 6-7) as UDK prints them.
+# UDK's KR60 numbers (docs/protocol.md sections 6 and 7) as UDK prints them.
 KR60_CONF = (
     "CONF {Type Actuator} {Name KR60Arm} "
     "{Link 1} {JointType Revolute} {MaxTorque 600.0000} {MinValue -3.1400} {MaxValue 3.1400} "
@@ -26,7 +26,7 @@ KR60_GEO_LOCATIONS = [
     (0.070, 0.010, -0.413), (0.424, -0.210, -0.383), (-0.004, 0.060, -1.004),
     (0.491, 0.162, -0.169), (0.492, 0.068, 0.000), (0.152, -0.070, 0.000)]
 KR60_AXES_ZDOWN = [(0, 0, -1), (0, 1, 0), (0, 1, 0), (1, 0, 0), (0, -1, 0), (-1, 0, 0)]
-# Derived relative orientations (reference section 7), compared as rotations.
+# Derived relative orientations (docs/protocol.md section 7), compared as rotations.
 KR60_GEO_RPY = [(np.pi, 0, 0), (-2.0, -1.571, -2.715), (0, 0, -1.571), (2.356, 1.571, 2.356),
                 (-0.785, -1.571, -2.356), (-2.356, -1.571, 2.356)]
 

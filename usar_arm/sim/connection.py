@@ -1,6 +1,6 @@
 """One TCP connection of the simulator: line framing, fair scheduling, the ACT fast path.
 
-Framing follows UDK's ``MessageParser.uc`` (usarsim-protocol.md section 2): a line ends at any CR
+Framing follows UDK's ``MessageParser.uc`` (docs/protocol.md section 2): a line ends at any CR
 or LF, empty lines are skipped, a partial line waits for its terminator. Lines longer than
 :data:`~usar_arm.usarsim.codec.MAX_LINE_BYTES` are refused whole (their tail is skipped up to the
 next terminator), lines with control bytes are refused as binary, and lines that do not parse are

@@ -1,7 +1,7 @@
 """MuJoCo physics of the embedded simulator: one shared world, robots added and removed live.
 
 Each joint is a position drive toward its (limit-clamped) target, as UDK's PhysX drive is:
-stiffness = MaxForce, damping = Damping, force limit = MaxForce (usarsim-protocol.md section 6.3).
+stiffness = MaxForce, damping = Damping, force limit = MaxForce (docs/protocol.md section 6.3).
 The world is expressed in the USARSim protocol frame (z down), so gravity is +z. Robots do not
 collide with each other or with themselves (contacts are off); the planner keeps motions
 collision-free.

@@ -1,6 +1,6 @@
 """One client connection of the simulator: its robot and how it answers each command.
 
-Behaviour follows UDK's ``BotConnection.uc`` (usarsim-protocol.md sections 3, 4 and 6): no reply to
+Behaviour follows UDK's ``BotConnection.uc`` (docs/protocol.md sections 3, 4 and 6): no reply to
 INIT (the robot appears at the next physics frame), commands other than INIT/GETSTARTPOSES are
 dropped until the robot exists, no reply to a GETCONF/GETGEO that matches nothing, ACT links are
 0-based and out-of-range links are ignored, targets are clamped to the joint limits.

@@ -1,4 +1,4 @@
-"""A complete MoveIt 2 config package as text files (ros-conventions.md section 2.1).
+"""A complete MoveIt 2 config package as text files (docs/conventions.md section 3).
 
 The package needs no separate description package: the URDF sits in ``config/`` and the
 modified ``config/<robot>.urdf.xacro`` includes it and the ros2_control macro by relative path.

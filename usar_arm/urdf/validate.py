@@ -2,7 +2,7 @@
 
 * structure, with ``check_urdf`` (urdfdom's own parser; it ships with cmeel-urdfdom, which ``pin``
   installs) and with yourdfpy;
-* semantics, which check_urdf does not look at (ros-conventions.md section 1.4): lower < upper,
+* semantics, which check_urdf does not look at (docs/conventions.md section 2): lower < upper,
   velocity > 0, effort >= 0, unique names, one root, unit axes, no inertial on the root, REP-199
   frames present and free of geometry, every visible link with a material.
 
@@ -28,7 +28,7 @@ REQUIRED_FRAMES = ("base_link", "base", "flange", "tool0")
 
 
 def semantic_problems(chain: KinematicChain) -> list[str]:
-    """Every rule of ros-conventions.md 1.4 that ``chain`` breaks."""
+    """Every rule of docs/conventions.md section 2 that ``chain`` breaks."""
     problems = []
     link_names = [lk.name for lk in chain.links]
     joint_names = [j.name for j in chain.joints]

@@ -1,6 +1,6 @@
 """How numbers are written on the USARSim wire.
 
-UDK prints numbers in three ways (usarsim-protocol.md section 2):
+UDK prints numbers in three ways (docs/protocol.md section 2):
 
 * ``UnitsConverter.FloatString(v, p)``: exactly ``p`` decimals, the fraction **truncated**, computed
   in 32-bit floats. Actuator GEO locations and GroundTruth poses use ``p = 3``.
