@@ -13,8 +13,8 @@ SOURCES = [p for folder in ("usar_arm", "tests", "bench", "tools", "fuzz", "exam
            if p.suffix in (".py", ".md", ".yaml", ".yml", ".toml", ".txt")
            and ".venvs" not in p.parts and "results" not in p.parts]
 SOURCES += [ROOT / "README.md", ROOT / "Makefile"]
-CITATION = re.compile(r"docs/([a-z_-]+\.md)(?:\s*\(?\s*sections?\s+([0-9][0-9.]*(?:(?:,\s*|\s+and\s+)"
-                      r"[0-9][0-9.]*)*))?")
+CITATION = re.compile(r"docs/([a-z_-]+\.md)(?:\s*\(?\s*sections?\s+"
+                      r"([0-9][0-9.]*(?:(?:,\s*|\s+and\s+)[0-9][0-9.]*)*))?")
 OUTSIDE = re.compile(r"usarsim-protocol\.md|ros-conventions\.md|DESIGN\.md|shared/reference"
                      r"|(?<![/-])\bpeers\.md")
 

@@ -3,8 +3,8 @@
 With the ``udk`` wire precision, an actuator link's GEO Location is computed the way
 ``Actuator.uc GetGeoData`` does it, in 32-bit floats and Unreal units (``MeterVectorToUU`` of each
 joint offset, the difference to the parent's, ``LengthVectorFromUU``), then printed by
-``FloatString(p=3)``; this reproduces UDK's numbers (docs/protocol.md section 7), e.g. the KR60's ``-1.004``. With the
-``full`` precision the exact float64 difference is sent.
+``FloatString(p=3)``; this reproduces UDK's numbers (docs/protocol.md section 7), e.g. the KR60's
+``-1.004``. With the ``full`` precision the exact float64 difference is sent.
 """
 
 from __future__ import annotations
