@@ -2,8 +2,8 @@
 
 The package needs no separate description package: the URDF sits in ``config/`` and the
 modified ``config/<robot>.urdf.xacro`` includes it and the ros2_control macro by relative path.
-``*_planning.yaml`` files are deliberately not written: MoveItConfigsBuilder supplies its own
-defaults, and their keys changed between ROS distributions.
+The planning files (``ompl_planning.yaml``, ``sensors_3d.yaml``, ``moveit.rviz``) come from
+:mod:`.moveit_planning`.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from usar_arm.model import KinematicChain
+from usar_arm.urdf.moveit_planning import planning_files
 from usar_arm.urdf.srdf import GROUP
 from usar_arm.urdf.writer import num
 from usar_arm.version import __version__
@@ -162,4 +163,5 @@ def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
             f'    moveit_config = MoveItConfigsBuilder("{robot}", package_name="{pkg}")'
             ".to_moveit_configs()",
             f"    return generate_{name}_launch(moveit_config)", ""])
+    files.update(planning_files(chain))
     return files
