@@ -1,4 +1,5 @@
-"""The soak test goes first, so that under ``pytest -n 2`` it overlaps the rest of the suite."""
+"""The soak and the 64-client load go first, so that in ``make test-slow`` (three workers,
+``--dist loadgroup``) they overlap the rest of the slow suite."""
 
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 Runs ``tools/soak_sim.py`` (light on CPU: 4 clients at 50 Hz plus a short-lived client every 5 s
 and a burst of junk every 15 s) so that the rest of the suite runs beside it. It is the first test
-of the session (see ``conftest.py``) so that it overlaps the rest under ``pytest -n 2``. Longer
+of the session (see ``conftest.py``) so that it overlaps the rest of ``make test-slow`` (three
+workers, ``--dist loadgroup``; it shares the "simulator-load" group with the 64-client load). Longer
 runs by hand: ``python tools/soak_sim.py --minutes 240``.
 """
 

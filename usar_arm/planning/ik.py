@@ -298,9 +298,9 @@ class IKSolver:
     def solve_batch(self, targets: Array, seeds: Array | None = None) -> BatchIKResult:
         """The solution nearest its seed for each of N targets (N, 4, 4), vectorised.
 
-        Analytic arms: every branch of every target at once (numpy), then batched Newton
-        polishing on the product-of-exponentials form of the same URDF, trying branches in
-        order of distance to the seed; the few targets left (if any) go through :meth:`solve`.
+        Analytic arms: the compiled nearest-branch path per target (about 7 us each; without
+        it, every branch of every target at once in numpy, then batched Newton polishing); the
+        few targets left (if any) go through :meth:`solve`.
         Other arms: :meth:`solve` per target. Failures are marked, not raised.
         """
         start = time.perf_counter()
@@ -312,7 +312,16 @@ class IKSolver:
         q_out = np.full((n, dof), np.nan)
         errs = np.full((n, 2), np.nan)
         done = np.zeros(n, dtype=bool)
-        if self.analytic is not None:
+        if self._fast is not None:  # the compiled nearest-branch path, one target at a time
+            rots = np.ascontiguousarray(targets[:, :3, :3])
+            poss = np.ascontiguousarray(targets[:, :3, 3])
+            refs_c = np.ascontiguousarray(refs)
+            for i in range(n):
+                sol = self._nearest_compiled(rots[i], poss[i], refs_c[i], None)
+                if sol is not None:
+                    q_out[i], errs[i], done[i] = sol.q, (sol.position_error,
+                                                         sol.orientation_error), True
+        elif self.analytic is not None:
             self._batch_analytic(targets, refs, q_out, errs, done)
         for i in np.flatnonzero(~done):
             try:

@@ -85,7 +85,7 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options,
                        levers)
     blocked = _first_blocked(world, result.waypoints, options, levers)
-    if blocked is not None:  # (cannot happen: the planner checked every edge that densely)
+    if blocked is not None:  # the planner checked every edge that densely: a planner defect
         raise NoPathError(options.planner, options.time_limit,
                           f"segment {blocked + 1} of the path is in collision")
     return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin, dense_replans=1)

@@ -324,7 +324,7 @@ class SimServer:
                 msgs = []
             heapq.heappush(due, (session.next_status, key))
             if not msgs:
-                break  # not due after all (cannot happen; never spin)
+                break  # not due after all (a clock step backwards): never spin
 
 
 def wait_for_port(host: str, port: int, timeout: float = 5.0) -> None:
