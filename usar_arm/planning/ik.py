@@ -316,11 +316,11 @@ class IKSolver:
             rots = np.ascontiguousarray(targets[:, :3, :3])
             poss = np.ascontiguousarray(targets[:, :3, 3])
             refs_c = np.ascontiguousarray(refs)
-            for i in range(n):
-                sol = self._nearest_compiled(rots[i], poss[i], refs_c[i], None)
-                if sol is not None:
-                    q_out[i], errs[i], done[i] = sol.q, (sol.position_error,
-                                                         sol.orientation_error), True
+            for k in range(n):
+                fast = self._nearest_compiled(rots[k], poss[k], refs_c[k], None)
+                if fast is not None:
+                    q_out[k], errs[k], done[k] = fast.q, (fast.position_error,
+                                                          fast.orientation_error), True
         elif self.analytic is not None:
             self._batch_analytic(targets, refs, q_out, errs, done)
         for i in np.flatnonzero(~done):
