@@ -94,10 +94,9 @@ def run(ctx: Context) -> dict[str, Any]:
                ctx.peer("mplib", "collision", "robot.set_qpos + is_state_colliding (FCL)"),
                ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)")]
     outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "collision_KR60")
-    robot = robot_from_files(spec["urdf"], spec["srdf"])
     cases: dict[str, Any] = {}
     for name, group in _by_scene(spec["problems"]).items():
-        judge = Judge(robot, scene_from_json(name, spec["scenes"][name]))
+        judge = Judge.for_scene(spec, name)
         truth = judge.colliding(np.array([p["q"] for p in group], float))
         truth_of = {p["id"]: bool(t) for p, t in zip(group, truth, strict=True)}
 

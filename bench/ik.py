@@ -26,6 +26,7 @@ import common
 import numpy as np
 import verify
 from common import Context, peerio
+from judge_reading import JudgedRobot
 
 from usar_arm.errors import IKError
 from usar_arm.robot import robot_from_files
@@ -114,14 +115,15 @@ def run(ctx: Context) -> dict[str, Any]:
     cases: dict[str, Any] = {}
     for name in ROBOTS:
         path, spec = ctx.problem(f"ik_{name}")
-        robot = robot_from_files(spec["urdf"], spec["srdf"])
+        kin = verify.Kinematics(JudgedRobot.from_files(spec["urdf"], spec["srdf"]),
+                                list(spec["joint_names"]))
         tol = spec["tolerance"]
         outcomes = common.run_alternating(spec, _solvers(ctx, name), ctx.work, ctx.rounds,
                                           f"ik_{name}")
 
-        def check(p: dict[str, Any], r: dict[str, Any], robot: Any = robot,
+        def check(p: dict[str, Any], r: dict[str, Any], kin: Any = kin,
                   tol: dict[str, float] = tol) -> dict[str, Any]:
-            c = verify.check_ik(robot, p, r, tol)
+            c = verify.check_ik(kin, p, r, tol)
             return {"verified": c.verified, "position_error_m": c.position_error_m,
                     "orientation_error_rad": c.orientation_error_rad,
                     "within_limits": c.within_limits}

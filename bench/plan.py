@@ -100,13 +100,12 @@ def run(ctx: Context) -> dict[str, Any]:
         path, spec = ctx.problem(key)
         outcomes = common.run_alternating(spec, _solvers(ctx), ctx.work, ctx.rounds, key)
         robot = robot_from_files(spec["urdf"], spec["srdf"])
-        judges = {n: verify.Judge(robot, scene_from_json(n, items))
-                  for n, items in spec["scenes"].items()}
+        judges = {n: verify.Judge.for_scene(spec, n) for n in spec["scenes"]}
         budget = float(spec["time_limit_s"])
 
         def check(p: dict[str, Any], r: dict[str, Any], robot: Any = robot,
                   judges: dict[str, Any] = judges, budget: float = budget) -> dict[str, Any]:
-            c = verify.check_path(robot, judges[p["scene"]], p, r)
+            c = verify.check_path(judges[p["scene"]], p, r)
             in_time = r.get("seconds") is not None and r["seconds"] <= budget
             return {"verified": c.verified and in_time, "ends_match": c.ends_match,
                     "ends_off_by_turns": c.ends_off_by_turns, "in_time": in_time,

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,7 @@ from typing import Any
 import common
 import numpy as np
 import scenes
+from judge_reading import JudgedRobot, read_scene
 from verify import Judge, densify
 
 from usar_arm.control.trajectory import MotionLimits
@@ -99,6 +101,16 @@ def load_robot(urdf: str | Path) -> Robot:
     return robot_from_files(urdf)
 
 
+def _judge(robot: Robot, sc: Scene) -> Judge:
+    """The benchmark's judge of ``robot`` in ``sc``, built from the same text a problem file
+    carries (the judge reads no usar-arm object)."""
+    srdf = next((text for name, text in robot.files.items() if name.endswith(".srdf")), None)
+    with tempfile.TemporaryDirectory() as folder:
+        obstacles = read_scene(scenes.to_json(sc, Path(folder)))
+    return Judge(JudgedRobot.from_text(robot.urdf, srdf), obstacles,
+                 list(robot.chain.joint_names))
+
+
 # ------------------------------------------------------------------------------ scenes
 _BOXES: dict[str, Any] = {}
 
@@ -113,7 +125,7 @@ def box_pairs(robot: Robot) -> list[dict[str, Any]]:
         dense = np.vstack([densify(np.array(p["witness"]), 0.01) for p in pairs])
         _BOXES["pairs"] = pairs
         _BOXES["centres"] = scenes.box_centres(max(scenes.BOX_COUNTS),
-                                               Judge(robot, empty).capsules(dense),
+                                               _judge(robot, empty).capsules(dense),
                                                SEED + 9)
     return _BOXES["pairs"]
 
@@ -145,7 +157,7 @@ def _robot_header(stage: str, name: str, robot: Robot, urdf: Path, srdf: Path
 def ik_set(name: str, n: int, out: Path) -> dict[str, Any]:
     urdf, srdf = robot_paths(name, out)
     robot = load_robot(urdf)
-    judge = Judge(robot, Scene("empty"))
+    judge = _judge(robot, Scene("empty"))
     lo, hi = robot.chain.lower(), robot.chain.upper()
     mid = ((lo + hi) / 2).tolist()
     problems = []
@@ -191,7 +203,7 @@ def _pair(robot: Robot, sc: Scene, rng: np.random.Generator, tries: int = 20
     lo, hi = robot.chain.lower(), robot.chain.upper()
     padded = robot.collision_world(sc, padding=CLEARANCE)
     world = robot.collision_world(sc)
-    judge = Judge(robot, sc)
+    judge = _judge(robot, sc)
 
     def sample() -> Array:
         for _ in range(10_000):

@@ -110,8 +110,7 @@ def _case(ctx: Context, key: str) -> dict[str, Any]:
                ctx.peer("toppra", "topp", "TOPP-RA on a cubic spline (time-optimal, no jerk)"),
                ctx.peer("roboplan", "topp", "TOPP-RA, Hermite spline (stops at waypoints)")]
     outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, key)
-    robot = robot_from_files(spec["urdf"], spec["srdf"])
-    judges = {n: verify.Judge(robot, from_json(n, items)) for n, items in spec["scenes"].items()}
+    judges = {n: verify.Judge.for_scene(spec, n) for n in spec["scenes"]}
     vmax, amax = np.array(spec["vmax"]), np.array(spec["amax"])
     reference = {r["id"]: r.get("duration_s") for r in outcomes["toppra"].results
                  if r.get("success")}

@@ -1,12 +1,15 @@
 """The correctness checks every solver's answers go through, ours as much as the peers'.
 
-* IK: forward kinematics (Pinocchio, the shared URDF) of the answer against the target pose, and
-  the joint limits.
-* Collision: :class:`Judge`, a brute-force python-fcl check of every pair the SRDF and the scene
-  leave enabled. It shares nothing with ``usar_arm.planning.collision`` (nor its compiled
-  broadphase) but the URDF's link cylinders and the scene's shapes: its own FCL primitives
-  built here, its own FCL objects, no broadphase (an exact bounding-sphere
-  test only skips pairs that cannot touch), FCL's default request.
+Nothing here imports ``usar_arm``: the judge reads the URDF, the SRDF and the scene from the
+problem files itself (``judge_reading.py``), builds its own python-fcl primitives and places them
+by Pinocchio's forward kinematics of the URDF text.
+
+* IK: forward kinematics of the answer against the target pose, and the joint limits.
+* Collision: :class:`Judge` checks every pair the SRDF and the scene leave enabled with
+  python-fcl's default request. In scenes of up to :data:`EVERY_PAIR_UP_TO` obstacles every
+  pair goes to FCL; in larger ones (the 100 and 1,000 box scenes) an exact sphere test first
+  skips pairs whose bounding spheres (a box: its exact distance to the link's bounding sphere)
+  are apart, which cannot touch.
 * Paths: start and goal, limits, and every configuration along every segment at most
   :data:`PATH_STEP` apart (joint units) checked by the judge.
 * Trajectories: end points, velocity and acceleration (finite differences of the samples)
@@ -22,19 +25,16 @@ from typing import Any
 
 import fcl
 import numpy as np
-from scipy.spatial import cKDTree
+import pinocchio as pin
+from judge_reading import JudgedRobot, Obstacle, pose, quat_matrix, read_scene
 
-from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
-from usar_arm.robot import Robot
-from usar_arm.spatial import Array, matrix_from_quat, rotation_distance
+Array = np.ndarray
 
 PATH_STEP = 0.005
 """rad or m: largest joint change between two configurations the judge checks on a path (half
 our planner's edge resolution, so the judge also looks between our planner's checks)."""
-KD_TREE_FROM = 64
-"""Scenes with more obstacles than this look up the ones smaller than a metre in a KD-tree."""
-BLOCK = 128
-"""Configurations the judge's vectorised prefilter handles at once (memory: 1,000 boxes)."""
+EVERY_PAIR_UP_TO = 64
+"""Scenes with at most this many obstacles send every enabled pair to FCL."""
 LIMIT_SLACK = 1e-6
 """rad or m beyond a joint limit still accepted (TRAC-IK keeps limits as float32)."""
 VELOCITY_SLACK = 1.02
@@ -46,152 +46,145 @@ def _tf(t: Array) -> fcl.Transform:
     return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
 
 
-def _geometry(shape: object) -> fcl.CollisionGeometry:
-    """The judge's own python-fcl primitive of a scene shape, in the shape's frame (m)."""
-    if isinstance(shape, Box):
-        return fcl.Box(*(float(x) for x in shape.size))
-    if isinstance(shape, CylinderShape):
-        return fcl.Cylinder(float(shape.radius), float(shape.length))
-    if isinstance(shape, Sphere):
-        return fcl.Sphere(float(shape.radius))
-    if isinstance(shape, Mesh):
-        mesh = fcl.BVHModel()
-        mesh.beginModel(len(shape.vertices), len(shape.faces))
-        mesh.addSubModel(np.asarray(shape.vertices, float), np.asarray(shape.faces, np.int32))
-        mesh.endModel()
-        return mesh
-    raise TypeError(f"the judge has no geometry for {shape!r}")
+def _geometry(o: Obstacle) -> fcl.CollisionGeometry:
+    """The judge's own python-fcl primitive of an obstacle, in the obstacle's frame (m)."""
+    p = o.params
+    if o.kind == "box":
+        return fcl.Box(*p["size"])
+    if o.kind == "cylinder":
+        return fcl.Cylinder(p["radius"], p["length"])
+    if o.kind == "sphere":
+        return fcl.Sphere(p["radius"])
+    mesh = fcl.BVHModel()
+    mesh.beginModel(len(p["vertices"]), len(p["faces"]))
+    mesh.addSubModel(p["vertices"], p["faces"])
+    mesh.endModel()
+    return mesh
+
+
+class Kinematics:
+    """Pinocchio forward kinematics of the URDF text, with joint values in the order of
+    ``joint_names`` (the problem file's), whatever order Pinocchio keeps them in."""
+
+    def __init__(self, robot: JudgedRobot, joint_names: list[str]):
+        self.model = pin.buildModelFromXML(robot.urdf)
+        self.data = self.model.createData()
+        self.index = [self.model.joints[self.model.getJointId(n)].idx_q for n in joint_names]
+        by_name = dict(zip(robot.joints, zip(robot.lower, robot.upper, strict=True),
+                           strict=True))
+        self.lower = np.array([by_name[n][0] for n in joint_names])
+        self.upper = np.array([by_name[n][1] for n in joint_names])
+
+    def update(self, q: Array) -> None:
+        full = pin.neutral(self.model)
+        full[self.index] = q
+        pin.framesForwardKinematics(self.model, self.data, full)
+
+    def frame(self, name: str) -> Array:
+        """The 4x4 world pose of frame ``name`` after :meth:`update`."""
+        return np.array(self.data.oMf[self.model.getFrameId(name)].homogeneous)
+
+    def inside(self, q: Array) -> bool:
+        """Every joint value of ``q`` (N, n or n) within its limits (plus the slack)."""
+        return bool(np.all(q >= self.lower - LIMIT_SLACK) and np.all(q <= self.upper
+                                                                     + LIMIT_SLACK))
 
 
 class Judge:
     """Brute-force collision check of one robot in one scene (python-fcl).
 
     Args:
-        robot: the shared description (URDF cylinders, SRDF disabled pairs).
-        scene: obstacles; an object's ``allow`` list exempts those links from it.
+        robot: the URDF's cylinders and the SRDF's disabled pairs, as the judge read them.
+        obstacles: the scene's; an obstacle's ``allow`` exempts those links from it.
+        joint_names: the order of the joint values the judge is given.
     """
 
-    def __init__(self, robot: Robot, scene: Scene):
-        self.robot = robot
-        links = [lk for lk in robot.chain.links if lk.geometry is not None]
-        self.links = [lk.name for lk in links]
-        self.local = np.array([lk.geometry.origin.matrix() for lk in links])  # type: ignore
-        cyl = [lk.geometry for lk in links]
-        self._cylinders = cyl
-        self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),  # type: ignore
+    def __init__(self, robot: JudgedRobot, obstacles: list[Obstacle], joint_names: list[str]):
+        self.kin = Kinematics(robot, joint_names)
+        cyl = robot.cylinders
+        self.links = [c.link for c in cyl]
+        self.local = np.array([c.origin for c in cyl]).reshape(-1, 4, 4)
+        self.half = np.array([c.length / 2 for c in cyl])
+        self.radius = np.array([c.radius for c in cyl])
+        self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),
                                                   fcl.Transform()) for c in cyl]
-        self.link_radius = np.array([math.hypot(c.radius, c.length / 2) for c in cyl])  # type: ignore
-        self.objects = [fcl.CollisionObject(_geometry(o.shape), _tf(o.pose))
-                        for o in scene.objects]
-        self.object_centre = np.array([o.pose[:3, 3] for o in scene.objects]).reshape(-1, 3)
-        self.object_radius = np.array([o.bounding_radius() for o in scene.objects])
-        # boxes: centre, axes and half sizes for an exact sphere-box distance
-        self.is_box = np.array([isinstance(o.shape, Box) for o in scene.objects], dtype=bool)
-        self.box_rot = np.array([o.pose[:3, :3] for o in scene.objects]).reshape(-1, 3, 3)
-        self.box_half = np.array([np.asarray(o.shape.size) / 2 if isinstance(o.shape, Box)
-                                  else np.zeros(3) for o in scene.objects]).reshape(-1, 3)
-        disabled = {tuple(sorted(p)) for p in robot.disabled}
-        n = len(self.links)
-        self.rr = np.array([(i, j) for i, j in itertools.combinations(range(n), 2)
-                            if tuple(sorted((self.links[i], self.links[j]))) not in disabled],
-                           dtype=int).reshape(-1, 2)
-        self.allowed = np.array([[self.links[i] not in o.allow for o in scene.objects]
-                                 for i in range(n)], dtype=bool).reshape(n, -1)
-        few = len(scene.objects) <= KD_TREE_FROM
-        self.big = np.flatnonzero(few | (self.object_radius > 1.0))
-        self.small = np.flatnonzero(~few & (self.object_radius <= 1.0))
-        self.small_radius = float(self.object_radius[self.small].max()) if len(self.small) \
-            else 0.0
-        self.tree = cKDTree(self.object_centre[self.small]) if len(self.small) else None
+        self.bound = np.hypot(self.radius, self.half)
+        self.objects = [fcl.CollisionObject(_geometry(o), _tf(o.pose)) for o in obstacles]
+        self.obstacles = obstacles
+        self.centre = np.array([o.pose[:3, 3] for o in obstacles]).reshape(-1, 3)
+        self.reach = np.array([o.bounding_radius() for o in obstacles])
+        n = len(cyl)
+        self.rr = [(i, j) for i, j in itertools.combinations(range(n), 2)
+                   if (min(self.links[i], self.links[j]), max(self.links[i], self.links[j]))
+                   not in robot.disabled]
+        self.rs = [(i, k) for i in range(n) for k, o in enumerate(obstacles)
+                   if self.links[i] not in o.allow]
+        self.every_pair = len(obstacles) <= EVERY_PAIR_UP_TO
+        self.enabled = np.zeros((n, len(obstacles)), dtype=bool)
+        for i, k in self.rs:
+            self.enabled[i, k] = True
+        self.is_box = np.array([o.kind == "box" for o in obstacles], dtype=bool)
+        self.box_rot = np.array([o.pose[:3, :3] for o in obstacles]).reshape(-1, 3, 3)
+        self.box_half = np.array([np.asarray(o.params["size"]) / 2 if o.kind == "box"
+                                  else np.zeros(3) for o in obstacles]).reshape(-1, 3)
         self.request = fcl.CollisionRequest()
-        self.frames = [robot.kinematics.frame_id(name) for name in self.links]
+
+    @classmethod
+    def for_scene(cls, spec: dict[str, Any], scene: str) -> Judge:
+        """The judge of a problem file's robot (``urdf``, ``srdf``, ``joint_names``) in its
+        scene ``scene``."""
+        robot = JudgedRobot.from_files(spec["urdf"], spec.get("srdf"))
+        return cls(robot, read_scene(spec["scenes"][scene]), list(spec["joint_names"]))
+
+    def poses(self, q: Array) -> Array:
+        """World poses (L, 4, 4) of the link cylinders at one configuration."""
+        self.kin.update(q)
+        return np.array([self.kin.frame(name) for name in self.links]) @ self.local
 
     def capsules(self, qs: Array) -> tuple[Array, Array, Array]:
         """Every link cylinder at every configuration as a capsule: axis ends a, b (M, 3) and
         radius (M,) (a capsule contains its cylinder)."""
-        poses = self._poses(np.atleast_2d(np.asarray(qs, float)))
-        half = np.array([c.length / 2 for c in self._cylinders])
-        axis = poses[..., :3, 2] * half[:, None]
+        poses = np.array([self.poses(q) for q in np.atleast_2d(np.asarray(qs, float))])
+        axis = poses[..., :3, 2] * self.half[:, None]
         centre = poses[..., :3, 3]
-        radius = np.broadcast_to([c.radius for c in self._cylinders], centre.shape[:2])
+        radius = np.broadcast_to(self.radius, centre.shape[:2])
         return ((centre - axis).reshape(-1, 3), (centre + axis).reshape(-1, 3),
                 np.asarray(radius).reshape(-1))
 
-    def _poses(self, qs: Array) -> Array:
-        """World poses (N, L, 4, 4) of the link cylinders."""
-        kin = self.robot.kinematics
-        out = np.empty((len(qs), len(self.links), 4, 4))
-        for n, q in enumerate(qs):
-            kin.update(q)
-            for k, fid in enumerate(self.frames):
-                out[n, k] = kin.data.oMf[fid].homogeneous
-        return out @ self.local
+    def _near(self, centres: Array) -> list[tuple[int, int]]:
+        """The enabled link-obstacle pairs that may touch, given the link cylinders' centres
+        (L, 3): a link's bounding sphere reaches the obstacle (exactly for boxes, by bounding
+        spheres otherwise). Conservative: a pair left out cannot touch."""
+        d = centres[:, None, :] - self.centre[None, :, :]                      # (L, S, 3)
+        local = np.einsum("sji,lsj->lsi", self.box_rot, d)                      # R^T d
+        box_gap = np.linalg.norm(local - np.clip(local, -self.box_half, self.box_half), axis=2)
+        sphere_gap = np.linalg.norm(d, axis=2) - self.reach
+        gap = np.where(self.is_box, box_gap, sphere_gap)
+        near = (gap <= self.bound[:, None] + 1e-9) & self.enabled
+        return [(int(i), int(k)) for i, k in zip(*np.nonzero(near), strict=True)]
 
-    def _near_objects(self, centre: Array) -> list[Array]:
-        """Per configuration, the (link, object) pairs whose link bounding sphere reaches the
-        object: the exact sphere-box distance for boxes, bounding spheres otherwise. In large
-        scenes, objects within a metre's radius are found through a KD-tree of their centres;
-        the others (floors, table tops; every object of a small scene) are tested directly.
-        Conservative: a pair left out cannot touch."""
-        n_cfg, n_links = centre.shape[:2]
-        found: list[list[Array]] = [[] for _ in range(n_cfg)]
-        if len(self.big):
-            c = centre[:, :, None, :] - self.object_centre[self.big]        # (N, L, B, 3)
-            near = self._reach(c, np.broadcast_to(self.big, c.shape[:3]),
-                               self.link_radius[None, :, None])
-            for n, i, b in zip(*np.nonzero(near & self.allowed[:, self.big]), strict=True):
-                found[n].append((i, self.big[b]))
-        if self.tree is not None:
-            radii = np.broadcast_to(self.link_radius + self.small_radius, (n_cfg, n_links))
-            hits = self.tree.query_ball_point(centre.reshape(-1, 3), radii.reshape(-1))
-            for flat, ks in enumerate(hits):
-                if not ks:
-                    continue
-                n, i = divmod(flat, n_links)
-                ks = self.small[np.asarray(ks, dtype=int)]
-                ks = ks[self.allowed[i, ks]]
-                d = centre[n, i] - self.object_centre[ks]
-                keep = self._reach(d, ks, self.link_radius[i])
-                found[n] += [(i, k) for k in ks[keep]]
-        return [np.array(f, dtype=int).reshape(-1, 2) for f in found]
-
-    def _reach(self, d: Array, objects: Array, radius: Array | float) -> Array:
-        """Whether spheres of ``radius`` at offsets ``d`` (..., 3) from the centres of
-        ``objects`` (...) reach them (exact for boxes, bounding spheres otherwise)."""
-        rot, half = self.box_rot[objects], self.box_half[objects]
-        local = np.einsum("...ji,...j->...i", rot, d)                    # R^T d
-        box_gap = np.linalg.norm(local - np.clip(local, -half, half), axis=-1)
-        sphere_gap = np.linalg.norm(d, axis=-1) - self.object_radius[objects]
-        gap = np.where(self.is_box[objects], box_gap, sphere_gap)
-        return gap <= radius + 1e-9
+    def collides(self, q: Array) -> bool:
+        """True when any enabled pair is in contact at ``q`` (n,)."""
+        poses = self.poses(np.asarray(q, float))
+        for i, placed in enumerate(self.robot_objects):
+            placed.setTransform(_tf(poses[i]))
+        for i, j in self.rr:
+            if fcl.collide(self.robot_objects[i], self.robot_objects[j], self.request,
+                           fcl.CollisionResult()) > 0:
+                return True
+        for i, k in (self.rs if self.every_pair else self._near(poses[:, :3, 3])):
+            if fcl.collide(self.robot_objects[i], self.objects[k], self.request,
+                           fcl.CollisionResult()) > 0:
+                return True
+        return False
 
     def colliding(self, qs: Array, stop_at_first: bool = False) -> Array:
         """True where a configuration (N, n) has a contact in any enabled pair."""
         qs = np.atleast_2d(np.asarray(qs, float))
-        if len(qs) > BLOCK:
-            out = np.zeros(len(qs), dtype=bool)
-            for lo in range(0, len(qs), BLOCK):
-                out[lo:lo + BLOCK] = self.colliding(qs[lo:lo + BLOCK], stop_at_first)
-                if stop_at_first and out[lo:lo + BLOCK].any():
-                    break
-            return out
-        poses = self._poses(qs)
-        centre = poses[:, :, :3, 3]
-        rr = self.rr
-        near_rr = (np.linalg.norm(centre[:, rr[:, 0]] - centre[:, rr[:, 1]], axis=2)
-                   <= self.link_radius[rr[:, 0]] + self.link_radius[rr[:, 1]] + 1e-9)
-        near_rs = self._near_objects(centre)
         out = np.zeros(len(qs), dtype=bool)
-        for n in range(len(qs)):
-            pairs_rr, pairs_rs = rr[near_rr[n]], near_rs[n]
-            for i in set(pairs_rr.ravel()) | set(pairs_rs[:, 0]):
-                self.robot_objects[i].setTransform(_tf(poses[n, i]))
-            hit = any(fcl.collide(self.robot_objects[i], self.robot_objects[j], self.request,
-                                  fcl.CollisionResult()) > 0 for i, j in pairs_rr)
-            hit = hit or any(fcl.collide(self.robot_objects[i], self.objects[k], self.request,
-                                         fcl.CollisionResult()) > 0 for i, k in pairs_rs)
-            out[n] = hit
-            if hit and stop_at_first:
+        for n, q in enumerate(qs):
+            out[n] = self.collides(q)
+            if out[n] and stop_at_first:
                 break
         return out
 
@@ -216,10 +209,13 @@ def densify(path: Array, step: float) -> Array:
 
 # ------------------------------------------------------------------------------ IK
 def pose_matrix(xyz: Any, quat_wxyz: Any) -> Array:
-    t = np.eye(4)
-    t[:3, :3] = matrix_from_quat(quat_wxyz)
-    t[:3, 3] = xyz
-    return t
+    """4x4 from a position and a (w, x, y, z) quaternion."""
+    return pose(quat_matrix(*(float(v) for v in quat_wxyz)), xyz)
+
+
+def _rotation_angle(a: Array, b: Array) -> float:
+    """The angle (rad) of the rotation between two rotation matrices."""
+    return math.acos(max(-1.0, min(1.0, (float(np.trace(a.T @ b)) - 1.0) / 2.0)))
 
 
 @dataclass(frozen=True)
@@ -230,19 +226,19 @@ class IkCheck:
     within_limits: bool | None
 
 
-def check_ik(robot: Robot, problem: dict[str, Any], result: dict[str, Any],
+def check_ik(kin: Kinematics, problem: dict[str, Any], result: dict[str, Any],
              tolerance: dict[str, float], tip: str = "tool0") -> IkCheck:
     """Does the answer reach the target within the tolerance and the joint limits?"""
     q = result.get("q") if result.get("success") else None
     if q is None:
         return IkCheck(False, None, None, None)
     q = np.asarray(q, float)
-    pose = robot.kinematics.frame_pose(q, tip)
+    kin.update(q)
+    reached = kin.frame(tip)
     target = pose_matrix(problem["xyz"], problem["quat_wxyz"])
-    dp = float(np.linalg.norm(pose[:3, 3] - target[:3, 3]))
-    do = float(rotation_distance(pose[:3, :3], target[:3, :3]))
-    lo, hi = robot.chain.lower(), robot.chain.upper()
-    inside = bool(np.all(q >= lo - LIMIT_SLACK) and np.all(q <= hi + LIMIT_SLACK))
+    dp = float(np.linalg.norm(reached[:3, 3] - target[:3, 3]))
+    do = _rotation_angle(reached[:3, :3], target[:3, :3])
+    inside = kin.inside(q)
     ok = dp <= tolerance["position_m"] and do <= tolerance["orientation_rad"] and inside
     return IkCheck(ok, dp, do, inside)
 
@@ -261,8 +257,7 @@ class PathCheck:
     waypoints: int | None
 
 
-def check_path(robot: Robot, judge: Judge, problem: dict[str, Any], result: dict[str, Any]
-               ) -> PathCheck:
+def check_path(judge: Judge, problem: dict[str, Any], result: dict[str, Any]) -> PathCheck:
     """Start and goal, joint limits, dense brute-force collision check of a returned path."""
     path = result.get("path") if result.get("success") else None
     if not path:
@@ -273,8 +268,7 @@ def check_path(robot: Robot, judge: Judge, problem: dict[str, Any], result: dict
     off = np.concatenate([p[0] - problem["start"], p[-1] - problem["goal"]])
     turns = bool(not ends and np.allclose(off, 2 * np.pi * np.round(off / (2 * np.pi)),
                                           atol=1e-6))
-    lo, hi = robot.chain.lower(), robot.chain.upper()
-    inside = bool(np.all(p >= lo - LIMIT_SLACK) and np.all(p <= hi + LIMIT_SLACK))
+    inside = judge.kin.inside(p)
     free = judge.path_free(p)
     length = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
     return PathCheck(ends and inside and free, ends, turns, inside, free, length, len(p))

@@ -1,0 +1,171 @@
+"""What the judge reads, read by the judge itself: the URDF's link cylinders and joint limits,
+the SRDF's disabled pairs, and the obstacles of a problem file's scene.
+
+Nothing here (nor in ``verify.py``) imports ``usar_arm``: the checks that every solver's answers
+go through must not share the code that produced ours. XML by ``xml.etree``, poses by this
+module's own roll-pitch-yaw and quaternion formulas, meshes by trimesh, forward kinematics by
+Pinocchio from the URDF text. Metres and radians.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+Array = np.ndarray
+
+
+def rpy_matrix(roll: float, pitch: float, yaw: float) -> Array:
+    """URDF's fixed-axis roll, pitch, yaw: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def quat_matrix(w: float, x: float, y: float, z: float) -> Array:
+    """The rotation of a unit quaternion (w, x, y, z); normalised first."""
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def pose(rot: Array, xyz: Any) -> Array:
+    """4x4 from a rotation and a translation."""
+    out = np.eye(4)
+    out[:3, :3] = rot
+    out[:3, 3] = [float(v) for v in xyz]
+    return out
+
+
+def _floats(text: str | None, default: str) -> list[float]:
+    return [float(v) for v in (text if text is not None else default).split()]
+
+
+@dataclass(frozen=True)
+class LinkCylinder:
+    """A link's collision cylinder: its pose in the link frame, radius and length (m)."""
+
+    link: str
+    origin: Array
+    radius: float
+    length: float
+
+
+@dataclass
+class JudgedRobot:
+    """The robot as the judge sees it.
+
+    Attributes:
+        urdf: the URDF text (Pinocchio builds its model from it).
+        cylinders: every link's collision cylinder (links without one are not checked).
+        joints: actuated joint names in the URDF's order; lower, upper: their limits.
+        disabled: the SRDF's disabled pairs (sorted link-name tuples).
+    """
+
+    urdf: str
+    cylinders: list[LinkCylinder]
+    joints: list[str]
+    lower: Array
+    upper: Array
+    disabled: set[tuple[str, str]] = field(default_factory=set)
+
+    @classmethod
+    def from_files(cls, urdf_path: str | Path, srdf_path: str | Path | None) -> JudgedRobot:
+        """Read a URDF (and its SRDF, when given)."""
+        urdf = Path(urdf_path).read_text(encoding="utf-8")
+        srdf = Path(srdf_path).read_text(encoding="utf-8") if srdf_path else None
+        return cls.from_text(urdf, srdf)
+
+    @classmethod
+    def from_text(cls, urdf: str, srdf: str | None) -> JudgedRobot:
+        root = ET.fromstring(urdf)
+        cylinders = []
+        for link in root.findall("link"):
+            for col in link.findall("collision"):
+                cyl = col.find("geometry/cylinder")
+                if cyl is None:
+                    continue
+                org = col.find("origin")
+                xyz = _floats(org.get("xyz") if org is not None else None, "0 0 0")
+                rpy = _floats(org.get("rpy") if org is not None else None, "0 0 0")
+                cylinders.append(LinkCylinder(link.get("name", ""), pose(rpy_matrix(*rpy), xyz),
+                                              float(cyl.get("radius", "0")),
+                                              float(cyl.get("length", "0"))))
+        joints, lower, upper = [], [], []
+        for joint in root.findall("joint"):
+            kind = joint.get("type")
+            if kind not in ("revolute", "prismatic", "continuous"):
+                continue
+            limit = joint.find("limit")
+            lo = float(limit.get("lower", "-inf")) if limit is not None else -math.inf
+            hi = float(limit.get("upper", "inf")) if limit is not None else math.inf
+            if kind == "continuous":
+                lo, hi = -math.inf, math.inf
+            joints.append(joint.get("name", ""))
+            lower.append(lo)
+            upper.append(hi)
+        disabled: set[tuple[str, str]] = set()
+        if srdf:
+            for d in ET.fromstring(srdf).findall("disable_collisions"):
+                a, b = d.get("link1", ""), d.get("link2", "")
+                disabled.add((min(a, b), max(a, b)))
+        return cls(urdf, cylinders, joints, np.array(lower), np.array(upper), disabled)
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """One obstacle: ``kind`` (box, cylinder, sphere, mesh), its pose (4x4 in base_link), its
+    parameters (box ``size``: full edges; ``radius``, ``length``; mesh ``vertices``, ``faces``)
+    and the links allowed to touch it."""
+
+    name: str
+    kind: str
+    pose: Array
+    params: dict[str, Any]
+    allow: frozenset[str]
+
+    def bounding_radius(self) -> float:
+        """Radius (m) of a sphere about the pose's origin that contains the obstacle."""
+        p = self.params
+        if self.kind == "box":
+            return float(np.linalg.norm(np.asarray(p["size"], float)) / 2)
+        if self.kind == "cylinder":
+            return math.hypot(p["radius"], p["length"] / 2)
+        if self.kind == "sphere":
+            return float(p["radius"])
+        return float(np.max(np.linalg.norm(p["vertices"], axis=1))) if len(p["vertices"]) else 0.0
+
+
+def read_scene(items: list[dict[str, Any]]) -> list[Obstacle]:
+    """The obstacles of a problem file's scene (``bench/scenes.py`` writes that format)."""
+    out = []
+    for d in items:
+        q = d.get("quat_wxyz", [1.0, 0.0, 0.0, 0.0])
+        where = pose(quat_matrix(*(float(v) for v in q)), d["xyz"])
+        kind = d["type"]
+        if kind == "box":
+            params: dict[str, Any] = {"size": [float(v) for v in d["size"]]}
+        elif kind == "cylinder":
+            params = {"radius": float(d["radius"]), "length": float(d["length"])}
+        elif kind == "sphere":
+            params = {"radius": float(d["radius"])}
+        elif kind == "mesh":
+            import trimesh
+
+            mesh = trimesh.load(d["file"], force="mesh")
+            params = {"vertices": np.asarray(mesh.vertices, float) * float(d.get("scale", 1.0)),
+                      "faces": np.asarray(mesh.faces, np.int32)}
+        else:
+            raise ValueError(f"the judge does not know obstacle type {kind!r} ({d.get('name')})")
+        out.append(Obstacle(str(d.get("name", "")), kind, where, params,
+                            frozenset(d.get("allow", []))))
+    return out

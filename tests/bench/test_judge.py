@@ -1,0 +1,115 @@
+"""The benchmark's judge (bench/verify.py, bench/judge_reading.py): it imports nothing from
+usar_arm, it sees contacts and gaps on hand-made cases whose answer is worked out here, it skips
+the SRDF's disabled pairs and an obstacle's allowed links, and it agrees with usar-arm's own
+collision world on random KR60 configurations in every shipped scene."""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "bench"))
+
+import verify  # noqa: E402
+from judge_reading import JudgedRobot, read_scene  # noqa: E402
+
+# A base cylinder (radius 0.1, length 0.4, centred 0.2 above the base) and an arm cylinder
+# (radius 0.05, length 1.0) lying along the x axis of link_1, 0.5 above the base, centred
+# 0.5 m out; link_1 turns about z.
+URDF = """<robot name="probe">
+  <link name="base_link"><collision><origin xyz="0 0 0.2"/>
+    <geometry><cylinder radius="0.1" length="0.4"/></geometry></collision></link>
+  <link name="link_1"><collision><origin xyz="0.5 0 0.5" rpy="0 1.5707963267948966 0"/>
+    <geometry><cylinder radius="0.05" length="1.0"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="link_1"/>
+    <axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" effort="1" velocity="1"/></joint>
+</robot>"""
+SRDF_NONE = "<robot name='probe'/>"
+
+
+def _box(x: float, y: float, z: float, size: tuple[float, float, float], **extra: object
+         ) -> dict[str, object]:
+    return {"name": "b", "type": "box", "xyz": [x, y, z], "quat_wxyz": [1, 0, 0, 0],
+            "size": list(size), **extra}
+
+
+def _judge(items: list[dict[str, object]], srdf: str = SRDF_NONE) -> verify.Judge:
+    return verify.Judge(JudgedRobot.from_text(URDF, srdf), read_scene(items), ["j1"])
+
+
+def test_the_judge_imports_nothing_from_usar_arm() -> None:
+    for name in ("verify.py", "judge_reading.py"):
+        tree = ast.parse((ROOT / "bench" / name).read_text())
+        imported = [n.name for node in ast.walk(tree) if isinstance(node, ast.Import)
+                    for n in node.names]
+        imported += [node.module or "" for node in ast.walk(tree)
+                     if isinstance(node, ast.ImportFrom)]
+        assert not [m for m in imported if m.split(".")[0] == "usar_arm"], (name, imported)
+
+
+@pytest.mark.parametrize(("gap", "hit"), [(0.001, False), (-0.001, True)])
+def test_an_arm_link_above_a_box_by_a_millimetre_or_into_it(gap: float, hit: bool) -> None:
+    # The arm cylinder's underside is at z = 0.5 - 0.05 = 0.45 along x in [0, 1] at q = 0; a
+    # box 0.2 high whose top is at 0.45 - gap, under x = 0.8.
+    top = 0.45 - gap
+    judge = _judge([_box(0.8, 0.0, top - 0.1, (0.2, 0.2, 0.2))])
+    assert bool(judge.colliding(np.array([[0.0]]))[0]) is hit
+    # Turned a quarter turn about z, the arm points along y and misses the box by far.
+    assert not judge.colliding(np.array([[np.pi / 2]]))[0]
+
+
+def test_a_sphere_and_a_cylinder_obstacle_by_hand() -> None:
+    # Arm axis along y at q = pi/2: points (0, 0..1, 0.5); a sphere of radius 0.1 at
+    # (0, 0.5, 0.5 + 0.05 + 0.1 + d): apart for d > 0, touching for d < 0.
+    for d, hit in ((0.002, False), (-0.002, True)):
+        sphere = {"name": "s", "type": "sphere", "xyz": [0.0, 0.5, 0.65 + d], "radius": 0.1}
+        assert bool(_judge([sphere]).colliding(np.array([[np.pi / 2]]))[0]) is hit
+    # A vertical post of radius 0.05 at (0.3, 0): the base cylinder (r 0.1) is 0.15 away
+    # from its axis -> touching exactly; move it 3 mm out -> apart (the arm passes above it).
+    for x, hit in ((0.147, True), (0.153, False)):
+        post = {"name": "p", "type": "cylinder", "xyz": [x, 0.0, 0.2], "radius": 0.05,
+                "length": 0.3}
+        assert bool(_judge([post]).colliding(np.array([[np.pi]]))[0]) is hit
+
+
+def test_disabled_pairs_and_allowed_links_are_not_checked() -> None:
+    # A box around the arm cylinder's middle, allowed to touch link_1: nothing to report; the
+    # same box without the exemption: a contact.
+    box = _box(0.5, 0.0, 0.5, (0.2, 0.2, 0.2), allow=["link_1"])
+    assert not _judge([box]).colliding(np.array([[0.0]]))[0]
+    box["allow"] = []
+    assert _judge([box]).colliding(np.array([[0.0]]))[0]
+    # A tall base that reaches the arm: a self contact, unless the SRDF disables the pair.
+    tall = URDF.replace('origin xyz="0 0 0.2"', 'origin xyz="0 0 0.3"')
+    tall = tall.replace('radius="0.1" length="0.4"', 'radius="0.1" length="0.6"')
+    srdf = ("<robot name='probe'><disable_collisions link1='link_1' link2='base_link' "
+            "reason='Adjacent'/></robot>")
+    for text, hit in ((SRDF_NONE, True), (srdf, False)):
+        judge = verify.Judge(JudgedRobot.from_text(tall, text), [], ["j1"])
+        assert bool(judge.colliding(np.array([[0.0]]))[0]) is hit
+
+
+@pytest.mark.parametrize("scene", ["table", "shelf", "cage"])
+def test_the_judge_agrees_with_usar_arm_on_random_configurations(scene: str,
+                                                                 tmp_path: Path) -> None:
+    import scenes
+
+    from usar_arm.robot import robot_from_files
+
+    urdf, srdf = ROOT / "robots/generated/KR60.urdf", ROOT / "robots/generated/KR60.srdf"
+    robot = robot_from_files(urdf, srdf)
+    sc = scenes.shipped(scene)
+    spec = {"urdf": str(urdf), "srdf": str(srdf), "joint_names": list(robot.chain.joint_names),
+            "scenes": {scene: scenes.to_json(sc, tmp_path)}}
+    judge = verify.Judge.for_scene(spec, scene)
+    world = robot.collision_world(sc)
+    qs = np.random.default_rng(4).uniform(robot.chain.lower(), robot.chain.upper(), (300, 6))
+    ours = world.in_collision_many(qs)
+    theirs = judge.colliding(qs)
+    assert (ours == theirs).all(), np.flatnonzero(ours != theirs)
+    assert 0 < theirs.sum() < len(qs)
