@@ -39,16 +39,17 @@ SLOW_PEER_LIMIT = {("KR60", "ikpy"): 2000, ("Fanuc_M16iB20", "ikpy"): 1000}
 to keep the whole run under 30 minutes; its ratios are taken over those poses."""
 
 
-def _solve_single(spec: dict[str, Any]) -> list[dict[str, Any]]:
+def _solve_single(spec: dict[str, Any], checked: bool = False) -> list[dict[str, Any]]:
     robot = robot_from_files(spec["urdf"], spec["srdf"])
     ik = robot.ik_solver()
+    world = robot.collision_world() if checked else None  # self-collisions, as mplib/roboplan
 
     def solve(p: dict[str, Any]) -> dict[str, Any]:
         target = verify.pose_matrix(p["xyz"], p["quat_wxyz"])
         seed = np.asarray(p["seed"], float)
         begin = time.perf_counter()
         try:
-            q = ik.solve(target, seed).best.q
+            q = ik.solve(target, seed, collision=world).best.q
         except IKError as exc:
             return {"success": False, "seconds": time.perf_counter() - begin, "q": None,
                     "status": type(exc).__name__}
@@ -77,35 +78,42 @@ def _solve_batch(spec: dict[str, Any]) -> list[dict[str, Any]]:
 def solver_main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--api", choices=("single", "batch"), default="single")
+    ap.add_argument("--api", choices=("single", "checked", "batch"), default="single")
     ap.add_argument("problems")
     ap.add_argument("results")
     a = ap.parse_args(argv)
     spec = common.read_json(common.Path(a.problems))
     robot = robot_from_files(spec["urdf"], spec["srdf"])
     ik = robot.ik_solver()
-    results = _solve_single(spec) if a.api == "single" else _solve_batch(spec)
+    results = (_solve_batch(spec) if a.api == "batch"
+               else _solve_single(spec, checked=a.api == "checked"))
+    api = {"single": "IKSolver.solve(pose, seed)",
+           "checked": "IKSolver.solve(pose, seed, collision=self-collision world)",
+           "batch": f"IKSolver.solve_batch, blocks of {BATCH}"}[a.api]
     peerio.write(a.results, peer=f"usar-arm ({a.api})", dist="usar-arm", stage="ik",
-                 results=results,
-                 settings={"api": "IKSolver.solve(pose, seed)" if a.api == "single" else
-                           f"IKSolver.solve_batch, blocks of {BATCH}", "method": ik.method,
-                           "options": asdict(ik.options)})
+                 results=results, settings={"api": api, "method": ik.method,
+                                            "options": asdict(ik.options)})
     return 0
 
 
 # ------------------------------------------------------------------------------ the stage
 def _solvers(ctx: Context, robot: str) -> list[common.Solver]:
     peers = ["pytracik", "mplib", "roboplan", "ikpy"] + (["opw"] if robot == "KR60" else [])
-    notes = {"pytracik": "TRAC-IK Speed, 5 ms timeout, 2 threads",
-             "mplib": "Planner.IK: 20 CLIK starts, collision-checked",
-             "roboplan": "SimpleIk, 2 restarts, collision-checked",
-             "ikpy": "scipy least_squares from the seed (full run: the first poses only)",
-             "opw": "closed form; the KR60 is only nearly OPW (wrist 2 mm off), so its "
-                    "answers are ~mm off the target"}
+    notes = {"pytracik": "no collision check; TRAC-IK Speed, 5 ms timeout, 2 threads",
+             "mplib": "collision-checked; Planner.IK: 20 CLIK starts",
+             "roboplan": "collision-checked; SimpleIk, 2 restarts",
+             "ikpy": "no collision check; scipy least_squares from the seed (full run: the "
+                     "first poses only)",
+             "opw": "no collision check; closed form; the KR60 is only nearly OPW (wrist 2 mm "
+                    "off), so its answers are ~mm off the target"}
     return [common.ours("usar-arm", "ik.py", "--api", "single",
-                        note="IKSolver.solve(pose, seed), one call per pose"),
+                        note="no collision check; IKSolver.solve(pose, seed), one call per pose"),
+            common.ours("usar-arm checked", "ik.py", "--api", "checked",
+                        note="collision-checked (self-collisions, as mplib and roboplan); "
+                             "IKSolver.solve(pose, seed, collision=world)"),
             common.ours("usar-arm batch", "ik.py", "--api", "batch",
-                        note=f"IKSolver.solve_batch, {BATCH} poses per call; time per pose"),
+                        note=f"no collision check; IKSolver.solve_batch, {BATCH} poses per "
+                             "call; time per pose"),
             *[ctx.peer(p, "ik", notes[p], SLOW_PEER_LIMIT.get((robot, p))) for p in peers]]
 
 
