@@ -34,6 +34,29 @@ ORIENTATION_TOLERANCE_RAD = 1e-3
 LINE_TOLERANCE_M = 1e-3
 
 
+def finite_difference_violations(t: Array, q: Array, lower: Array, upper: Array,
+                                 vmax: Array, amax: Array, jmax: Array) -> list[str]:
+    """The limits checked from the positions alone (not the code's own velocities and
+    accelerations, nor its limit check): over the uniform 1 ms samples, the first, second and
+    third differences are weighted averages of velocity, acceleration and jerk over 1, 2 and
+    3 ms, so none of them may exceed its limit (a float tolerance aside)."""
+    out = []
+    if np.any(q < lower - 1e-9) or np.any(q > upper + 1e-9):
+        out.append("a position outside its joint limits (samples)")
+    uniform = np.flatnonzero(np.abs(np.diff(t) - 1.0 / RATE_HZ) < 1e-9)
+    if len(uniform) < 4:
+        return out
+    k = np.arange(uniform[0], uniform[-1] + 2)  # the run of uniformly spaced samples
+    h = 1.0 / RATE_HZ
+    for order, limit, name in ((1, vmax, "velocity"), (2, amax, "acceleration"),
+                               (3, jmax, "jerk")):
+        diff = np.diff(q[k], n=order, axis=0) / h ** order
+        worst = float(np.max(np.abs(diff) / (limit * (1 + LIMIT_TOLERANCE) + 1e-9)))
+        if worst > 1.0 + 1e-6:
+            out.append(f"finite-difference {name} {worst:.6f}x its limit")
+    return out
+
+
 @dataclass
 class Recheck:
     """What the re-check measured and every invariant it found broken (empty: all kept)."""
@@ -78,6 +101,9 @@ def recheck(robot: Robot, world: CollisionWorld, plan: MotionPlan, start: Array 
         return out
     out.limits = check_limits(t, q, qd, qdd, traj.limits, names)
     _limits("the 1 kHz motion", out.limits, bad)
+    bad += finite_difference_violations(t, q, traj.limits.lower, traj.limits.upper,
+                                        traj.limits.velocity, traj.limits.acceleration,
+                                        traj.limits.jerk)
     hits = world.in_collision_many(q)
     if np.any(hits):
         k = int(np.argmax(hits))

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.planning.recheck import recheck
+from tests.planning.recheck import finite_difference_violations, recheck
 from usar_arm.errors import (
     GoalInCollisionError,
     IKError,
@@ -384,3 +384,16 @@ def test_a_thousand_seeded_problems_keep_every_invariant(kr60: Robot, fanuc: Rob
         assert every[name] > 0, f"no {name}: that failure path was not exercised"
     assert sum(v for k, v in every.items() if k in ("UnreachableError", "JointLimitError",
                                                      "AllSolutionsInCollisionError")) > 0
+
+
+def test_the_finite_difference_check_sees_a_limit_exceeded_by_one_percent() -> None:
+    t = np.arange(0.0, 1.0, 1e-3)
+    ones = np.ones(1)
+    lim = {"lower": -10 * ones, "upper": 10 * ones, "vmax": ones, "amax": 10 * ones,
+           "jmax": 100 * ones}
+    ok = (0.99 * t)[:, None]        # 0.99 rad/s: within the 1 rad/s limit
+    fast = (1.01 * t)[:, None]      # 1.01 rad/s: over it
+    assert finite_difference_violations(t, ok, **lim) == []
+    assert any("velocity" in v for v in finite_difference_violations(t, fast, **lim))
+    jerky = (0.5 * 10.5 * t ** 2)[:, None]  # 10.5 rad/s^2: over the acceleration limit
+    assert any("acceleration" in v for v in finite_difference_violations(t, jerky, **lim))
