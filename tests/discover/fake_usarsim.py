@@ -1,30 +1,47 @@
-"""A tiny scripted USARSim server that describes an arbitrary arm (for generality and errors)."""
+"""A tiny scripted USARSim server that describes an arbitrary arm (for generality and errors).
+
+It shares no code with usar-arm (standard library only, its own line reading): it greets,
+answers GETSTARTPOSES, spawns on INIT and then streams STA and ASTA at 10 Hz, answers
+GETCONF/GETGEO from fixed lines, and takes ACT targets (0-based links), which its ASTA lines then
+report (1-based links) as the joints' values.
+"""
 
 from __future__ import annotations
 
+import itertools
+import re
 import socket
 import threading
 import time
 
 from tests.usarsim.fake_server import FakeServer
-from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.codec import parse_line
+
+_BLOCK = re.compile(r"\{(\w+)\s*([^}]*)\}")
+
+
+def _read(line: str) -> tuple[str, list[tuple[str, str]]]:
+    """The command word (upper case) and the ``{Key value}`` blocks of a line."""
+    head = line.split("{", 1)[0].strip().upper()
+    return head, [(k, v.strip()) for k, v in _BLOCK.findall(line)]
 
 
 def fake_usarsim(conf: str, geo: str, *, greet: bool = True, answer: bool = True,
                  close_mid_geo: bool = False, arm: str = "A", dof: int = 2) -> FakeServer:
-    """Serve NFO, GETSTARTPOSES, INIT (then 10 Hz ASTA), GETCONF/GETGEO from fixed lines."""
+    """Serve NFO, GETSTARTPOSES, INIT (then 10 Hz ASTA), GETCONF/GETGEO from fixed lines and
+    ACT (the targets become the streamed joint values)."""
 
     def script(conn: socket.socket) -> None:
         if greet:
             conn.sendall(b"NFO {Gametype BotDeathMatch} {Level fake} {TimeLimit 0}\r\n")
         spawned = threading.Event()
+        joints = [0.0] * dof
 
         def stream() -> None:
             t = 0.0
             while spawned.is_set():
                 t += 0.1
-                values = " ".join(f"{{Link {k + 1}}} {{Value 0.0000}}" for k in range(dof))
+                values = " ".join(f"{{Link {k + 1}}} {{Value {v:.4f}}}"
+                                  for k, v in enumerate(joints))
                 try:
                     conn.sendall(f"STA {{Time {t:.4f}}} {{Battery 99999}} {{Type StaticPlatform}}"
                                  f"\r\nASTA {{Time {t:.4f}}} {{Name {arm}}} {values}\r\n".encode())
@@ -42,22 +59,27 @@ def fake_usarsim(conf: str, geo: str, *, greet: bool = True, answer: bool = True
             buf += chunk
             while b"\n" in buf:
                 raw, buf = buf.split(b"\n", 1)
-                msg = parse_line(raw.decode().strip())
+                head, blocks = _read(raw.decode().strip())
+                keys = {k.lower(): v for k, v in blocks}
                 if not answer:
                     continue
-                if isinstance(msg, m.GetStartPoses):
+                if head == "GETSTARTPOSES":
                     conn.sendall(b"NFO {StartPoses 1} {Start1 0.00,0.00,0.00 0.00,0.00,0.00}\r\n")
-                elif isinstance(msg, m.Init):
+                elif head == "INIT":
                     spawned.set()
                     threading.Thread(target=stream, daemon=True).start()
-                elif isinstance(msg, m.GetConf) and msg.type == "Robot":
+                elif head == "ACT":
+                    for (key, value), (key2, value2) in itertools.pairwise(blocks):
+                        if key == "Link" and key2 == "Value" and 0 <= int(value) < dof:
+                            joints[int(value)] = float(value2)
+                elif head == "GETCONF" and keys.get("type") == "Robot":
                     conn.sendall(b"CONF {Name R} {Type StaticPlatform} {SteeringType None} "
                                  b"{Mass 0} \r\n")
-                elif isinstance(msg, m.GetGeo) and msg.type == "Robot":
+                elif head == "GETGEO" and keys.get("type") == "Robot":
                     conn.sendall(b"GEO {Type StaticPlatform} {Name R}\r\n")
-                elif isinstance(msg, m.GetConf):
+                elif head == "GETCONF":
                     conn.sendall(conf.encode() + b"\r\n")
-                elif isinstance(msg, m.GetGeo):
+                elif head == "GETGEO":
                     if close_mid_geo:
                         conn.sendall(geo.encode()[: len(geo) // 2])
                         spawned.clear()

@@ -17,7 +17,6 @@ from usar_arm import errors
 from usar_arm.cli.main import main
 from usar_arm.description import DescribeOptions
 from usar_arm.embedded import describe
-from usar_arm.spatial import rot_x, rot_y, rot_z
 
 
 def test_a_general_arm_with_a_rotated_mount_a_slide_and_a_tip(tmp_path: Path) -> None:
@@ -27,30 +26,33 @@ def test_a_general_arm_with_a_rotated_mount_a_slide_and_a_tip(tmp_path: Path) ->
     chain = desc.chain
     assert [j.type.value for j in chain.actuated_joints] == ["revolute", "prismatic"]
     assert chain.name == "R"
-    # Expected flange position, from the GEO numbers by hand (z-down), then flipped to z-up.
-    mount = rot_z(1.570)
-    q1, d2 = 0.7, 0.25
-    axis1 = rot_x(3.14)[:, 2]          # snapped to (0, 0, -1)
-    axis1 = np.round(axis1)
-    rot1 = _axis_angle(axis1, q1)
-    slide = np.round((rot_x(3.14) @ rot_y(1.57))[:, 2])  # joint 2 axis, snapped
-    p_act = np.array([0.0, 0.0, -0.3]) + rot1 @ (np.array([0.4, 0, 0]) + slide * d2
-                                                  + np.array([0.1, 0, 0]))
-    p_world = np.array([0.5, 0.2, -0.1]) + _snap(mount) @ p_act
-    expected = np.diag([1.0, -1.0, -1.0]) @ p_world
-    got = chain.frame_pose("flange", [q1, d2])[:3, 3]
-    assert np.allclose(got, expected, atol=1e-9)
+    # The flange at q1 = 0.7 rad, d2 = 0.25 m, worked out by hand from the GEO line (z down):
+    # - the mount: at (0.5, 0.2, -0.1), yaw 1.570 -> a quarter turn, (x, y, z) -> (-y, x, z);
+    # - joint 1 at (0, 0, -0.3), frame roll 3.14 -> pi: its axis is -z, so q1 turns by -0.7
+    #   about z; joint 2 is 0.4 m out along x, its frame pitched 1.57 -> pi/2 from joint 1's,
+    #   so it slides along x; the Tip is 0.1 m further along x. At q1, everything beyond joint
+    #   1 lies 0.4 + 0.25 + 0.1 = 0.75 m out along (cos 0.7, -sin 0.7, 0):
+    #   (0.573631640463366, -0.483163265428268, -0.3) in the arm's frame;
+    # - turned by the mount: (0.483163265428268, 0.573631640463366, -0.3), plus the mount's
+    #   position: (0.983163265428268, 0.773631640463366, -0.4);
+    # - z up (x, -y, -z):
+    expected = (0.983163265428268, -0.773631640463366, 0.4)
+    got = chain.frame_pose("flange", [0.7, 0.25])[:3, 3]
+    assert np.allclose(got, expected, atol=1e-9), got
     assert desc.warnings == () or all("geometry" in w or "default" in w for w in desc.warnings)
     assert any("conservative default" in s for s in desc.limit_sources[0])
 
 
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    from usar_arm.spatial import exp_so3
-    return exp_so3(axis * angle)
+def test_the_fake_server_streams_the_targets_it_was_sent() -> None:
+    from usar_arm.usarsim.client import UsarClient
 
-
-def _snap(r: np.ndarray) -> np.ndarray:
-    return np.round(r)
+    with fake_usarsim(CONF, GEO) as srv, UsarClient(port=srv.port, timeout=2.0) as client:
+        client.spawn("USARBot.Anything")
+        first = client.wait_asta("A")
+        assert first.values == ((1, 0.0), (2, 0.0))
+        client.act("A", [0.5, 0.125])  # ACT links 0 and 1 -> ASTA links 1 and 2
+        later = client.wait_asta("A", after_time=first.time + 0.15)
+        assert later.values == ((1, 0.5), (2, 0.125))
 
 
 def _cli(tmp_path: Path, *args: str) -> tuple[int, float]:
