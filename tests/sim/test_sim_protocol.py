@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import socket
 import time
 
@@ -22,13 +23,36 @@ KR60_CONF = (
     "{Link 4} {JointType Revolute} {MaxTorque 100.0000} {MinValue -3.1400} {MaxValue 3.1400} "
     "{Link 5} {JointType Revolute} {MaxTorque 60.0000} {MinValue -2.0760} {MaxValue 2.0760} "
     "{Link 6} {JointType Revolute} {MaxTorque 25.0000} {MinValue -3.1400} {MaxValue 3.1400}")
-KR60_GEO_LOCATIONS = [
-    (0.070, 0.010, -0.413), (0.424, -0.210, -0.383), (-0.004, 0.060, -1.004),
-    (0.491, 0.162, -0.169), (0.492, 0.068, 0.000), (0.152, -0.070, 0.000)]
+KR60_GEO = (
+    "GEO {Type Actuator} {Name KR60Arm} {Location 0.000,0.000,0.000} "
+    "{Orientation 0.000,0.000,0.000}{Mount KR60} "
+    "{Link 1} {Parent 0} {Location 0.070,0.010,-0.413} {Orientation 3.14,0.00,0.00} "
+    "{Link 2} {Parent 1} {Location 0.424,-0.210,-0.383} {Orientation -2.00,-1.57,-2.71} "
+    "{Link 3} {Parent 2} {Location -0.004,0.060,-1.004} {Orientation 0.00,0.00,-1.57} "
+    "{Link 4} {Parent 3} {Location 0.491,0.162,-0.169} {Orientation 2.36,1.57,2.36} "
+    "{Link 5} {Parent 4} {Location 0.492,0.068,0.000} {Orientation -0.79,-1.57,-2.36} "
+    "{Link 6} {Parent 5} {Location 0.152,-0.070,0.000} {Orientation -2.36,-1.57,2.36}"
+    "{Tip 0.05,0.00,0.00}")
+"""UDK's GEO of the KR60 character by character: locations are the differences of the spec's
+offsets truncated to 3 decimals (the reference's -1.004 for a true -1.005), orientations the
+relative rotations of the spec's Directions to 2 decimals (checked below by hand), Tip 0.048 at
+2 decimals, no space before {Mount or {Tip."""
+KR60_DIRECTIONS = [(3.1415, 0, 0), (-1.571, 1.571, 0), (-1.571, 0, 0), (-1.571, 0, -1.571),
+                   (1.571, 0, 0), (1.571, 0, -1.571)]
+"""The joints' absolute Directions (roll, pitch, yaw) in kr60Arm.uc."""
 KR60_AXES_ZDOWN = [(0, 0, -1), (0, 1, 0), (0, 1, 0), (1, 0, 0), (0, -1, 0), (-1, 0, 0)]
-# Derived relative orientations (docs/protocol.md section 7), compared as rotations.
-KR60_GEO_RPY = [(np.pi, 0, 0), (-2.0, -1.571, -2.715), (0, 0, -1.571), (2.356, 1.571, 2.356),
-                (-0.785, -1.571, -2.356), (-2.356, -1.571, 2.356)]
+
+
+def _rpy(r: float, p: float, y: float) -> np.ndarray:
+    """R = Rz(y) Ry(p) Rx(r), written out (no usar-arm helper)."""
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.arccos(np.clip((np.trace(a.T @ b) - 1) / 2, -1, 1)))
 
 
 def spawn(port: int, cls: str = "USARBot.KR60", timeout: float = 3.0) -> UsarClient:
@@ -49,19 +73,24 @@ def test_kr60_conf_and_geo_are_the_reference_numbers(sim: SimServer) -> None:
     with spawn(sim.port) as client:
         conf_line = client.request(m.GetConf("Actuator", "KR60Arm"),
                                    lambda x: isinstance(x, m.Conf)).line
-        geo = client.get_geo("Actuator", "KR60Arm")
+        geo_line = client.request(m.GetGeo("Actuator", "KR60Arm"),
+                                  lambda x: isinstance(x, m.Geo)).line
         platform = client.get_conf("Robot")
         platform_geo = client.get_geo("Robot")
     assert conf_line == KR60_CONF
-    item = geo.items[0]
-    assert item.mount == "KR60" and item.tip == (0.05, 0.0, 0.0)  # TipOffset 0.048 at 2 decimals
-    assert [ln.location for ln in item.links] == KR60_GEO_LOCATIONS
-    assert [ln.parent for ln in item.links] == [0, 1, 2, 3, 4, 5]
-    from usar_arm.spatial import rotation_distance, rpy_to_matrix
+    assert geo_line == KR60_GEO
+    # Each printed orientation is the relative rotation of the spec's Directions (parent^T
+    # child) to within its 2 decimals, and accumulating them gives each joint's axis.
+    printed = [tuple(float(v) for v in block.split(","))
+               for block in re.findall(r"\{Link \d\} \{Parent \d\} \{Location [^}]*\} "
+                                       r"\{Orientation ([^}]*)\}", geo_line)]
+    parent = np.eye(3)
     absolute = np.eye(3)
-    for ln, rpy, axis in zip(item.links, KR60_GEO_RPY, KR60_AXES_ZDOWN, strict=True):
-        assert rotation_distance(rpy_to_matrix(ln.orientation), rpy_to_matrix(rpy)) < 0.01
-        absolute = absolute @ rpy_to_matrix(ln.orientation)
+    for rpy, direction, axis in zip(printed, KR60_DIRECTIONS, KR60_AXES_ZDOWN, strict=True):
+        child = _rpy(*direction)
+        assert _angle(_rpy(*rpy), parent.T @ child) < 0.01, rpy
+        parent = child
+        absolute = absolute @ _rpy(*rpy)
         assert np.allclose(absolute[:, 2], axis, atol=0.02)
     assert platform == m.PlatformConf("KR60", "StaticPlatform",
                                       (("SteeringType", "None"), ("Mass", "0")))
