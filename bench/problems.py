@@ -294,23 +294,24 @@ def topp_set(plan_doc: dict[str, Any], n: int, out: Path) -> dict[str, Any]:
 
 def topp_neutral_set(plan_doc: dict[str, Any], n: int) -> dict[str, Any]:
     """Paths no planner made: 3 to 7 random waypoints in the empty scene, each straight segment
-    free of self-collision at 0.01 rad steps (drawn with the set's seed). On these a spline that
-    leaves the polyline costs nothing, so every solver's durations compare on equal terms."""
-    robot = load_robot(plan_doc["urdf"])
-    lo, hi = robot.chain.lower(), robot.chain.upper()
-    world = robot.collision_world(scene("empty"))
+    free of self-collision by the judge itself at its own step (drawn with the set's seed). On
+    these a spline that leaves the polyline costs nothing, so every solver's durations compare
+    on equal terms."""
+    lo, hi = np.array(plan_doc["lower"]), np.array(plan_doc["upper"])
+    judge = Judge.for_scene({**plan_doc, "scenes": {"empty": []}}, "empty")
     rng = np.random.default_rng(SEED + 7)
     problems: list[dict[str, Any]] = []
     while len(problems) < n:
         count = int(rng.integers(3, 8))
         points = [rng.uniform(lo, hi)]
+        if judge.colliding(points[0])[0]:
+            continue
         while len(points) < count:
             step = np.clip(points[-1] + rng.normal(0.0, 0.6, len(lo)), lo, hi)
-            if not world.in_collision_many(edge_configurations(points[-1], step, 0.01)).any():
+            if judge.path_free(np.array([points[-1], step])):
                 points.append(step)
-        if not world.in_collision(points[0]):
-            problems.append({"id": len(problems), "scene": "empty",
-                             "waypoints": np.array(points).tolist()})
+        problems.append({"id": len(problems), "scene": "empty",
+                         "waypoints": np.array(points).tolist()})
     keep = ("robot", "urdf", "srdf", "joint_names", "lower", "upper", "vmax", "amax", "jmax")
     return {"stage": "topp", **{k: plan_doc[k] for k in keep}, "speed_scale": 1.0,
             "scenes": {"empty": []},

@@ -355,6 +355,11 @@ def _print(report: dict[str, Any], path: Path) -> None:
         print(f"  {label}: {len(report[label])}")
 
 
+SOLVE_RATE_FLOORS = {"free-pair": 0.93, "pose": 0.95, "blocked-pair": 0.70, "lin-short": 0.48}
+"""Least fraction solved per kind of problem in the 1,000-problem run (observed 0.970, 0.993,
+0.770, 0.550)."""
+
+
 def _assert_clean(tally: Tally) -> None:
     problems = ([f"INVARIANT: {v}" for v in tally.violations]
                 + [f"UNTYPED: {v}" for v in tally.untyped]
@@ -378,7 +383,14 @@ def test_a_thousand_seeded_problems_keep_every_invariant(kr60: Robot, fanuc: Rob
     _assert_clean(tally)
     every = tally.counts["all"]["all"]
     assert every["tried"] >= 1000
-    assert every["solved"] >= 400
+    # Observed (seed 2, the run before these floors): 635 / 1,000 solved; free-pair 197/203,
+    # pose 150/151, blocked-pair 77/100, lin-short 82/149. Floors a little below those rates.
+    assert every["solved"] / every["tried"] >= 0.60
+    for kind, floor in SOLVE_RATE_FLOORS.items():
+        c = tally.counts["kind"][kind]
+        assert c["tried"] >= 50, f"{kind}: only {c['tried']} tried"
+        rate = c.get("solved", 0) / c["tried"]
+        assert rate >= floor, f"{kind}: solved {c.get('solved', 0)}/{c['tried']} < {floor:.0%}"
     for name in ("StartInCollisionError", "GoalInCollisionError", "OutOfLimitsError",
                  "NoPathError", "LinBlockedError", "InvalidInputError"):
         assert every[name] > 0, f"no {name}: that failure path was not exercised"
