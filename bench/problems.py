@@ -294,21 +294,30 @@ def topp_set(plan_doc: dict[str, Any], n: int, out: Path) -> dict[str, Any]:
 
 def topp_neutral_set(plan_doc: dict[str, Any], n: int) -> dict[str, Any]:
     """Paths no planner made: 3 to 7 random waypoints in the empty scene, each straight segment
-    free of self-collision by the judge itself at its own step (drawn with the set's seed). On
-    these a spline that leaves the polyline costs nothing, so every solver's durations compare
-    on equal terms."""
+    clear of self-collision by 1 cm everywhere along it (usar-arm's padded world walks it with
+    its continuous guarantee; the judge checks it too), drawn with the set's seed. On these a
+    spline that leaves the polyline costs nothing, and any sampling of the polyline is free, so
+    every solver's durations compare on equal terms."""
+    robot = load_robot(plan_doc["urdf"])
     lo, hi = np.array(plan_doc["lower"]), np.array(plan_doc["upper"])
+    padded = robot.collision_world(scene("empty"), padding=CLEARANCE)
+    levers = padded.lever_arms()
     judge = Judge.for_scene({**plan_doc, "scenes": {"empty": []}}, "empty")
     rng = np.random.default_rng(SEED + 7)
     problems: list[dict[str, Any]] = []
+
+    def free(a: Array, b: Array) -> bool:
+        steps = max(1, int(np.ceil(float(levers @ np.abs(b - a)) / 0.005)))
+        return padded.segment_free(a, b, steps) and judge.path_free(np.array([a, b]))
+
     while len(problems) < n:
         count = int(rng.integers(3, 8))
         points = [rng.uniform(lo, hi)]
-        if judge.colliding(points[0])[0]:
+        if padded.in_collision(points[0]):
             continue
         while len(points) < count:
             step = np.clip(points[-1] + rng.normal(0.0, 0.6, len(lo)), lo, hi)
-            if judge.path_free(np.array([points[-1], step])):
+            if free(points[-1], step):
                 points.append(step)
         problems.append({"id": len(problems), "scene": "empty",
                          "waypoints": np.array(points).tolist()})
