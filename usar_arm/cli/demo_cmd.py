@@ -17,9 +17,6 @@ from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_
 from usar_arm.cli.execution_args import execution_options
 from usar_arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
 from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.export.bag import write_bag
-from usar_arm.export.plot import plot_trajectory
-from usar_arm.export.render import render_arm, tool_path
 from usar_arm.fileio import write_atomic
 from usar_arm.motion import MotionOptions
 from usar_arm.planning.ompl_adapter import OmplOptions
@@ -104,6 +101,11 @@ def _verdict(rows: list[dict[str, Any]], key: str) -> tuple[bool, float, float]:
 
 def _outputs(arm: Arm, result: CycleResult, folder: Path, bag: bool) -> dict[str, str]:
     """Write trajectories, pictures and the bag; returns what -> path."""
+    # Imported here: matplotlib and the bag writer cost ~0.3 s that other commands never need.
+    from usar_arm.export.bag import write_bag
+    from usar_arm.export.plot import plot_trajectory
+    from usar_arm.export.render import render_arm, tool_path
+
     files: dict[str, str] = {}
     moves = result.moves
     cycle, executed = result.timeline()

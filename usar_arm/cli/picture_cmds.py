@@ -10,8 +10,6 @@ from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosit
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
 from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.export.plot import plot_trajectory
-from usar_arm.export.render import render_arm, tool_path
 from usar_arm.planning.scene import Scene
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot
@@ -79,6 +77,8 @@ def _check_joints(robot: Robot, traj: Trajectory, path: str) -> None:
 
 
 def run_render(args: argparse.Namespace) -> int:
+    from usar_arm.export.render import render_arm, tool_path  # matplotlib: only when drawing
+
     setup_logging(verbosity(args))
     if min(args.size) < 100:
         raise InvalidInputError(f"--size must be at least 100 x 100 pixels, got {args.size}")
@@ -107,6 +107,8 @@ def run_render(args: argparse.Namespace) -> int:
 
 
 def run_plot(args: argparse.Namespace) -> int:
+    from usar_arm.export.plot import plot_trajectory  # matplotlib: only when plotting
+
     setup_logging(verbosity(args))
     traj, executed = load_with_executed(args.trajectory)
     plot_trajectory(args.out, traj, executed, jerk=not args.no_jerk, width=args.width)
