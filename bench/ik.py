@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Any
 
 import common
@@ -114,7 +114,10 @@ def _solvers(ctx: Context, robot: str) -> list[common.Solver]:
             common.ours("usar-arm batch", "ik.py", "--api", "batch",
                         note=f"no collision check; IKSolver.solve_batch, {BATCH} poses per "
                              "call; time per pose"),
-            *[ctx.peer(p, "ik", notes[p], SLOW_PEER_LIMIT.get((robot, p))) for p in peers]]
+            *[ctx.peer(p, "ik", notes[p], SLOW_PEER_LIMIT.get((robot, p))) for p in peers],
+            replace(ctx.peer("roboplan", "ik_unchecked",
+                             "no collision check; SimpleIk, 2 restarts, check_collisions=False"),
+                    name="roboplan unchecked")]
 
 
 def run(ctx: Context) -> dict[str, Any]:

@@ -5,8 +5,11 @@ beside the URDF>) (see rp_scene.py). SimpleIk(scene, SimpleIkOptions(group_name,
 max_linear_error_norm=position_m, max_angular_error_norm=orientation_rad)), defaults
 otherwise (max_iters=100, max_restarts=2, step_size=0.25, damping=1e-3, check_collisions=True,
 fast_return=True). Timed: ik.solveIk(CartesianConfiguration(base, tip, T), JointConfiguration
-(names, seed), solution) alone.
+(names, seed), solution) alone. With ROBOPLAN_IK_CHECK_COLLISIONS=0 in the environment
+(run_roboplan_ik_unchecked.py), check_collisions=False: the mode without a collision check.
 """
+
+import os
 
 import numpy as np
 import peerio
@@ -22,6 +25,7 @@ opts = SimpleIkOptions(
     max_time=spec["timeout_s"],
     max_linear_error_norm=tol["position_m"],
     max_angular_error_norm=tol["orientation_rad"],
+    check_collisions=os.environ.get("ROBOPLAN_IK_CHECK_COLLISIONS", "1") != "0",
 )
 ik = SimpleIk(scene, opts)
 ik.setRngSeed(0)
@@ -48,6 +52,8 @@ peerio.write(
     dist="roboplan",
     stage="ik",
     results=peerio.solve_all(spec["problems"], solve),
-    settings={"group": group, "max_time": spec["timeout_s"], "collisions": acm},
-    notes="SimpleIk checks collisions (SRDF pairs disabled) by default",
+    settings={"group": group, "max_time": spec["timeout_s"], "collisions": acm,
+              "check_collisions": opts.check_collisions},
+    notes="SimpleIk" + (" checks collisions (SRDF pairs disabled)" if opts.check_collisions
+                        else " without its collision check"),
 )
