@@ -1,0 +1,250 @@
+"""The fit: Levenberg-Marquardt on the pose residuals, reduced to the identifiable parameters.
+
+1. Scale: every residual by its own 1-sigma (noise and truncation), every Jacobian column to
+   unit norm. 2. Rank: QR with column pivoting of that scaled identification Jacobian gives the
+   rank; the parameters kept are chosen in a fixed order of preference (base, tool, joint frames
+   root to tip), a parameter whose column depends on those already kept being unidentifiable
+   (named in the report). 3. Levenberg-Marquardt to convergence. 4. Outliers: readings more than
+   ``outlier_sigma`` outside their intervals are removed (worst first, at most 10 %) and the fit
+   repeated; if that is not enough the result is ``consistent = False``. 5. Standard deviations
+   from the residual covariance of the midpoint model at the solution.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from usar_arm.calibrate import quantised as qm
+from usar_arm.calibrate.measurements import Measurement
+from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.calibrate.residuals import Residuals, distances
+from usar_arm.errors import CalibrationError
+from usar_arm.spatial import Array
+
+# The quantisation model "auto" stands for: measured best on synthetic quantised readings
+# (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
+AUTO_MODEL = "midpoint"
+RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
+MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
+STEP = 1e-6             # numeric Jacobian step (m, rad)
+
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """How to fit (see the module)."""
+
+    quantisation: str = "auto"        # "midpoint" | "set-membership" | "auto"
+    max_iterations: int = 20
+    outlier_sigma: float = 4.0
+    base: bool = True
+    tool: bool = True
+    default_sigma_m: float = 1e-4     # noise of a position number that states none (m)
+    default_sigma_rad: float = 1e-4   # noise of an angle that states none (rad)
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """One identified parameter: its name, value and standard deviation (m or rad)."""
+
+    name: str
+    value: float
+    std: float
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The result of :func:`identify` (see docs/calibration.md)."""
+
+    parameters: tuple[ParameterEstimate, ...]
+    unidentifiable: tuple[str, ...]
+    rank: int
+    base: Array
+    fit: Residuals
+    consistent: bool
+    worst: tuple[str, ...]
+    rejected: tuple[str, ...]
+    quantisation: str
+    measured_frame: str = ""
+    base_guess: Array = field(default_factory=lambda: np.eye(4))
+    iterations: int = 0
+    vector: Array = field(default_factory=lambda: np.zeros(0))
+    qr_rank: int = 0                  # the pivoted QR's rank (equals rank unless ill-posed)
+    seconds: float = 0.0              # time the fit took
+
+    def apply(self, urdf: str) -> str:
+        """The calibrated URDF text (joint origins and the measured frame's offset corrected)."""
+        return ErrorModel.from_urdf(urdf, self.measured_frame).apply(urdf, self.vector)
+
+    def validate(self, urdf: str, measured_frame: str,
+                 held_out: Sequence[Measurement]) -> Residuals:
+        """Residuals on readings never used for the fit: the nominal ``urdf`` at the base guess
+        before, the calibrated URDF (evaluated by Pinocchio) at the fitted base after."""
+        from usar_arm.calibrate.validation import validate
+
+        return validate(self, urdf, measured_frame, held_out)
+
+
+def _jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: Array,
+              t: qm.Targets) -> Array:
+    """d errors / d p[cols] (N*6, len(cols)), central differences."""
+    out = np.empty((q.shape[0] * 6, len(cols)))
+    for k, c in enumerate(cols):
+        hi, lo = p.copy(), p.copy()
+        hi[c] += STEP
+        lo[c] -= STEP
+        d = qm.errors(model.poses(hi, q, base), t) - qm.errors(model.poses(lo, q, base), t)
+        out[:, k] = (d / (2 * STEP)).ravel()
+    return out
+
+
+def _select(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
+    """The identifiable columns, kept in ``order`` of preference, and the pivoted-QR rank."""
+    from scipy.linalg import qr
+
+    norms = np.linalg.norm(jac, axis=0)
+    scaled = jac / np.where(norms > 0, norms, 1.0)
+    r = qr(scaled, mode="r", pivoting=True)[0]
+    diag = np.abs(np.diag(r))
+    rank = int((diag > RANK_TOL * diag[0]).sum()) if len(diag) else 0
+    kept: list[int] = []
+    basis = np.zeros((jac.shape[0], 0))
+    for c in order:
+        if norms[c] == 0:
+            continue
+        v = scaled[:, c] - basis @ (basis.T @ scaled[:, c])
+        v = v - basis @ (basis.T @ v)
+        if np.linalg.norm(v) > math.sqrt(RANK_TOL):
+            kept.append(c)
+            basis = np.column_stack([basis, v / np.linalg.norm(v)])
+    return kept, rank
+
+
+def _lm(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array, t: qm.Targets,
+        kind: str, iterations: int) -> tuple[Array, int]:
+    """Levenberg-Marquardt on the weighted residuals over the parameters ``cols``."""
+    def cost(x: Array) -> tuple[float, Array, Array]:
+        e = qm.errors(model.poses(x, q, base), t)
+        r, d = qm.residuals(e, t, kind)
+        return float((r ** 2).sum()), r.ravel(), d.ravel()
+
+    c0, r, d = cost(p)
+    lam = 1e-3
+    it = 0
+    while it < iterations:
+        it += 1
+        jac = _jacobian(model, p, cols, q, base, t) * d[:, None]
+        jtj, g = jac.T @ jac, jac.T @ r
+        improved = False
+        for _ in range(10):
+            a = jtj + lam * np.diag(np.diag(jtj) + 1e-12)
+            dp = -np.linalg.solve(a, g)
+            trial = p.copy()
+            trial[cols] += dp
+            c1, r1, d1 = cost(trial)
+            if c1 < c0:
+                improved = True
+                break
+            lam *= 10
+        if not improved:
+            break
+        p, r, d = trial, r1, d1
+        lam = max(lam / 10, 1e-9)
+        done = c0 - c1 < 1e-10 * c0 + 1e-14
+        c0 = c1
+        if done:
+            break
+    return p, it
+
+
+def _model_name(options: CalibrationOptions) -> str:
+    kind = AUTO_MODEL if options.quantisation == "auto" else options.quantisation
+    if kind not in qm.MODELS:
+        raise CalibrationError(f"unknown quantisation model '{options.quantisation}' "
+                               f"(expected auto, {', '.join(qm.MODELS)})")
+    return kind
+
+
+def _preference(model: ErrorModel) -> list[int]:
+    idx = {n: i for i, n in enumerate(model.names)}
+    first = [idx[n] for n in model.names if n.startswith(("base.", "tool."))]
+    return first + [i for i in range(model.size) if i not in first]
+
+
+def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement],
+             base_guess: Array, options: CalibrationOptions = CalibrationOptions()
+             ) -> Calibration:
+    """Fit the error model of ``urdf`` to the measured poses of ``measured_frame`` in M.
+
+    ``base_guess``: M_from_base_link (4x4) known before the fit. Raises
+    :class:`~usar_arm.errors.CalibrationError` for too few readings.
+    """
+    start = time.perf_counter()
+    kind = _model_name(options)
+    model = ErrorModel.from_urdf(urdf, measured_frame, options.base, options.tool)
+    base_guess = np.asarray(base_guess, float)
+    meas = list(measurements)
+    rows = sum(6 if m.rpy is not None else 3 for m in meas)
+    if len(meas) < 3:
+        raise CalibrationError("too few readings to identify anything", len(meas), 3)
+    q = np.array([m.q for m in meas], float)
+    t = qm.targets(meas, options.default_sigma_m, options.default_sigma_rad)
+    p0 = np.zeros(model.size)
+    jac0 = _jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
+    jac0 *= t.used.ravel()[:, None]
+    cols, qr_rank = _select(jac0, _preference(model))
+    if len(cols) == 0 or rows < len(cols) + 6:
+        raise CalibrationError(f"too few readings: {rows} numbers for {len(cols)} identifiable "
+                               "parameters", len(meas), math.ceil((len(cols) + 6) / 6))
+    keep = np.ones(len(meas), bool)
+    p, its = p0, 0
+    limit = int(MAX_REJECTED * len(meas))
+    for _ in range(limit + 1):
+        tk = _subset(t, keep)
+        p, its = _lm(model, p0, cols, q[keep], base_guess, tk, kind, options.max_iterations)
+        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t)
+        sc[~keep] = 0.0
+        worst = int(np.argmax(sc))
+        if sc[worst] <= options.outlier_sigma or (~keep).sum() >= limit:
+            break
+        keep[worst] = False
+    e = qm.errors(model.poses(p, q, base_guess), t)
+    sc = qm.scores(e, t)
+    consistent = bool(sc[keep].max() <= options.outlier_sigma) if keep.any() else False
+    std = _std(model, p, cols, q[keep], base_guess, _subset(t, keep))
+    before = distances(model.poses(p0, q, base_guess), t)
+    after = distances(model.poses(p, q, base_guess), t)
+    order = np.argsort(-np.where(keep, sc, np.inf), kind="stable")
+    names = model.names
+    return Calibration(
+        parameters=tuple(ParameterEstimate(names[c], float(p[c]), float(s))
+                         for c, s in zip(cols, std, strict=True)),
+        unidentifiable=tuple(names[c] for c in range(model.size) if c not in cols),
+        rank=len(cols), base=model.base_pose(p, base_guess),
+        fit=Residuals(t.labels, before[0], before[1], after[0], after[1]),
+        consistent=consistent, worst=tuple(t.labels[k] for k in order[:5]),
+        rejected=tuple(t.labels[k] for k in np.flatnonzero(~keep)), quantisation=kind,
+        measured_frame=measured_frame, base_guess=base_guess, iterations=its, vector=p,
+        qr_rank=qr_rank, seconds=time.perf_counter() - start)
+
+
+def _subset(t: qm.Targets, keep: Array) -> qm.Targets:
+    return qm.Targets(t.mid[keep], t.half[keep], t.sigma[keep], t.used[keep],
+                      t.quantised_rot[keep], t.rotations[keep],
+                      tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k))
+
+
+def _std(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
+         t: qm.Targets) -> Array:
+    """Standard deviations (m, rad) from the midpoint model's residual covariance."""
+    e = qm.errors(model.poses(p, q, base), t)
+    r, d = qm.residuals(e, t, "midpoint")
+    jac = _jacobian(model, p, cols, q, base, t) * d.ravel()[:, None]
+    dof = max(int(t.used.sum()) - len(cols), 1)
+    s2 = float((r ** 2).sum()) / dof
+    cov = np.linalg.pinv(jac.T @ jac) * s2
+    return np.sqrt(np.maximum(np.diag(cov), 0.0))

@@ -1,0 +1,33 @@
+"""Validation on held-out readings: the calibrated URDF, as written, evaluated by Pinocchio."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from usar_arm.calibrate import quantised as qm
+from usar_arm.calibrate.measurements import Measurement
+from usar_arm.calibrate.residuals import Residuals, distances
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.spatial import Array
+
+if TYPE_CHECKING:
+    from usar_arm.calibrate.identify import Calibration
+
+
+def model_poses(urdf: str, frame: str, base: Array, q: Array) -> Array:
+    """(N, 4, 4) poses of ``frame`` in M = base * FK(urdf) (Pinocchio)."""
+    km = KinematicModel(urdf)
+    return np.array([base @ km.frame_pose(qi, frame) for qi in q]).reshape(-1, 4, 4)
+
+
+def validate(cal: Calibration, urdf: str, measured_frame: str,
+             held_out: Sequence[Measurement]) -> Residuals:
+    """Before: ``urdf`` at the base guess; after: ``cal.apply(urdf)`` at the fitted base."""
+    t = qm.targets(held_out, 0.0, 0.0)
+    q = np.array([m.q for m in held_out], float)
+    before = distances(model_poses(urdf, measured_frame, cal.base_guess, q), t)
+    after = distances(model_poses(cal.apply(urdf), measured_frame, cal.base, q), t)
+    return Residuals(t.labels, before[0], before[1], after[0], after[1])
