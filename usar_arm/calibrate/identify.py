@@ -28,7 +28,7 @@ from usar_arm.spatial import Array
 
 # The quantisation model "auto" stands for: measured best on synthetic quantised readings
 # (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
-AUTO_MODEL = "midpoint"
+AUTO_MODEL = "set-membership"
 RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
 MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
 STEP = 1e-6             # numeric Jacobian step (m, rad)
@@ -205,7 +205,11 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     limit = int(MAX_REJECTED * len(meas))
     for _ in range(limit + 1):
         tk = _subset(t, keep)
-        p, its = _lm(model, p0, cols, q[keep], base_guess, tk, kind, options.max_iterations)
+        p, its = _lm(model, p0, cols, q[keep], base_guess, tk, "midpoint",
+                     options.max_iterations)
+        if kind != "midpoint":  # started from the midpoint solution: inside or near the set
+            p, more = _lm(model, p, cols, q[keep], base_guess, tk, kind, options.max_iterations)
+            its += more
         sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t)
         sc[~keep] = 0.0
         worst = int(np.argmax(sc))
