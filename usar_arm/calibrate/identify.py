@@ -102,7 +102,7 @@ def _jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: 
     return out
 
 
-def _select(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
+def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
     """The identifiable columns, kept in ``order`` of preference, and the pivoted-QR rank."""
     from scipy.linalg import qr
 
@@ -169,7 +169,7 @@ def _model_name(options: CalibrationOptions) -> str:
     return kind
 
 
-def _preference(model: ErrorModel) -> list[int]:
+def preference(model: ErrorModel) -> list[int]:
     idx = {n: i for i, n in enumerate(model.names)}
     first = [idx[n] for n in model.names if n.startswith(("base.", "tool."))]
     return first + [i for i in range(model.size) if i not in first]
@@ -196,7 +196,7 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     p0 = np.zeros(model.size)
     jac0 = _jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
     jac0 *= t.used.ravel()[:, None]
-    cols, qr_rank = _select(jac0, _preference(model))
+    cols, qr_rank = select_identifiable(jac0, preference(model))
     if len(cols) == 0 or rows < len(cols) + 6:
         raise CalibrationError(f"too few readings: {rows} numbers for {len(cols)} identifiable "
                                "parameters", len(meas), math.ceil((len(cols) + 6) / 6))
