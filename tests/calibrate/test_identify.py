@@ -133,3 +133,36 @@ def test_the_calibrated_urdf_is_deterministic_and_changes_only_origins() -> None
     changed = [(x, y) for x, y in zip(KR60.splitlines(), a.apply(KR60).splitlines(),
                                       strict=True) if x != y]
     assert changed and all("<origin" in y and "<joint" not in y for _, y in changed)
+
+
+def test_selected_and_dithered_poses_50_times_4_truncated_readings_reach_02mm() -> None:
+    """The wire's way: 50 observability-selected poses, 4 dithered readings each."""
+    from usar_arm.calibrate.observability import dither_offsets, select_poses
+
+    truth = perturbed(KR60, 2)
+    base = transform(FLIP_X) @ transform_from_xyz_rpy([0.3, 0.2, 0.0015], [0.003, -0.002, 0.004])
+    guess = transform(FLIP_X) @ transform_from_xyz_rpy([0.3, 0.2, 0.0], [0.0, 0.0, 0.0])
+    poses = select_poses(KR60, "KR60ArmTipTruth", 50, lambda q: True, seed=4)
+    q = np.array([p + d for p in poses
+                  for d in dither_offsets(KR60, "KR60ArmTipTruth", p, 4, 1e-3, 1e-3)])
+    q = np.clip(q, NOMINAL.lower, NOMINAL.upper)
+    data = readings(truth, "KR60ArmTipTruth", base, q, 5, step_m=1e-3, step_rad=1e-3)
+    cal = identify(KR60, "KR60ArmTipTruth", data, guess)
+    after = tool_errors(truth, base, cal.apply(KR60), cal.base, "KR60ArmTipTruth",
+                        random_q(NOMINAL, 300, 5))
+    assert after[0] <= 2e-4 and after[1] <= 2e-4, after
+
+
+def test_a_sensor_at_the_tip_moves_the_flange_onto_the_calibrated_sensor() -> None:
+    """The KR60's tip sensor hangs from link_6 at the Tip: with tip_joint the flange (and so
+    tool0) takes the calibrated sensor position; the printed Tip offset is overridden."""
+    truth = perturbed(KR60, 9)
+    data = readings(truth, "KR60ArmTipTruth", TRACKER_BASE, random_q(NOMINAL, 50, 3), 4,
+                    sigma_m=5e-5, sigma_rad=5e-5)
+    cal = identify(KR60, "KR60ArmTipTruth", data, np.eye(4))
+    moved = KinematicModel(cal.apply(KR60, tip_joint="joint_a6-flange"))
+    for qk in random_q(NOMINAL, 20, 8):
+        sensor = moved.frame_pose(qk, "KR60ArmTipTruth")[:3, 3]
+        np.testing.assert_allclose(moved.frame_pose(qk, "tool0")[:3, 3], sensor, atol=1e-9)
+    with pytest.raises(CalibrationError, match="must be fixed"):
+        cal.apply(KR60, tip_joint="flange-tool0")

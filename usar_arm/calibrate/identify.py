@@ -73,12 +73,17 @@ class Calibration:
     base_guess: Array = field(default_factory=lambda: np.eye(4))
     iterations: int = 0
     vector: Array = field(default_factory=lambda: np.zeros(0))
+    tool: bool = True                 # the measured frame's offset was a parameter
+    base_fitted: bool = True          # the base pose was a parameter
     qr_rank: int = 0                  # the pivoted QR's rank (equals rank unless ill-posed)
     seconds: float = 0.0              # time the fit took
 
-    def apply(self, urdf: str) -> str:
-        """The calibrated URDF text (joint origins and the measured frame's offset corrected)."""
-        return ErrorModel.from_urdf(urdf, self.measured_frame).apply(urdf, self.vector)
+    def apply(self, urdf: str, tip_joint: str | None = None) -> str:
+        """The calibrated URDF text (joint origins and the measured frame's offset corrected;
+        with ``tip_joint``, that fixed joint moved onto the measured frame: see
+        :meth:`ErrorModel.apply`)."""
+        model = ErrorModel.from_urdf(urdf, self.measured_frame, self.base_fitted, self.tool)
+        return model.apply(urdf, self.vector, tip_joint)
 
     def validate(self, urdf: str, measured_frame: str,
                  held_out: Sequence[Measurement]) -> Residuals:
@@ -233,6 +238,7 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
         consistent=consistent, worst=tuple(t.labels[k] for k in order[:5]),
         rejected=tuple(t.labels[k] for k in np.flatnonzero(~keep)), quantisation=kind,
         measured_frame=measured_frame, base_guess=base_guess, iterations=its, vector=p,
+        tool=model.tool_joint is not None, base_fitted=options.base,
         qr_rank=qr_rank, seconds=time.perf_counter() - start)
 
 

@@ -122,16 +122,38 @@ class ErrorModel:
                 t = t @ origin
         return t
 
-    def apply(self, urdf: str, p: Array) -> str:
+    def apply(self, urdf: str, p: Array, tip_joint: str | None = None) -> str:
         """The URDF text with the joint origins and the tool joint corrected (only those
-        ``<origin>`` elements change; numbers printed as the writer prints them)."""
+        ``<origin>`` elements change; numbers printed as the writer prints them).
+
+        ``tip_joint``: a fixed joint with the same parent link as the measured frame's whose
+        child sits where the measured frame is (a sensor mounted at the Tip): its origin
+        position becomes the calibrated measured frame's (its rotation is kept).
+        """
         joints, tool, _ = self.split(p)
         for j in self.path:
             if j.actuated:
                 urdf = _replace_origin(urdf, j, corrected(j.origin.matrix(), joints[j.name]))
             elif j.name == self.tool_joint and tool is not None:
-                urdf = _replace_origin(urdf, j, corrected(j.origin.matrix(), tool))
+                mount = corrected(j.origin.matrix(), tool)
+                urdf = _replace_origin(urdf, j, mount)
+                if tip_joint is not None:
+                    urdf = self._move_tip(urdf, tip_joint, j, mount[:3, 3])
         return urdf
+
+    @staticmethod
+    def _move_tip(urdf: str, tip_joint: str, mount: Joint, position: Array) -> str:
+        chain, _ = parse_urdf(urdf)
+        try:
+            tip = chain.joint(tip_joint)
+        except KeyError:
+            raise CalibrationError(f"no joint '{tip_joint}' in the URDF") from None
+        if tip.parent != mount.parent or tip.actuated:
+            raise CalibrationError(f"the tip joint '{tip_joint}' must be fixed and hang from "
+                                   f"'{mount.parent}' as the measured frame does")
+        pose = tip.origin.matrix()
+        pose[:3, 3] = position
+        return _replace_origin(urdf, tip, pose)
 
 
 def corrected(origin: Array, d: Array) -> Array:

@@ -25,6 +25,7 @@ from usar_arm.control.tip_bias import interval, wrap
 from usar_arm.spatial import Array, log_so3, rpy_to_matrix
 
 MODELS = ("midpoint", "set-membership")
+GIMBAL = 0.05  # |cos pitch| below this: printed roll and yaw are not smooth in the rotation
 PULL = 0.05  # weight of the pull toward the middle in the set-membership residual
 
 
@@ -72,6 +73,8 @@ def targets(measurements: Sequence[Measurement], default_sigma_m: float,
             mid[k, 3:] = [(lo + hi) / 2 for lo, hi in box]
             half[k, 3:] = [(hi - lo) / 2 for lo, hi in box]
             rots[k] = rpy_to_matrix(mid[k, 3:])
+            if abs(np.cos(mid[k, 4])) < GIMBAL:  # roll and yaw not separable: position only
+                used[k, 3:] = False
         else:
             rots[k] = rpy_to_matrix(m.rpy)
     return Targets(mid, half, sigma, used, qrot, rots, tuple(m.label for m in measurements))
