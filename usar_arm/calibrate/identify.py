@@ -166,6 +166,20 @@ def _lm(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array, t: 
     return p, it
 
 
+def structural_rank(model: ErrorModel, rotations: bool = True, samples: int = 40) -> int:
+    """How many parameters readings at generic configurations identify (random configurations
+    within the joint limits, seed 0; position-only when ``rotations`` is False)."""
+    joints = [j for j in model.path if j.actuated]
+    lo = np.array([j.limits.lower if j.limits else -np.pi for j in joints])
+    hi = np.array([j.limits.upper if j.limits else np.pi for j in joints])
+    q = np.random.default_rng(0).uniform(lo, hi, (samples, len(joints)))
+    t = qm.targets([Measurement(qk, np.zeros(3), np.zeros(3) if rotations else None,
+                                sigma_m=1e-3, sigma_rad=1e-3) for qk in q], 1e-3, 1e-3)
+    jac = _jacobian(model, np.zeros(model.size), range(model.size), q, np.eye(4), t)
+    jac *= t.used.ravel()[:, None]
+    return len(select_identifiable(jac, preference(model))[0])
+
+
 def _model_name(options: CalibrationOptions) -> str:
     kind = AUTO_MODEL if options.quantisation == "auto" else options.quantisation
     if kind not in qm.MODELS:
@@ -202,9 +216,12 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     jac0 = _jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
     jac0 *= t.used.ravel()[:, None]
     cols, qr_rank = select_identifiable(jac0, preference(model))
-    if len(cols) == 0 or rows < len(cols) + 6:
-        raise CalibrationError(f"too few readings: {rows} numbers for {len(cols)} identifiable "
-                               "parameters", len(meas), math.ceil((len(cols) + 6) / 6))
+    per = 6 if all(m.rpy is not None for m in meas) else 3
+    full = structural_rank(model, per == 6)
+    if len(cols) == 0 or rows < full + 6:
+        raise CalibrationError(f"too few readings: {rows} numbers for {full} identifiable "
+                               "parameters (and 6 more numbers to judge the fit)", len(meas),
+                               math.ceil((full + 6) / per))
     keep = np.ones(len(meas), bool)
     p, its = p0, 0
     limit = int(MAX_REJECTED * len(meas))

@@ -9,6 +9,7 @@ import numpy as np
 
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
+from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals, distances
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.spatial import Array
@@ -18,8 +19,9 @@ if TYPE_CHECKING:
 
 
 def model_poses(urdf: str, frame: str, base: Array, q: Array) -> Array:
-    """(N, 4, 4) poses of ``frame`` in M = base * FK(urdf) (Pinocchio)."""
-    km = KinematicModel(urdf)
+    """(N, 4, 4) poses of ``frame`` in M = base * FK(urdf) (Pinocchio; its joint order checked
+    against the error model's, so q means the same to both)."""
+    km = KinematicModel(urdf, ErrorModel.from_urdf(urdf, frame).joint_names)
     return np.array([base @ km.frame_pose(qi, frame) for qi in q]).reshape(-1, 4, 4)
 
 
