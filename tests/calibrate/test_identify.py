@@ -192,3 +192,17 @@ def test_seven_joints_one_prismatic_reach_the_tracker_target() -> None:
                         random_q(model, 300, 24))
     assert after[0] <= 1e-4 and after[1] <= 1e-4, after
     assert cal.rank == 32  # a prismatic joint adds 2 (its direction), not 4
+
+
+def test_readings_without_a_stated_uncertainty_get_the_noise_they_show() -> None:
+    """A tracker file with no sigma column and 0.3 mm / 0.3 mrad of noise: consistent, and a
+    lie of 4 mm is still rejected."""
+    truth = perturbed(KR60, 13)
+    data = readings(truth, "tool0", TRACKER_BASE, random_q(NOMINAL, 60, 14), 15, sigma_m=3e-4,
+                    sigma_rad=3e-4, state_sigma=False)
+    cal = identify(KR60, "tool0", data, np.eye(4))
+    assert cal.consistent and not cal.rejected
+    liar = data[5]
+    data[5] = Measurement(liar.q, liar.position + np.array([0, 0.004, 0]), liar.rpy,
+                          label="the liar")
+    assert identify(KR60, "tool0", data, np.eye(4)).rejected == ("the liar",)

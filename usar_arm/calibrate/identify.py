@@ -222,6 +222,7 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
         raise CalibrationError(f"too few readings: {rows} numbers for {full} identifiable "
                                "parameters (and 6 more numbers to judge the fit)", len(meas),
                                math.ceil((full + 6) / per))
+    t = _unstated_noise(model, cols, q, base_guess, t, meas, options)
     keep = np.ones(len(meas), bool)
     p, its = p0, 0
     limit = int(MAX_REJECTED * len(meas))
@@ -257,6 +258,25 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
         measured_frame=measured_frame, base_guess=base_guess, iterations=its, vector=p,
         tool=model.tool_joint is not None, base_fitted=options.base,
         qr_rank=qr_rank, seconds=time.perf_counter() - start)
+
+
+def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t: qm.Targets,
+                    meas: Sequence[Measurement], options: CalibrationOptions) -> qm.Targets:
+    """Targets whose numbers without a stated sigma or step get the noise the readings show:
+    after a midpoint fit with the defaults, 1.4826 x the median absolute error of those numbers
+    (position and angles separately; robust to a few outliers)."""
+    pos = np.array([not (m.sigma_m > 0 or m.step_m > 0) for m in meas])
+    rot = np.array([m.rpy is not None and not (m.sigma_rad > 0 or m.step_rad > 0) for m in meas])
+    if not pos.any() and not rot.any():
+        return t
+    p, _ = _lm(model, np.zeros(model.size), cols, q, base, t, "midpoint", options.max_iterations)
+    e = np.abs(qm.errors(model.poses(p, q, base), t))
+    dof = max(1.0 - len(cols) / max(int(t.used.sum()), 1), 0.1)
+    sig_m = float(np.median(e[pos, :3]) * 1.4826 / np.sqrt(dof)) if pos.any() \
+        else options.default_sigma_m
+    sig_rad = float(np.median(e[rot, 3:]) * 1.4826 / np.sqrt(dof)) if rot.any() \
+        else options.default_sigma_rad
+    return qm.targets(meas, max(sig_m, 1e-9), max(sig_rad, 1e-9))
 
 
 def _subset(t: qm.Targets, keep: Array) -> qm.Targets:
