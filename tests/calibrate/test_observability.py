@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from tests.calibrate.synthetic import KR60, random_q
-from usar_arm.calibrate.identify import preference, select_identifiable
 from usar_arm.calibrate.observability import (
     dither_offsets,
     pose_jacobians,
@@ -13,6 +12,7 @@ from usar_arm.calibrate.observability import (
     smallest_singular_value,
 )
 from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.calibrate.solver import preference, select_identifiable
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.spatial import Array
 

@@ -23,15 +23,20 @@ from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals, distances
+from usar_arm.calibrate.solver import (
+    jacobian,
+    levenberg_marquardt,
+    preference,
+    select_identifiable,
+    structural_rank,
+)
 from usar_arm.errors import CalibrationError
 from usar_arm.spatial import Array
 
 # The quantisation model "auto" stands for: measured best on synthetic quantised readings
 # (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
 AUTO_MODEL = "set-membership"
-RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
 MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
-STEP = 1e-6             # numeric Jacobian step (m, rad)
 
 
 @dataclass(frozen=True)
@@ -94,104 +99,12 @@ class Calibration:
         return validate(self, urdf, measured_frame, held_out)
 
 
-def _jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: Array,
-              t: qm.Targets) -> Array:
-    """d errors / d p[cols] (N*6, len(cols)), central differences."""
-    out = np.empty((q.shape[0] * 6, len(cols)))
-    for k, c in enumerate(cols):
-        hi, lo = p.copy(), p.copy()
-        hi[c] += STEP
-        lo[c] -= STEP
-        d = qm.errors(model.poses(hi, q, base), t) - qm.errors(model.poses(lo, q, base), t)
-        out[:, k] = (d / (2 * STEP)).ravel()
-    return out
-
-
-def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
-    """The identifiable columns, kept in ``order`` of preference, and the pivoted-QR rank."""
-    from scipy.linalg import qr
-
-    norms = np.linalg.norm(jac, axis=0)
-    scaled = jac / np.where(norms > 0, norms, 1.0)
-    r = qr(scaled, mode="r", pivoting=True)[0]
-    diag = np.abs(np.diag(r))
-    rank = int((diag > RANK_TOL * diag[0]).sum()) if len(diag) else 0
-    kept: list[int] = []
-    basis = np.zeros((jac.shape[0], 0))
-    for c in order:
-        if norms[c] == 0:
-            continue
-        v = scaled[:, c] - basis @ (basis.T @ scaled[:, c])
-        v = v - basis @ (basis.T @ v)
-        if np.linalg.norm(v) > math.sqrt(RANK_TOL):
-            kept.append(c)
-            basis = np.column_stack([basis, v / np.linalg.norm(v)])
-    return kept, rank
-
-
-def _lm(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array, t: qm.Targets,
-        kind: str, iterations: int) -> tuple[Array, int]:
-    """Levenberg-Marquardt on the weighted residuals over the parameters ``cols``."""
-    def cost(x: Array) -> tuple[float, Array, Array]:
-        e = qm.errors(model.poses(x, q, base), t)
-        r, d = qm.residuals(e, t, kind)
-        return float((r ** 2).sum()), r.ravel(), d.ravel()
-
-    c0, r, d = cost(p)
-    lam = 1e-3
-    it = 0
-    while it < iterations:
-        it += 1
-        jac = _jacobian(model, p, cols, q, base, t) * d[:, None]
-        jtj, g = jac.T @ jac, jac.T @ r
-        improved = False
-        for _ in range(10):
-            a = jtj + lam * np.diag(np.diag(jtj) + 1e-12)
-            dp = -np.linalg.solve(a, g)
-            trial = p.copy()
-            trial[cols] += dp
-            c1, r1, d1 = cost(trial)
-            if c1 < c0:
-                improved = True
-                break
-            lam *= 10
-        if not improved:
-            break
-        p, r, d = trial, r1, d1
-        lam = max(lam / 10, 1e-9)
-        done = c0 - c1 < 1e-10 * c0 + 1e-14
-        c0 = c1
-        if done:
-            break
-    return p, it
-
-
-def structural_rank(model: ErrorModel, rotations: bool = True, samples: int = 40) -> int:
-    """How many parameters readings at generic configurations identify (random configurations
-    within the joint limits, seed 0; position-only when ``rotations`` is False)."""
-    joints = [j for j in model.path if j.actuated]
-    lo = np.array([j.limits.lower if j.limits else -np.pi for j in joints])
-    hi = np.array([j.limits.upper if j.limits else np.pi for j in joints])
-    q = np.random.default_rng(0).uniform(lo, hi, (samples, len(joints)))
-    t = qm.targets([Measurement(qk, np.zeros(3), np.zeros(3) if rotations else None,
-                                sigma_m=1e-3, sigma_rad=1e-3) for qk in q], 1e-3, 1e-3)
-    jac = _jacobian(model, np.zeros(model.size), range(model.size), q, np.eye(4), t)
-    jac *= t.used.ravel()[:, None]
-    return len(select_identifiable(jac, preference(model))[0])
-
-
 def _model_name(options: CalibrationOptions) -> str:
     kind = AUTO_MODEL if options.quantisation == "auto" else options.quantisation
     if kind not in qm.MODELS:
         raise CalibrationError(f"unknown quantisation model '{options.quantisation}' "
                                f"(expected auto, {', '.join(qm.MODELS)})")
     return kind
-
-
-def preference(model: ErrorModel) -> list[int]:
-    idx = {n: i for i, n in enumerate(model.names)}
-    first = [idx[n] for n in model.names if n.startswith(("base.", "tool."))]
-    return first + [i for i in range(model.size) if i not in first]
 
 
 def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement],
@@ -213,7 +126,7 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     q = np.array([m.q for m in meas], float)
     t = qm.targets(meas, options.default_sigma_m, options.default_sigma_rad)
     p0 = np.zeros(model.size)
-    jac0 = _jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
+    jac0 = jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
     jac0 *= t.used.ravel()[:, None]
     cols, qr_rank = select_identifiable(jac0, preference(model))
     per = 6 if all(m.rpy is not None for m in meas) else 3
@@ -228,10 +141,11 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     limit = int(MAX_REJECTED * len(meas))
     for _ in range(limit + 1):
         tk = _subset(t, keep)
-        p, its = _lm(model, p0, cols, q[keep], base_guess, tk, "midpoint",
-                     options.max_iterations)
+        p, its = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, "midpoint",
+                                     options.max_iterations)
         if kind != "midpoint":  # started from the midpoint solution: inside or near the set
-            p, more = _lm(model, p, cols, q[keep], base_guess, tk, kind, options.max_iterations)
+            p, more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
+                                          options.max_iterations)
             its += more
         sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t)
         sc[~keep] = 0.0
@@ -269,7 +183,8 @@ def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t
     rot = np.array([m.rpy is not None and not (m.sigma_rad > 0 or m.step_rad > 0) for m in meas])
     if not pos.any() and not rot.any():
         return t
-    p, _ = _lm(model, np.zeros(model.size), cols, q, base, t, "midpoint", options.max_iterations)
+    p, _ = levenberg_marquardt(model, np.zeros(model.size), cols, q, base, t, "midpoint",
+                               options.max_iterations)
     e = np.abs(qm.errors(model.poses(p, q, base), t))
     dof = max(1.0 - len(cols) / max(int(t.used.sum()), 1), 0.1)
     sig_m = float(np.median(e[pos, :3]) * 1.4826 / np.sqrt(dof)) if pos.any() \
@@ -290,7 +205,7 @@ def _std(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
     """Standard deviations (m, rad) from the midpoint model's residual covariance."""
     e = qm.errors(model.poses(p, q, base), t)
     r, d = qm.residuals(e, t, "midpoint")
-    jac = _jacobian(model, p, cols, q, base, t) * d.ravel()[:, None]
+    jac = jacobian(model, p, cols, q, base, t) * d.ravel()[:, None]
     dof = max(int(t.used.sum()) - len(cols), 1)
     s2 = float((r ** 2).sum()) / dof
     cov = np.linalg.pinv(jac.T @ jac) * s2
