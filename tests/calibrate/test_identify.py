@@ -206,3 +206,21 @@ def test_readings_without_a_stated_uncertainty_get_the_noise_they_show() -> None
     data[5] = Measurement(liar.q, liar.position + np.array([0, 0.004, 0]), liar.rpy,
                           label="the liar")
     assert identify(KR60, "tool0", data, np.eye(4)).rejected == ("the liar",)
+
+
+def test_truncated_joint_values_widen_the_intervals_instead_of_breaking_consistency() -> None:
+    """Joint values printed to 4 decimals (0.1 mrad steps, as ASTA prints them): with step_q
+    the fit stays consistent and within the target from 300 readings; the lever arm makes
+    0.1 mrad up to 0.2 mm."""
+    truth = perturbed(KR60, 1)
+    base = transform(FLIP_X) @ transform_from_xyz_rpy([0.3, 0.2, 0.0015], [0.003, -0.002, 0.004])
+    guess = transform(FLIP_X) @ transform_from_xyz_rpy([0.3, 0.2, 0.0], [0.0, 0.0, 0.0])
+    q = random_q(NOMINAL, 300, 11)
+    data = readings(truth, "KR60ArmTipTruth", base, q, 3, step_m=1e-3, step_rad=1e-3)
+    printed = [Measurement(np.trunc(m.q / 1e-4) * 1e-4, m.position, m.rpy, m.step_m,
+                           m.step_rad, label=m.label, step_q=1e-4) for m in data]
+    cal = identify(KR60, "KR60ArmTipTruth", printed, guess)
+    assert cal.consistent and not cal.rejected
+    after = tool_errors(truth, base, cal.apply(KR60), cal.base, "KR60ArmTipTruth",
+                        random_q(NOMINAL, 300, 5))
+    assert after[0] <= 2e-4 and after[1] <= 2e-4, after

@@ -25,6 +25,7 @@ from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals, distances
 from usar_arm.calibrate.solver import (
     jacobian,
+    joint_jacobian,
     levenberg_marquardt,
     preference,
     select_identifiable,
@@ -123,8 +124,11 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     rows = sum(6 if m.rpy is not None else 3 for m in meas)
     if len(meas) < 3:
         raise CalibrationError("too few readings to identify anything", len(meas), 3)
-    q = np.array([m.q for m in meas], float)
+    q = qm.joint_midpoints(meas)
     t = qm.targets(meas, options.default_sigma_m, options.default_sigma_rad)
+    step_q = np.array([m.step_q for m in meas])
+    if step_q.any():
+        t = qm.widen_for_joints(t, joint_jacobian(model, q, base_guess, t), step_q)
     p0 = np.zeros(model.size)
     jac0 = jacobian(model, p0, range(model.size), q, base_guess, t) / t.scale.ravel()[:, None]
     jac0 *= t.used.ravel()[:, None]

@@ -50,7 +50,10 @@ class Measurement:
     ``q`` (n,) rad / m in the URDF's actuated joint order; ``position`` (3,) m; ``rpy`` (3,)
     rad with R = Rz(yaw) Ry(pitch) Rx(roll), or None (position only). ``step_m`` / ``step_rad``:
     each printed number truncated toward zero to this step (0: not quantised). ``sigma_m`` /
-    ``sigma_rad``: 1-sigma noise of each number. ``label``: where it came from.
+    ``sigma_rad``: 1-sigma noise of each number. ``label``: where it came from. ``step_q``: the
+    joint values as printed, each truncated toward zero to this step (rad, or m for prismatic
+    joints; 0: exact); the fit uses their intervals' middles and widens the pose intervals by
+    what the joint intervals allow.
     """
 
     q: Array
@@ -61,6 +64,7 @@ class Measurement:
     sigma_m: float = 0.0
     sigma_rad: float = 0.0
     label: str = ""
+    step_q: float = 0.0      # each joint value printed truncated toward zero to this step
 
 
 @dataclass(frozen=True)

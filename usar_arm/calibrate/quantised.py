@@ -16,7 +16,7 @@ Position numbers are compared per axis in M; quantised angles per printed roll, 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -129,3 +129,16 @@ def scores(e: Array, t: Targets) -> Array:
     """(N,) how far each reading is outside its intervals, in its own 1-sigma (0: inside)."""
     excess = np.maximum(np.abs(e) - t.half, 0.0) / t.scale
     return np.where(t.used, excess, 0.0).max(axis=1)
+
+
+def joint_midpoints(measurements: Sequence[Measurement]) -> Array:
+    """(N, n) joint values: the middles of the printed values' intervals when truncated."""
+    return np.array([[sum(interval(float(v), m.step_q)) / 2 for v in m.q] if m.step_q > 0
+                     else np.asarray(m.q, float) for m in measurements], float)
+
+
+def widen_for_joints(t: Targets, joint_jacobian: Array, step_q: Array) -> Targets:
+    """Targets whose intervals also hold what truncated joint values allow: each number's
+    half-width grows by sum_j |d number / d q_j| step_q / 2 (``joint_jacobian`` (N, 6, n))."""
+    extra = np.abs(joint_jacobian).sum(axis=2) * step_q[:, None] / 2
+    return replace(t, half=t.half + np.where(t.used, extra, 0.0))

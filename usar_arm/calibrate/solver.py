@@ -30,6 +30,19 @@ def jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: A
     return out
 
 
+def joint_jacobian(model: ErrorModel, q: Array, base: Array, t: qm.Targets) -> Array:
+    """(N, 6, n) d errors / d q at the nominal parameters (central differences)."""
+    p = np.zeros(model.size)
+    out = np.empty((q.shape[0], 6, q.shape[1]))
+    for j in range(q.shape[1]):
+        hi, lo = q.copy(), q.copy()
+        hi[:, j] += STEP
+        lo[:, j] -= STEP
+        out[:, :, j] = (qm.errors(model.poses(p, hi, base), t)
+                        - qm.errors(model.poses(p, lo, base), t)) / (2 * STEP)
+    return out
+
+
 def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
     """The identifiable columns, kept in ``order`` of preference, and the pivoted-QR rank."""
     from scipy.linalg import qr

@@ -29,7 +29,7 @@ def validate(cal: Calibration, urdf: str, measured_frame: str,
              held_out: Sequence[Measurement]) -> Residuals:
     """Before: ``urdf`` at the base guess; after: ``cal.apply(urdf)`` at the fitted base."""
     t = qm.targets(held_out, 0.0, 0.0)
-    q = np.array([m.q for m in held_out], float)
+    q = qm.joint_midpoints(held_out)
     before = distances(model_poses(urdf, measured_frame, cal.base_guess, q), t)
     after = distances(model_poses(cal.apply(urdf), measured_frame, cal.base, q), t)
     return Residuals(t.labels, before[0], before[1], after[0], after[1])
