@@ -39,11 +39,12 @@ def sets(draw: st.DrawFn) -> MeasurementSet:
 
 
 @settings(max_examples=40, deadline=None)
-@given(data=sets(), length=st.sampled_from(["m", "mm"]), angle=st.sampled_from(["rad", "deg"]))
+@given(data=sets(), length=st.sampled_from(["m", "mm"]), angle=st.sampled_from(["rad", "deg"]),
+       suffix=st.sampled_from([".csv", ".yaml"]))
 def test_write_then_read_gives_the_same_measurements(tmp_path_factory: pytest.TempPathFactory,
                                                      data: MeasurementSet, length: str,
-                                                     angle: str) -> None:
-    path = tmp_path_factory.mktemp("m") / "m.csv"
+                                                     angle: str, suffix: str) -> None:
+    path = tmp_path_factory.mktemp("m") / f"m{suffix}"
     write_measurements(path, data, length, angle, PRISMATIC)
     back = read_measurements(path, JOINTS, prismatic=PRISMATIC)
     assert back.frame == "tool0" and back.length_unit == length and back.angle_unit == angle
@@ -53,7 +54,8 @@ def test_write_then_read_gives_the_same_measurements(tmp_path_factory: pytest.Te
         np.testing.assert_allclose(b.position, a.position, rtol=1e-12, atol=1e-15)
         assert a.rpy is not None and b.rpy is not None
         np.testing.assert_allclose(b.rpy, a.rpy, rtol=1e-12, atol=1e-15)
-        assert b.step_m == pytest.approx(a.step_m) and b.sigma_rad == pytest.approx(a.sigma_rad)
+        assert b.step_m == pytest.approx(a.step_m) and b.step_rad == pytest.approx(a.step_rad)
+        assert b.sigma_m == pytest.approx(a.sigma_m) and b.sigma_rad == pytest.approx(a.sigma_rad)
         assert b.label == a.label
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -285,5 +286,35 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
 
 def write_measurements(path: str | Path, data: MeasurementSet, length_unit: str = "m",
                        angle_unit: str = "rad", prismatic: Sequence[bool] | None = None) -> Path:
-    """Write a measurement set as CSV, atomically."""
-    return write_atomic(path, csv_text(data, length_unit, angle_unit, prismatic))
+    """Write a measurement set atomically: YAML for a .yaml / .yml path, else CSV."""
+    text = (yaml_text if str(path).endswith((".yaml", ".yml")) else csv_text)(
+        data, length_unit, angle_unit, prismatic)
+    return write_atomic(path, text)
+
+
+def yaml_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "rad",
+              prismatic: Sequence[bool] | None = None) -> str:
+    """The YAML text of a measurement set (numbers as Python's repr: round trips)."""
+    ls, ang = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
+    kinds = list(prismatic) if prismatic is not None else [False] * len(data.joint_names)
+    qs = [ls if k else ang for k in kinds]
+
+    def seq(values: Sequence[float]) -> str:
+        return "[" + ", ".join(repr(float(v)) for v in values) + "]"
+
+    lines = [f"frame: {json.dumps(data.frame)}",
+             f"units: {{length: {length_unit}, angle: {angle_unit}}}",
+             f"joints: [{', '.join(json.dumps(n) for n in data.joint_names)}]",
+             "measurements:"]
+    for m in data.measurements:
+        lines.append(f"  - q: {seq([v / s for v, s in zip(m.q, qs, strict=True)])}")
+        lines.append(f"    position: {seq([v / ls for v in m.position])}")
+        if m.rpy is not None:
+            lines.append(f"    rpy: {seq([v / ang for v in m.rpy])}")
+        for key, value, s in (("step_position", m.step_m, ls), ("step_angle", m.step_rad, ang),
+                              ("sigma_position", m.sigma_m, ls),
+                              ("sigma_angle", m.sigma_rad, ang)):
+            if value:
+                lines.append(f"    {key}: {float(value / s)!r}")
+        lines.append(f"    label: {json.dumps(m.label)}")
+    return "\n".join(lines) + "\n"
