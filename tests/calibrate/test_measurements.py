@@ -9,11 +9,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from usar_arm.calibrate.measurement_writer import write_measurements
 from usar_arm.calibrate.measurements import (
     Measurement,
     MeasurementSet,
     read_measurements,
-    write_measurements,
 )
 from usar_arm.errors import FileFormatError
 
