@@ -224,3 +224,16 @@ def test_truncated_joint_values_widen_the_intervals_instead_of_breaking_consiste
     after = tool_errors(truth, base, cal.apply(KR60), cal.base, "KR60ArmTipTruth",
                         random_q(NOMINAL, 300, 5))
     assert after[0] <= 2e-4 and after[1] <= 2e-4, after
+
+
+def test_a_tracker_in_its_own_frame_far_from_the_guess_still_converges() -> None:
+    """The tracker stands 2 m away, turned 100 degrees: base_guess identity is far off, and
+    Levenberg-Marquardt on the exponential base correction still reaches the same accuracy."""
+    truth = perturbed(KR60, 2)
+    tracker = transform_from_xyz_rpy([2.0, -1.0, 0.3], [0.1, -0.05, 1.75])
+    data = readings(truth, "tool0", tracker, random_q(NOMINAL, 50, 12), 2, sigma_m=5e-5,
+                    sigma_rad=5e-5)
+    cal = identify(KR60, "tool0", data, np.eye(4))
+    after = tool_errors(truth, tracker, cal.apply(KR60), cal.base, "tool0",
+                        random_q(NOMINAL, 300, 22))
+    assert cal.consistent and after[0] <= 1e-4 and after[1] <= 1e-4, after
