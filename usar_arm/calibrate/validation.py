@@ -33,3 +33,12 @@ def validate(cal: Calibration, urdf: str, measured_frame: str,
     before = distances(model_poses(urdf, measured_frame, cal.base_guess, q), t)
     after = distances(model_poses(cal.apply(urdf), measured_frame, cal.base, q), t)
     return Residuals(t.labels, before[0], before[1], after[0], after[1])
+
+
+def split_held_out(readings: Sequence[Measurement], every: int = 5
+                   ) -> tuple[list[Measurement], list[Measurement]]:
+    """(fit, held out): every ``every``-th reading (the every-th, 2 every-th, ...) is held out
+    and never fitted; deterministic, and spread over the run like the readings themselves."""
+    held = [m for k, m in enumerate(readings) if k % every == every - 1]
+    fit = [m for k, m in enumerate(readings) if k % every != every - 1]
+    return fit, held

@@ -17,6 +17,7 @@ import numpy as np
 from usar_arm.calibrate.identify import CalibrationOptions, identify
 from usar_arm.calibrate.measurements import read_measurements
 from usar_arm.calibrate.report import calibration_dict, check_validated
+from usar_arm.calibrate.validation import split_held_out
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.errors import EXIT_OK, FileFormatError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
@@ -84,8 +85,7 @@ def run_file(args: argparse.Namespace) -> int:
                              lower=chain.lower(), upper=chain.upper())
     frame = args.frame or data.frame
     readings = list(data.measurements)
-    held = [m for k, m in enumerate(readings) if k % HOLD_OUT_EVERY == HOLD_OUT_EVERY - 1]
-    fit = [m for k, m in enumerate(readings) if k % HOLD_OUT_EVERY != HOLD_OUT_EVERY - 1]
+    fit, held = split_held_out(readings, HOLD_OUT_EVERY)
     progress(f"fitting {len(fit)} readings of {frame}; {len(held)} held out (every "
              f"{HOLD_OUT_EVERY}th) for validation...")
     cal = identify(urdf, frame, fit, np.eye(4), CalibrationOptions(quantisation=args.quantisation))
