@@ -24,6 +24,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -129,8 +130,16 @@ class _Straight:
 
     def states(self, times: Array) -> tuple[Array, Array, Array]:
         """Positions, velocities, accelerations (m, n) at segment times ``times`` (s)."""
-        s, sd, sdd = profile_states(self.profile, times)
+        gap_s, gap_sd = self.end_gaps
+        s, sd, sdd = _closed(times, self.duration, profile_states(self.profile, times), gap_s,
+                             gap_sd)
         return (self.start + s * self.delta, sd * self.delta, sdd * self.delta)
+
+    @cached_property
+    def end_gaps(self) -> tuple[float, float]:
+        """How far the profile ends from s = 1 and from rest (rounding, ~1e-9)."""
+        s, sd, _ = profile_states(self.profile, np.array([self.duration]))
+        return 1.0 - float(s[0, 0]), -float(sd[0, 0])
 
     @property
     def peak_speed(self) -> float:
@@ -144,6 +153,8 @@ class _Free:
     """A multi-DoF Ruckig segment between two states (used where the motion blends)."""
 
     traj: RuckigTrajectory
+    end_position: Array
+    end_velocity: Array
 
     @property
     def duration(self) -> float:
@@ -151,7 +162,41 @@ class _Free:
 
     def states(self, times: Array) -> tuple[Array, Array, Array]:
         """Positions, velocities, accelerations (m, n) at segment times ``times`` (s)."""
-        return profile_states(self.traj, times)
+        gap_q, gap_qd = self.end_gaps
+        return _closed(times, self.duration, profile_states(self.traj, times), gap_q, gap_qd)
+
+    @cached_property
+    def end_gaps(self) -> tuple[Array, Array]:
+        """How far the profile ends from the target position and velocity (~1e-8)."""
+        q, qd, _ = profile_states(self.traj, np.array([self.duration]))
+        return self.end_position - q[0], self.end_velocity - qd[0]
+
+
+def _closed(times: Array, duration: float, states: tuple[Array, Array, Array],
+            position_gap: Array | float, velocity_gap: Array | float
+            ) -> tuple[Array, Array, Array]:
+    """``states`` (positions, velocities, accelerations at ``times``, s) plus the quintic that
+    closes the profile's gap at its end: Ruckig's profile ends within ~1e-8 of its target
+    (rad or m; rad/s), and the next segment starts exactly there, so without it the motion
+    would jump by that much where two segments meet, a jerk of gap / h^3 to anyone who
+    differentiates 1 ms samples. The quintic starts with zero position, velocity and
+    acceleration and ends with the gaps and zero acceleration; its jerk is at most
+    60 gap / T^3 + 36 velocity_gap / T^2 (about 1e-6 rad/s^3 for T = 0.1 s)."""
+    if duration <= 0.0:
+        return states
+    s = np.clip(np.asarray(times, float) / duration, 0.0, 1.0)[:, None]
+    dp = np.atleast_1d(np.asarray(position_gap, float))
+    dv = np.atleast_1d(np.asarray(velocity_gap, float)) * duration
+    h0 = s ** 3 * (10.0 + s * (-15.0 + 6.0 * s))
+    h0d = s ** 2 * (30.0 + s * (-60.0 + 30.0 * s))
+    h0dd = s * (60.0 + s * (-180.0 + 120.0 * s))
+    h1 = s ** 3 * (-4.0 + s * (7.0 - 3.0 * s))
+    h1d = s ** 2 * (-12.0 + s * (28.0 - 15.0 * s))
+    h1dd = s * (-24.0 + s * (84.0 - 60.0 * s))
+    q, qd, qdd = states
+    return (q + (dp * h0 + dv * h1).reshape(q.shape),
+            qd + ((dp * h0d + dv * h1d) / duration).reshape(qd.shape),
+            qdd + ((dp * h0dd + dv * h1dd) / duration ** 2).reshape(qdd.shape))
 
 
 Segment = _Straight | _Free
@@ -273,7 +318,7 @@ def blended(names: tuple[str, ...], waypoints: Array, limits: MotionLimits,
                 segments.append(lines[k])
                 continue
             seg = _Free(_calculate(wp[k], wp[k + 1], v[k], v[k + 1], limits,
-                                   Synchronization.Time))
+                                   Synchronization.Time), wp[k + 1], v[k + 1])
             segments.append(seg)
             if bad is None and not _segment_ok(seg, limits, forbidden, check_step):
                 bad = k
@@ -308,9 +353,34 @@ def _segment_ok(seg: _Free, limits: MotionLimits, forbidden: SampleCheck | None,
                 step: float) -> bool:
     times = np.append(np.arange(0.0, seg.duration, step), seg.duration)
     q = seg.states(times)[0]
-    if np.any(q < limits.lower - 1e-9) or np.any(q > limits.upper + 1e-9):
-        return False
+    extremes = seg.states(_turning_times(seg.traj))[0]
+    for x in (q, extremes):
+        if np.any(x < limits.lower - 1e-9) or np.any(x > limits.upper + 1e-9):
+            return False
     return not (forbidden is not None and bool(np.any(forbidden(q))))
+
+
+def _turning_times(traj: RuckigTrajectory) -> Array:
+    """Every time (s) at which some DoF of ``traj`` may reach an extreme position: the phase
+    boundaries and, inside each constant-jerk phase, the roots of its velocity
+    v + a t + j t^2 / 2. A position check at these times is exact, not sampled."""
+    out = [np.array([0.0, float(traj.duration)])]
+    for profile in traj.profiles[-1]:
+        starts, jerk, _, v, a = _phase_table(profile)
+        span = np.diff(starts)
+        j, v, a = jerk[:-1], v[:-1], a[:-1]
+        out.append(starts)
+        quad = np.abs(j) > 1e-12
+        disc = np.where(quad, a * a - 2.0 * j * v, -1.0)
+        root = np.sqrt(np.maximum(disc, 0.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            roots = [((-a + root) / j, quad & (disc >= 0.0)),
+                     ((-a - root) / j, quad & (disc >= 0.0)),
+                     (-v / a, ~quad)]
+        for cand, valid in roots:
+            ok = valid & np.isfinite(cand) & (cand > 0.0) & (cand < span)
+            out.append(starts[:-1][ok] + cand[ok])
+    return np.unique(np.clip(np.concatenate(out), 0.0, float(traj.duration)))
 
 
 def _dedupe(wp: Array) -> Array:

@@ -12,7 +12,9 @@ This is the only module that imports ``mujoco``.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Sequence
+import ctypes
+import ctypes.util
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -28,6 +30,32 @@ LINK_RADIUS = 0.05
 FRESH_SPEC_AFTER = 50
 """Robot removals after which the MuJoCo spec is built anew: an ``MjSpec`` keeps about 2 KiB
 for every robot ever deleted from it (mujoco 3.x), which a long-running server must not."""
+
+
+def _heap_trimmer() -> Callable[[int], int] | None:
+    """glibc's ``malloc_trim`` (None elsewhere)."""
+    name = ctypes.util.find_library("c")
+    try:
+        trim = getattr(ctypes.CDLL(name), "malloc_trim", None) if name else None
+    except OSError:
+        return None
+    return trim if callable(trim) else None
+
+
+_MALLOC_TRIM = _heap_trimmer()
+
+
+def release_freed_memory() -> None:
+    """Give the heap's free pages back to the system (glibc; elsewhere nothing).
+
+    Every model rebuild frees and reallocates a few MiB; glibc keeps the freed pages and the
+    heap fragments, so a server whose robots come and go grew by ~15 KiB per robot removed
+    (17 MiB over 1,100 spawn/remove cycles, measured) while holding no more live memory.
+    Trimming after a removal keeps it flat; it frees only what is free, so a real leak still
+    shows in the soak test's memory slope.
+    """
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)
 
 
 @dataclass
@@ -73,6 +101,7 @@ class PhysicsWorld:
         self._spec = self._new_spec()
         self._robots: dict[str, _RobotEntry] = {}
         self._batching = False
+        self._removed_since_trim = False
         self._dirty = False
         self._removals = 0
         self._model = self._spec.compile()
@@ -183,6 +212,7 @@ class PhysicsWorld:
                 self._build(entry)
         else:
             self._spec.delete(self._spec.body(f"{key}/platform"))
+        self._removed_since_trim = True
         self._changed()
 
     @contextlib.contextmanager
@@ -207,8 +237,15 @@ class PhysicsWorld:
             self._recompile()
 
     def _recompile(self) -> None:
-        """Rebuild the model, carrying every remaining robot's state over by name."""
+        """Rebuild the model, carrying every remaining robot's state over by name (and, after
+        a removal, give the freed heap back: :func:`release_freed_memory`)."""
         self._dirty = False
+        self._rebuild()
+        if self._removed_since_trim:
+            self._removed_since_trim = False
+            release_freed_memory()
+
+    def _rebuild(self) -> None:
         old_m, old_d = self._model, self._data
         qpos = {}
         for j in range(old_m.njnt):
