@@ -259,7 +259,7 @@ class Arm:
             ExecutionAbortedError: see :meth:`Executor.execute`.
         """
         executor = self.executor(options)
-        sensor = self._tip_sensor()
+        sensor = self.tip_sensor()
         if tip_correction and sensor is None:
             raise InvalidInputError(
                 "tip correction needs the arm's tip GroundTruth sensor, and the server reports "
@@ -277,7 +277,7 @@ class Arm:
                                   lambda pose, seed: np.array(
                                       self.robot.ik_solver().solve(pose, seed).best.q),
                                   executor.settle, lambda: executor.measure()[0], report.goal,
-                                  target, joint_step=self._joint_step())
+                                  target, joint_step=self.joint_step())
                 goal = fix.goal
                 figures = TipCorrectionFigures(
                     fix.before_m, fix.before_rad, fix.readings,
@@ -297,7 +297,12 @@ class Arm:
         final, _ = executor.measure()
         return replace(report, tip=tip, goal=goal, final_joint_error_rad=np.abs(final - goal))
 
-    def _joint_step(self) -> float:
+    def asta_time(self, timeout: float = 2.0) -> float:
+        """The simulated time (s) of the newest ASTA line: readings newer than it were taken
+        after everything sent so far."""
+        return float(self._live().wait_asta(str(self.robot.actuator), timeout=timeout).time)
+
+    def joint_step(self) -> float:
         """The resolution the server prints joint values with (0 = full precision)."""
         rec = self._live().latest("ASTA", str(self.robot.actuator))
         return rec.step("Value") if rec is not None else 0.0
@@ -316,12 +321,12 @@ class Arm:
         """
         zero = np.zeros(len(self.joint_names))
         offset = np.linalg.inv(self.fk(zero, str(self.robot.tip_sensor))) @ self.fk(zero)
-        step = self._tip_step()
+        step = self.tip_step()
         if step > 0 and float(np.linalg.norm(offset[:3, 3])) <= step:
             offset[:3, 3] = 0.0
         return offset
 
-    def _tip_step(self) -> float:
+    def tip_step(self) -> float:
         """The resolution (m) the server printed the Tip with (0: exact or unknown)."""
         for name, text in self.robot.files.items():
             if name.endswith(".discovery.json"):
@@ -329,7 +334,8 @@ class Arm:
                 return float(precision.get("tip_resolution_m") or 0.0)
         return 0.0
 
-    def _tip_sensor(self) -> TipSensor | None:
+    def tip_sensor(self) -> TipSensor | None:
+        """The server's tip GroundTruth sensor of this arm (None offline or without one)."""
         sensor = self.robot.tip_sensor
         if self.client is None or not sensor:
             return None

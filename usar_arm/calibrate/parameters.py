@@ -133,10 +133,10 @@ class ErrorModel:
         joints, tool, _ = self.split(p)
         for j in self.path:
             if j.actuated:
-                urdf = _replace_origin(urdf, j, corrected(j.origin.matrix(), joints[j.name]))
+                urdf = replace_origin(urdf, j, corrected(j.origin.matrix(), joints[j.name]))
             elif j.name == self.tool_joint and tool is not None:
                 mount = corrected(j.origin.matrix(), tool)
-                urdf = _replace_origin(urdf, j, mount)
+                urdf = replace_origin(urdf, j, mount)
                 if tip_joint is not None:
                     urdf = self._move_tip(urdf, tip_joint, j, mount[:3, 3])
         return urdf
@@ -153,7 +153,7 @@ class ErrorModel:
                                    f"'{mount.parent}' as the measured frame does")
         pose = tip.origin.matrix()
         pose[:3, 3] = position
-        return _replace_origin(urdf, tip, pose)
+        return replace_origin(urdf, tip, pose)
 
 
 def corrected(origin: Array, d: Array) -> Array:
@@ -164,7 +164,7 @@ def corrected(origin: Array, d: Array) -> Array:
     return out
 
 
-def _replace_origin(urdf: str, joint: Joint, pose: Array) -> str:
+def replace_origin(urdf: str, joint: Joint, pose: Array) -> str:
     xyz, rpy = pose[:3, 3], matrix_to_rpy(pose[:3, :3])
     new = f'<origin xyz="{nums(xyz)}" rpy="{nums(rpy)}"/>'
     pattern = re.compile(r'(<joint\s+name="' + re.escape(joint.name) + r'"[^>]*>)(.*?)(</joint>)',
