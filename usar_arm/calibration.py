@@ -28,6 +28,8 @@ from usar_arm.calibrate.observability import select_poses
 from usar_arm.calibrate.parameters import replace_origin
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.validation import split_held_out
+from usar_arm.control.splice import join_trajectories
+from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.errors import CalibrationError, InvalidInputError
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
@@ -35,6 +37,10 @@ from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
 
 FLIP = transform(FLIP_X)
+SPEED_SCALE = 1.0
+"""The tour runs at the arm's full limits: readings pair a sensor pose with the joint values of
+the same instant, so how closely the arm tracks the plan does not matter, only how many
+different readings a second of motion gives."""
 HOLD_OUT_EVERY = 5
 """Every fifth reading is held out for validation and never fitted."""
 
@@ -115,6 +121,21 @@ def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) ->
     return np.asarray(chosen, float)
 
 
+def tour_order(start: Array, configurations: Array, velocity: Array) -> Array:
+    """``configurations`` in nearest-neighbour order from ``start``, distance being the time
+    the slowest joint needs at its velocity limit (s): a short tour gives the same readings'
+    spread in less time (measured: 14 poses, 56 s of motion in the chosen order)."""
+    left = list(range(len(configurations)))
+    order: list[int] = []
+    here = np.asarray(start, float)
+    while left:
+        times = [float(np.max(np.abs(configurations[k] - here) / velocity)) for k in left]
+        k = left.pop(int(np.argmin(times)))
+        order.append(k)
+        here = configurations[k]
+    return np.asarray(configurations, float)[order]
+
+
 class _Recorder:
     """Every tip-sensor reading the server streams, paired with the ASTA line of the same
     simulated time (the server prints both from one state, ten times a second)."""
@@ -157,7 +178,8 @@ class _Recorder:
 
 def collect(arm: Arm, configurations: Array, scene: str | None,
             progress: Progress | None = None) -> list[Measurement]:
-    """Move through ``configurations`` (planned, collision-free in ``scene``) and keep every
+    """Move through ``configurations`` in one motion (each leg planned collision-free in
+    ``scene`` from rest to rest, the legs joined, no settling between them) and keep every
     tip-sensor reading taken on the way, in motion and at rest, with the joint values the
     server reported at the same simulated time. The arm's motion moves each printed number
     through its step, so the truncation dithers by itself."""
@@ -166,14 +188,20 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
         raise InvalidInputError("calibration needs an arm connected to a server")
     recorder = _Recorder(str(arm.robot.actuator), str(arm.robot.tip_sensor),
                          arm.robot.wire_links)
+    pieces: list[tuple[float, Trajectory]] = []
+    start, clock = arm.joints(), 0.0
+    for q in tour_order(start, configurations, MotionLimits.from_chain(arm.robot.chain).velocity):
+        traj = arm.plan(joints=q, scene=scene, start=start, speed_scale=SPEED_SCALE).trajectory
+        pieces.append((clock, traj))
+        start, clock = traj.q[-1], clock + traj.duration
+    joined = join_trajectories(pieces)
     unsubscribe = client.subscribe(recorder)
     try:
-        for k, q in enumerate(configurations):
-            arm.execute(arm.plan(joints=q, scene=scene).trajectory)
-            if progress is not None:
-                progress(k + 1, len(configurations))
+        arm.execute(joined)
     finally:
         unsubscribe()
+    if progress is not None:
+        progress(len(configurations), len(configurations))
     return recorder.measurements()
 
 
