@@ -38,7 +38,7 @@ from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot, robot_from_files, robot_from_record
+from usar_arm.robot import Robot, cache_folder, robot_from_files, robot_from_record
 from usar_arm.spatial import Array
 from usar_arm.usarsim.client import UsarClient
 
@@ -77,13 +77,16 @@ class Arm:
         self.server = server
         self._scenes: dict[str, tuple[Scene, CollisionWorld]] = {}
         self._executor: Executor | None = None
+        self.cache_entry: Path | None = None
+        """The description cache's entry of this arm (connected arms only)."""
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def connect(cls, robot: str = "KR60", host: str | None = None, port: int = 3000,
                 start: str | None = None, timeout: float = 5.0, naming: str = "ros-i",
                 wire_precision: str = "udk", sim_speed: float = 1.0,
-                velocity_limits: str | None = None, cache: Path | None = None) -> Arm:
+                velocity_limits: str | None = None, cache: Path | None = None,
+                calibrated: bool = True) -> Arm:
         """Spawn ``robot`` on a server and learn it (the description comes from the cache when
         the server described the same arm before).
 
@@ -91,6 +94,8 @@ class Arm:
             robot: robot class (``KR60`` = ``USARBot.KR60``).
             host, port: a USARSim server; without ``host`` the embedded simulator is started
                 in this process (``wire_precision`` and ``sim_speed`` configure it).
+            calibrated: use the calibrated description when this arm was calibrated before
+                (``usar-arm urdf`` or ``calibrate`` cached it); False: the as-learnt one.
         """
         options = DescribeOptions(robot=robot, host=host, port=port, start=start,
                                   naming=naming, velocity_limits=velocity_limits,
@@ -116,7 +121,8 @@ class Arm:
             client.connect()
             record = discover(client, options.robot_class, start=start, timeout=timeout,
                               known_classes=known)
-            arm = cls(robot_from_record(record, options, cache), client, server)
+            arm = cls(robot_from_record(record, options, cache, calibrated), client, server)
+            arm.cache_entry = cache_folder(record, options, cache)
         except BaseException:
             client.close()
             if server is not None:

@@ -14,9 +14,10 @@ report says so.
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -26,16 +27,20 @@ from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identif
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.observability import select_poses
 from usar_arm.calibrate.parameters import replace_origin
+from usar_arm.calibrate.report import calibration_dict
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.validation import split_held_out
 from usar_arm.control.splice import join_trajectories
 from usar_arm.control.trajectory import MotionLimits, Trajectory
+from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.errors import CalibrationError, InvalidInputError
+from usar_arm.robot import CALIBRATED
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
 
+log = logging.getLogger(__name__)
 FLIP = transform(FLIP_X)
 SPEED_SCALE = 1.0
 """The tour runs at the arm's full limits: readings pair a sensor pose with the joint values of
@@ -244,3 +249,45 @@ def summary(result: WireCalibration) -> dict[str, Any]:
             "seconds": round(result.seconds, 1), "rank": result.calibration.rank,
             "consistent": result.calibration.consistent, "fit": fit, "validation": val,
             "tool_point": result.tool_point}
+
+
+def calibrate_description(desc: Description, options: DescribeOptions, poses: int = 14,
+                          scene: str | None = None, seed: int = 0,
+                          progress: Progress | None = None
+                          ) -> tuple[Description, WireCalibration]:
+    """Spawn the arm ``desc`` describes again (same server and options), calibrate it, and
+    return the calibrated description (its URDF, and discovery.json with a ``calibration``
+    section; on the embedded simulator also the calibrated description's accuracy against the
+    simulator's own model) and the calibration. The calibrated description is cached beside
+    the as-learnt one, so that the next plan or demo of this arm uses it."""
+    if options.frame != "z-up":
+        raise InvalidInputError("calibration works on REP-103 (z-up) descriptions; describe "
+                                f"with --frame z-up (got {options.frame})")
+    with Arm.connect(robot=options.robot, host=options.host, port=options.port,
+                     start=options.start, timeout=options.timeout, naming=options.naming,
+                     wire_precision=options.wire_precision,
+                     velocity_limits=options.velocity_limits, calibrated=False) as arm:
+        if arm.urdf != desc.urdf:
+            raise CalibrationError("the arm spawned for calibration is described differently "
+                                   "from the description to calibrate (did the server "
+                                   "change?)")
+        result = calibrate_arm(arm, poses, scene, seed, progress)
+        entry = arm.cache_entry
+    notes = (f"{result.readings} tip-sensor readings on a tour through {result.poses} poses "
+             f"({result.seconds:.0f} s); every {HOLD_OUT_EVERY}th reading held out",
+             result.tool_point)
+    discovery = {**desc.discovery,
+                 "calibration": calibration_dict(result.calibration, result.validation, notes)}
+    if "accuracy_vs_simulator" in desc.discovery and options.host is None:
+        from usar_arm.embedded import urdf_accuracy
+
+        discovery["calibration"]["as_learnt_accuracy_vs_simulator"] = \
+            desc.discovery["accuracy_vs_simulator"]
+        discovery["accuracy_vs_simulator"] = urdf_accuracy(result.urdf, options)
+    calibrated = replace(desc, urdf=result.urdf, discovery=discovery)
+    if entry is not None:
+        try:
+            write_description(calibrated, entry / CALIBRATED)
+        except OSError as exc:
+            log.warning("cannot cache the calibrated description in %s: %s", entry, exc)
+    return calibrated, result

@@ -25,6 +25,7 @@ from usar_arm.model import JointType
 from usar_arm.urdf.reader import parse_urdf
 
 HOLD_OUT_EVERY = 5  # every fifth reading is held out for validation
+POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -37,7 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                     "is consistent and holds on the held-out readings.")
     p.add_argument("--measurements", metavar="FILE", help="measured poses (CSV or YAML)")
     p.add_argument("--urdf", metavar="X.urdf", help="the description to calibrate")
-    p.add_argument("--frame", help="measured frame (default: the file's)")
+    p.add_argument("--frame", help="FILE mode: measured frame (default: the file's)")
     p.add_argument("--out", default="calibrated", metavar="DIR",
                    help="where to write (default ./calibrated)")
     p.add_argument("--quantisation", default="auto",
@@ -50,7 +51,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 
 def add_robot_mode(p: argparse.ArgumentParser) -> None:
-    """The ``--robot`` mode's arguments (added by the server side of the calibration)."""
+    """The ``--robot`` mode's arguments: spawn the robot on a server (the embedded simulator
+    unless --host), learn it, tour it through poses reading its tip sensor, fit, validate."""
+    p.add_argument("--robot", default=None,
+                   help="ROBOT mode: spawn and calibrate this robot class (e.g. KR60) on a "
+                        "server through its tip GroundTruth sensor")
+    p.add_argument("--host", default=None, help="USARSim server (default: the embedded one)")
+    p.add_argument("--port", type=int, default=3000, help="server port (default 3000)")
+    p.add_argument("--start-position", default=None, metavar="NAME", help="start pose")
+    p.add_argument("--timeout", type=float, default=5.0, metavar="S",
+                   help="seconds to wait for each server reply (default 5)")
+    p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
+                   help="number format of the embedded simulator (ignored with --host)")
+    p.add_argument("--poses", type=int, default=POSES, metavar="N",
+                   help=f"poses of the calibration tour (default {POSES})")
+    p.add_argument("--scene", default=None,
+                   help="scene the tour must avoid (a shipped name or a YAML file)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the pose choice (default 0)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,8 +81,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_robot(args: argparse.Namespace) -> int:
-    """The ``--robot`` mode: spawn, learn, move through the poses, fit (server side)."""
-    raise InvalidInputError("calibrate --robot is not available in this build")
+    """The ``--robot`` mode: spawn, learn, tour the poses, fit, validate, write."""
+    from usar_arm.cli.calibrate_robot import calibrate_robot
+
+    return calibrate_robot(args)
 
 
 def _milli(x: float) -> str:
