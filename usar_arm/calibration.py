@@ -33,7 +33,7 @@ from usar_arm.calibrate.validation import split_held_out
 from usar_arm.control.splice import join_trajectories
 from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.description import DescribeOptions, Description, write_description
-from usar_arm.errors import CalibrationError, InvalidInputError
+from usar_arm.errors import CalibrationError, ExecutionAbortedError, InvalidInputError
 from usar_arm.robot import CALIBRATED
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
@@ -42,10 +42,12 @@ from usar_arm.usarsim.inbox import Received
 
 log = logging.getLogger(__name__)
 FLIP = transform(FLIP_X)
-SPEED_SCALE = 1.0
+SPEED_SCALES = (1.0, 0.5, 0.25)
 """The tour runs at the arm's full limits: readings pair a sensor pose with the joint values of
-the same instant, so how closely the arm tracks the plan does not matter, only how many
-different readings a second of motion gives."""
+the same instant, so how closely the arm follows the plan matters only for safety (the
+executor's tracking bound), and a fast tour gives more different readings a second. An arm
+whose drives cannot follow its full limits within that bound (the Fanuc's rail) tours again at
+half of them."""
 HOLD_OUT_EVERY = 5
 """Every fifth reading is held out for validation and never fitted."""
 
@@ -126,6 +128,34 @@ def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) ->
     return np.asarray(chosen, float)
 
 
+def _at_rest(arm: Arm, tolerance: float = 1e-3, timeout: float = 10.0) -> Array:
+    """The arm's joints once two ASTA readings 0.3 s of simulated time apart differ by less
+    than ``tolerance`` (rad or m) in every joint (an aborted tour leaves it moving)."""
+    deadline = time.monotonic() + timeout
+    q, t = arm.joints(), arm.asta_time()
+    while True:
+        later = arm.joints(newer_than=t + 0.3)
+        if float(np.max(np.abs(later - q))) < tolerance:
+            return later
+        if time.monotonic() > deadline:
+            raise CalibrationError(f"the arm did not come to rest within {timeout:.0f} s "
+                                   f"(still moving by {np.max(np.abs(later - q)):.4f})")
+        q, t = later, arm.asta_time()
+
+
+def _tour(arm: Arm, configurations: Array, scene: str | None, scale: float) -> Trajectory:
+    """One trajectory from the arm's joints through ``configurations`` (nearest first), each
+    leg planned collision-free from rest to rest at ``scale`` of the limits."""
+    pieces: list[tuple[float, Trajectory]] = []
+    start, clock = _at_rest(arm), 0.0
+    limits = MotionLimits.from_chain(arm.robot.chain)
+    for q in tour_order(start, configurations, limits.velocity):
+        traj = arm.plan(joints=q, scene=scene, start=start, speed_scale=scale).trajectory
+        pieces.append((clock, traj))
+        start, clock = traj.q[-1], clock + traj.duration
+    return join_trajectories(pieces)
+
+
 def tour_order(start: Array, configurations: Array, velocity: Array) -> Array:
     """``configurations`` in nearest-neighbour order from ``start``, distance being the time
     the slowest joint needs at its velocity limit (s): a short tour gives the same readings'
@@ -193,16 +223,17 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
         raise InvalidInputError("calibration needs an arm connected to a server")
     recorder = _Recorder(str(arm.robot.actuator), str(arm.robot.tip_sensor),
                          arm.robot.wire_links)
-    pieces: list[tuple[float, Trajectory]] = []
-    start, clock = arm.joints(), 0.0
-    for q in tour_order(start, configurations, MotionLimits.from_chain(arm.robot.chain).velocity):
-        traj = arm.plan(joints=q, scene=scene, start=start, speed_scale=SPEED_SCALE).trajectory
-        pieces.append((clock, traj))
-        start, clock = traj.q[-1], clock + traj.duration
-    joined = join_trajectories(pieces)
     unsubscribe = client.subscribe(recorder)
     try:
-        arm.execute(joined)
+        for scale in SPEED_SCALES:
+            try:
+                arm.execute(_tour(arm, configurations, scene, scale))
+                break
+            except ExecutionAbortedError as exc:
+                if scale == SPEED_SCALES[-1]:
+                    raise
+                log.warning("the calibration tour at %.0f %% of the limits was aborted (%s); "
+                            "touring again slower", 100 * scale, exc)
     finally:
         unsubscribe()
     if progress is not None:

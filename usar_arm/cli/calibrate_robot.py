@@ -4,6 +4,7 @@ calibration: describe, calibrate on the server through the tip sensor, print bef
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
 
 from usar_arm.calibration import WireCalibration, calibrate_description
@@ -23,8 +24,9 @@ def has_tip_sensor(desc: Description) -> bool:
 
 
 def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: str | None,
-              seed: int) -> tuple[Description, WireCalibration]:
-    """Calibrate with a progress line on stderr, then print the before/after figures."""
+              seed: int, say: Callable[[str], None] = out
+              ) -> tuple[Description, WireCalibration]:
+    """Calibrate with a progress line on stderr, then ``say`` the before/after figures."""
     err(f"calibrating {desc.chain.name}: a tour through {poses} poses, reading its tip "
         "sensor...")
 
@@ -34,22 +36,22 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
     calibrated, result = calibrate_description(desc, options, poses, scene, seed, tick)
     fit, val = result.calibration.fit.summary(), result.validation.summary()
     cal = result.calibration
-    out(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
+    say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
         f"s ({cal.quantisation}, rank {cal.rank}, {len(cal.unidentifiable)} unidentifiable, "
         f"{len(cal.rejected)} rejected)")
-    out(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
+    say(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
         f"{_mm(fit['max_before_rad'])} -> {_mm(fit['max_after_rad'])} mrad "
         "(from each reading's interval middle)")
-    out(f"  held out   max {_mm(val['max_before_m'])} -> {_mm(val['max_after_m'])} mm, "
+    say(f"  held out   max {_mm(val['max_before_m'])} -> {_mm(val['max_after_m'])} mm, "
         f"{_mm(val['max_before_rad'])} -> {_mm(val['max_after_rad'])} mrad")
     truth = calibrated.discovery.get("accuracy_vs_simulator")
     before = calibrated.discovery["calibration"].get("as_learnt_accuracy_vs_simulator")
     if truth and before:
-        out(f"  against the simulator's own model ({truth['configurations']} configurations): "
+        say(f"  against the simulator's own model ({truth['configurations']} configurations): "
             f"flange {_mm(before['max_flange_error_m'])} -> {_mm(truth['max_flange_error_m'])} "
             f"mm, joint axes {_mm(before['max_joint_axis_error_rad'])} -> "
             f"{_mm(truth['max_joint_axis_error_rad'])} mrad")
-    out(f"  tool point: {result.tool_point}")
+    say(f"  tool point: {result.tool_point}")
     return calibrated, result
 
 
@@ -72,7 +74,8 @@ def calibrate_robot(args: argparse.Namespace) -> int:
                               timeout=args.timeout)
     err(f"discovering {options.robot_class}...")
     desc = describe(options)
-    calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed)
+    calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed,
+                                   err if args.json else out)
     paths = write_description(calibrated, args.out)
     picture = residual_picture(result, Path(args.out) / f"{desc.chain.name}.calibration.png")
     if args.json:

@@ -11,7 +11,7 @@ from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_loggi
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
 from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK
+from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
 
@@ -91,7 +91,10 @@ def run_urdf(args: argparse.Namespace) -> int:
     elif options.frame != "z-up":
         err("not calibrating: calibration works on z-up descriptions (--frame z-up)")
     else:
-        desc, _ = calibrate(desc, options, args.poses, None, 0)
+        try:
+            desc, _ = calibrate(desc, options, args.poses, None, 0, err if args.json else out)
+        except (CalibrationError, ExecutionAbortedError) as exc:
+            err(f"calibration failed, so the description is as learnt: {exc}")
     paths = write_description(desc, args.out_dir)
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
