@@ -27,6 +27,7 @@ ALLOWED: dict[str, set[str]] = {
     "planning": {"urdf", "model"} | UTILITIES,
     "control": {"usarsim", "planning", "model"} | UTILITIES,
     "export": {"control", "planning", "urdf", "model"} | UTILITIES,
+    "calibrate": {"discover", "planning", "control", "urdf", "model"} | UTILITIES,
 }
 # orchestration
 FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "__init__",

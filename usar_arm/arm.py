@@ -38,7 +38,7 @@ from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot, robot_from_files, robot_from_record
+from usar_arm.robot import Robot, cache_folder, robot_from_files, robot_from_record
 from usar_arm.spatial import Array
 from usar_arm.usarsim.client import UsarClient
 
@@ -77,13 +77,16 @@ class Arm:
         self.server = server
         self._scenes: dict[str, tuple[Scene, CollisionWorld]] = {}
         self._executor: Executor | None = None
+        self.cache_entry: Path | None = None
+        """The description cache's entry of this arm (connected arms only)."""
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def connect(cls, robot: str = "KR60", host: str | None = None, port: int = 3000,
                 start: str | None = None, timeout: float = 5.0, naming: str = "ros-i",
                 wire_precision: str = "udk", sim_speed: float = 1.0,
-                velocity_limits: str | None = None, cache: Path | None = None) -> Arm:
+                velocity_limits: str | None = None, cache: Path | None = None,
+                calibrated: bool = True) -> Arm:
         """Spawn ``robot`` on a server and learn it (the description comes from the cache when
         the server described the same arm before).
 
@@ -91,6 +94,8 @@ class Arm:
             robot: robot class (``KR60`` = ``USARBot.KR60``).
             host, port: a USARSim server; without ``host`` the embedded simulator is started
                 in this process (``wire_precision`` and ``sim_speed`` configure it).
+            calibrated: use the calibrated description when this arm was calibrated before
+                (``usar-arm urdf`` or ``calibrate`` cached it); False: the as-learnt one.
         """
         options = DescribeOptions(robot=robot, host=host, port=port, start=start,
                                   naming=naming, velocity_limits=velocity_limits,
@@ -116,7 +121,8 @@ class Arm:
             client.connect()
             record = discover(client, options.robot_class, start=start, timeout=timeout,
                               known_classes=known)
-            arm = cls(robot_from_record(record, options, cache), client, server)
+            arm = cls(robot_from_record(record, options, cache, calibrated), client, server)
+            arm.cache_entry = cache_folder(record, options, cache)
         except BaseException:
             client.close()
             if server is not None:
@@ -259,7 +265,7 @@ class Arm:
             ExecutionAbortedError: see :meth:`Executor.execute`.
         """
         executor = self.executor(options)
-        sensor = self._tip_sensor()
+        sensor = self.tip_sensor()
         if tip_correction and sensor is None:
             raise InvalidInputError(
                 "tip correction needs the arm's tip GroundTruth sensor, and the server reports "
@@ -277,7 +283,7 @@ class Arm:
                                   lambda pose, seed: np.array(
                                       self.robot.ik_solver().solve(pose, seed).best.q),
                                   executor.settle, lambda: executor.measure()[0], report.goal,
-                                  target, joint_step=self._joint_step())
+                                  target, joint_step=self.joint_step())
                 goal = fix.goal
                 figures = TipCorrectionFigures(
                     fix.before_m, fix.before_rad, fix.readings,
@@ -297,7 +303,12 @@ class Arm:
         final, _ = executor.measure()
         return replace(report, tip=tip, goal=goal, final_joint_error_rad=np.abs(final - goal))
 
-    def _joint_step(self) -> float:
+    def asta_time(self, timeout: float = 2.0) -> float:
+        """The simulated time (s) of the newest ASTA line: readings newer than it were taken
+        after everything sent so far."""
+        return float(self._live().wait_asta(str(self.robot.actuator), timeout=timeout).time)
+
+    def joint_step(self) -> float:
         """The resolution the server prints joint values with (0 = full precision)."""
         rec = self._live().latest("ASTA", str(self.robot.actuator))
         return rec.step("Value") if rec is not None else 0.0
@@ -316,12 +327,12 @@ class Arm:
         """
         zero = np.zeros(len(self.joint_names))
         offset = np.linalg.inv(self.fk(zero, str(self.robot.tip_sensor))) @ self.fk(zero)
-        step = self._tip_step()
+        step = self.tip_step()
         if step > 0 and float(np.linalg.norm(offset[:3, 3])) <= step:
             offset[:3, 3] = 0.0
         return offset
 
-    def _tip_step(self) -> float:
+    def tip_step(self) -> float:
         """The resolution (m) the server printed the Tip with (0: exact or unknown)."""
         for name, text in self.robot.files.items():
             if name.endswith(".discovery.json"):
@@ -329,7 +340,8 @@ class Arm:
                 return float(precision.get("tip_resolution_m") or 0.0)
         return 0.0
 
-    def _tip_sensor(self) -> TipSensor | None:
+    def tip_sensor(self) -> TipSensor | None:
+        """The server's tip GroundTruth sensor of this arm (None offline or without one)."""
         sensor = self.robot.tip_sensor
         if self.client is None or not sensor:
             return None

@@ -117,3 +117,14 @@ def accuracy_report(chain: KinematicChain, act: ActuatorSpec, frame: str, sample
 def _digits(value: float) -> float:
     """``value`` rounded to 12 significant digits."""
     return float(f"{value:.12g}")
+
+
+def urdf_accuracy(urdf: str, options: DescribeOptions, samples: int = 1000) -> dict[str, Any]:
+    """:func:`accuracy_report` of a URDF (e.g. a calibrated one) of a built-in robot."""
+    from usar_arm.urdf.reader import parse_urdf
+
+    chain, _ = parse_urdf(urdf)
+    spec = builtin_robots()[options.robot_class]
+    act = next(a for a in spec.actuators if a.tip_sensor) if len(spec.actuators) > 1 \
+        else spec.actuators[0]
+    return accuracy_report(chain, act, options.frame, samples)

@@ -340,3 +340,23 @@ class ExecutionAbortedError(UsarArmError):
         if at_time_s is not None:
             text += f" at t = {at_time_s:.2f} s"
         super().__init__(text + "; the arm was told to hold its current position")
+
+
+# --------------------------------------------------------------------------- calibration
+
+
+class CalibrationError(UsarArmError):
+    """A kinematic calibration cannot be made (too few readings, nothing identifiable, no
+    convergence); nothing was written and the as-learnt description is kept."""
+
+    exit_code = EXIT_INVALID_INPUT
+
+    def __init__(self, problem: str, readings: int | None = None,
+                 needed: int | None = None):
+        self.problem = problem
+        self.readings = readings
+        self.needed = needed
+        text = f"calibration failed: {problem}"
+        if readings is not None and needed is not None:
+            text += f" ({readings} readings, at least {needed} needed)"
+        super().__init__(text + "; nothing was written")

@@ -155,20 +155,35 @@ def description_key(record: DiscoveryRecord, options: DescribeOptions) -> str:
     return hashlib.sha256(material.encode()).hexdigest()[:20]
 
 
+CALIBRATED = "calibrated"
+"""Sub-folder of a cache entry holding the calibrated description of the same CONF/GEO."""
+
+
+def cache_folder(record: DiscoveryRecord, options: DescribeOptions,
+                 cache: Path | None = None) -> Path:
+    """The cache entry of a discovery: the as-learnt description, and the calibrated one in
+    its :data:`CALIBRATED` sub-folder once the arm was calibrated."""
+    return (cache or cache_dir()) / description_key(record, options)
+
+
 def robot_from_record(record: DiscoveryRecord, options: DescribeOptions,
-                      cache: Path | None = None) -> Robot:
+                      cache: Path | None = None, calibrated: bool = True) -> Robot:
     """The Robot a discovery describes, from the cache when the same CONF/GEO were described
-    before, else built (and cached)."""
+    before (calibrated, when that arm was calibrated and ``calibrated``), else built (and
+    cached)."""
     assert record.arm is not None
-    folder = (cache or cache_dir()) / description_key(record, options)
-    urdf = folder / f"{record.arm.robot_name}.urdf"
-    if urdf.exists():
+    folder = cache_folder(record, options, cache)
+    tried = ([folder / CALIBRATED] if calibrated else []) + [folder]
+    for where in tried:
+        urdf = where / f"{record.arm.robot_name}.urdf"
+        if not urdf.exists():
+            continue
         try:
             robot = robot_from_files(urdf)
-            log.info("description of %s from the cache (%s)", record.arm.robot_name, folder)
+            log.info("description of %s from the cache (%s)", record.arm.robot_name, where)
             return robot
         except (FileFormatError, ValueError, KeyError) as exc:
-            log.warning("ignoring a broken cache entry %s: %s", folder, exc)
+            log.warning("ignoring a broken cache entry %s: %s", where, exc)
     desc = describe_arm(record, options)
     try:
         write_description(desc, folder)

@@ -154,7 +154,7 @@ def _argv(command: str, tmp: Path, trajectory: Path) -> list[str]:
     if command == "urdf":
         (tmp / "out").mkdir()
         (tmp / "out" / "KR60.urdf").write_text(OLD)
-        return ["urdf", "--out-dir", str(tmp / "out"), "--acm-samples", "50"]
+        return ["urdf", "--out-dir", str(tmp / "out"), "--acm-samples", "50", "--no-calibrate"]
     if command == "plan":
         (tmp / "out").mkdir()
         (tmp / "out" / "traj.json").write_text(OLD)

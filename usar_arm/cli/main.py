@@ -6,11 +6,20 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from usar_arm.cli import demo_cmd, execute_cmd, ik_cmd, picture_cmds, plan_cmd, sim_cmd, urdf_cmd
+from usar_arm.cli import (
+    calibrate_cmd,
+    demo_cmd,
+    execute_cmd,
+    ik_cmd,
+    picture_cmds,
+    plan_cmd,
+    sim_cmd,
+    urdf_cmd,
+)
 from usar_arm.cli.common import EXIT_CODES_HELP, report_error
 from usar_arm.version import __version__
 
-COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd]
+COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd, calibrate_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

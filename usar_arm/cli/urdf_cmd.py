@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from usar_arm.cli.calibrate_cmd import POSES
+from usar_arm.cli.calibrate_robot import calibrate, has_tip_sensor
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
 from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK
+from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
 
@@ -21,11 +23,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                     "(the embedded simulator unless --host), read its actuator's CONF and GEO, "
                     "and write <Robot>.urdf, <Robot>.srdf, <Robot>.joint_limits.yaml and "
                     "<Robot>.discovery.json (the raw lines received and the chain built from "
-                    "them). Every file is validated first and written atomically.")
+                    "them). An arm with a tip pose sensor is calibrated first (a tour through "
+                    "--poses poses reading it; --no-calibrate skips it). Every file is "
+                    "validated first and written atomically.")
     add_server_args(p)
     add_description_args(p)
     p.add_argument("--out-dir", default="robots/generated", metavar="DIR",
                    help="where to write (default robots/generated)")
+    p.add_argument("--no-calibrate", action="store_true",
+                   help="write the description as learnt; by default an arm with a tip pose "
+                        "sensor is first calibrated through it (a tour of --poses poses)")
+    p.add_argument("--poses", type=int, default=POSES, metavar="N",
+                   help=f"poses of the calibration tour (default {POSES})")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(p)
     p.set_defaults(handler=run_urdf)
@@ -73,10 +82,24 @@ def run_urdf(args: argparse.Namespace) -> int:
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
     desc = describe(options)
+    if args.no_calibrate:
+        err("not calibrating (--no-calibrate): the description is as learnt")
+    elif not has_tip_sensor(desc):
+        err(f"not calibrating: the server reports no tip pose sensor on {desc.chain.name}'s "
+            "arm, so the description is as learnt (calibrate --measurements FILE fits one to "
+            "a tracker's readings)")
+    elif options.frame != "z-up":
+        err("not calibrating: calibration works on z-up descriptions (--frame z-up)")
+    else:
+        try:
+            desc, _ = calibrate(desc, options, args.poses, None, 0, err if args.json else out)
+        except (CalibrationError, ExecutionAbortedError) as exc:
+            err(f"calibration failed, so the description is as learnt: {exc}")
     paths = write_description(desc, args.out_dir)
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
-                    "joints": _joint_rows(desc), "warnings": list(desc.warnings)})
+                    "joints": _joint_rows(desc), "warnings": list(desc.warnings),
+                    "calibrated": "calibration" in desc.discovery})
         return EXIT_OK
     _print_table(desc)
     for kind, path in paths.items():

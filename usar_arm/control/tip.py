@@ -83,6 +83,11 @@ class TipSensor:
         self.sensor_to_tool0 = np.asarray(sensor_to_tool0, float)
         self._platform = np.eye(4)
 
+    def platform_pose(self) -> Array:
+        """The platform's world pose (4x4, z-down) from the last reading, each printed number
+        at the middle of its interval."""
+        return self._platform.copy()
+
     @property
     def source(self) -> str:
         """A description for reports."""

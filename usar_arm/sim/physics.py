@@ -281,8 +281,15 @@ class PhysicsWorld:
         return float(self._data.time)
 
     def step(self, n: int = 1) -> None:
-        """Advance the physics by ``n`` steps of ``timestep``."""
+        """Advance the physics by ``n`` steps of ``timestep``.
+
+        ``mj_step`` computes the frames (``site_xpos``...) from the positions it starts from and
+        then integrates them, so afterwards the frames lag the joint values by one step; they
+        are brought up to date here, so that the tip's pose and the joints read at one time
+        are one state (1 ms apart they differ by ~2.5 mm at the KR60's tip moving 1 rad/s).
+        """
         mujoco.mj_step(self._model, self._data, nstep=n)
+        mujoco.mj_kinematics(self._model, self._data)
 
     def _index(self, key: str, actuator: str) -> _ActuatorIndex:
         return self._robots[key].actuators[actuator]

@@ -1,0 +1,78 @@
+"""`usar-arm calibrate --measurements FILE --urdf X.urdf`: fits, validates on held-out
+readings, writes only then; bad files and contradicting readings write nothing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
+from usar_arm.calibrate.measurement_writer import write_measurements
+from usar_arm.calibrate.measurements import Measurement, MeasurementSet
+from usar_arm.cli import main
+from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.spatial import transform_from_xyz_rpy
+
+NOMINAL = KinematicModel(KR60)
+BASE = transform_from_xyz_rpy([0.002, -0.001, 0.0015], [0.003, -0.002, 0.004])
+
+
+def _files(tmp_path: Path, data: list[Measurement]) -> tuple[Path, Path]:
+    urdf = tmp_path / "KR60.urdf"
+    urdf.write_text(KR60)
+    path = tmp_path / "tracker.csv"
+    write_measurements(path, MeasurementSet(tuple(data), "tool0",
+                                            joint_names=NOMINAL.joint_names), "mm", "deg")
+    return urdf, path
+
+
+def test_file_mode_writes_a_validated_calibrated_urdf_and_report(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    truth = perturbed(KR60, 11)
+    data = readings(truth, "tool0", BASE, random_q(NOMINAL, 60, 1), 2, sigma_m=5e-5,
+                    sigma_rad=5e-5)
+    urdf, path = _files(tmp_path, data)
+    out = tmp_path / "out"
+    assert main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out",
+                 str(out)]) == EXIT_OK
+    text = capsys.readouterr().out
+    assert "48 readings of tool0" in text and "held out" in text and "(12 readings)" in text
+    report = json.loads((out / "KR60.calibration.json").read_text())
+    assert report["consistent"] and report["rank"] == 30 and len(report["unidentifiable"]) == 18
+    assert report["validation"]["summary"]["max_after_m"] < 3e-4
+    assert len(report["validation"]["readings"]) == 12
+    calibrated = (out / "KR60.urdf").read_text()
+    err = tool_errors(truth, BASE, calibrated, np.array(report["base"]), "tool0",
+                      random_q(NOMINAL, 200, 3))
+    assert err[0] < 1e-4
+
+
+def test_contradicting_readings_write_nothing(tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    truth = perturbed(KR60, 12)
+    q = random_q(NOMINAL, 40, 4)
+    moved = BASE @ transform_from_xyz_rpy([0.003, 0, 0], [0, 0, 0.002])
+    data = (readings(truth, "tool0", BASE, q[:20], 1, sigma_m=5e-5, sigma_rad=5e-5)
+            + readings(truth, "tool0", moved, q[20:], 2, sigma_m=5e-5, sigma_rad=5e-5))
+    urdf, path = _files(tmp_path, data)
+    code = main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out",
+                 str(tmp_path / "out")])
+    assert code == EXIT_INVALID_INPUT
+    assert "consistent: false" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_file_with_a_missing_column_writes_nothing(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    urdf = tmp_path / "KR60.urdf"
+    urdf.write_text(KR60)
+    path = tmp_path / "bad.csv"
+    path.write_text("# frame: tool0\njoint_a1_deg,joint_a2_deg,x_mm,y_mm,z_mm\n1,2,3,4,5\n")
+    code = main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out",
+                 str(tmp_path / "out")])
+    assert code == EXIT_INVALID_INPUT
+    assert "bad.csv:2" in capsys.readouterr().err and not (tmp_path / "out").exists()

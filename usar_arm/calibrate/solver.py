@@ -1,0 +1,122 @@
+"""The numerical core of the fit: the identification Jacobian, the identifiable columns, and
+Levenberg-Marquardt on the weighted residuals (see identify.py for the method)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from usar_arm.calibrate import quantised as qm
+from usar_arm.calibrate.measurements import Measurement
+from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.spatial import Array
+
+RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
+STEP = 1e-6             # numeric Jacobian step (m, rad)
+
+
+def jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: Array,
+              t: qm.Targets) -> Array:
+    """d errors / d p[cols] (N*6, len(cols)), central differences."""
+    out = np.empty((q.shape[0] * 6, len(cols)))
+    for k, c in enumerate(cols):
+        hi, lo = p.copy(), p.copy()
+        hi[c] += STEP
+        lo[c] -= STEP
+        d = qm.errors(model.poses(hi, q, base), t) - qm.errors(model.poses(lo, q, base), t)
+        out[:, k] = (d / (2 * STEP)).ravel()
+    return out
+
+
+def joint_jacobian(model: ErrorModel, q: Array, base: Array, t: qm.Targets) -> Array:
+    """(N, 6, n) d errors / d q at the nominal parameters (central differences)."""
+    p = np.zeros(model.size)
+    out = np.empty((q.shape[0], 6, q.shape[1]))
+    for j in range(q.shape[1]):
+        hi, lo = q.copy(), q.copy()
+        hi[:, j] += STEP
+        lo[:, j] -= STEP
+        out[:, :, j] = (qm.errors(model.poses(p, hi, base), t)
+                        - qm.errors(model.poses(p, lo, base), t)) / (2 * STEP)
+    return out
+
+
+def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:
+    """The identifiable columns, kept in ``order`` of preference, and the pivoted-QR rank."""
+    from scipy.linalg import qr
+
+    norms = np.linalg.norm(jac, axis=0)
+    scaled = jac / np.where(norms > 0, norms, 1.0)
+    r = qr(scaled, mode="r", pivoting=True)[0]
+    diag = np.abs(np.diag(r))
+    rank = int((diag > RANK_TOL * diag[0]).sum()) if len(diag) else 0
+    kept: list[int] = []
+    basis = np.zeros((jac.shape[0], 0))
+    for c in order:
+        if norms[c] == 0:
+            continue
+        v = scaled[:, c] - basis @ (basis.T @ scaled[:, c])
+        v = v - basis @ (basis.T @ v)
+        if np.linalg.norm(v) > math.sqrt(RANK_TOL):
+            kept.append(c)
+            basis = np.column_stack([basis, v / np.linalg.norm(v)])
+    return kept, rank
+
+
+def levenberg_marquardt(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
+                        t: qm.Targets, kind: str, iterations: int) -> tuple[Array, int]:
+    """Levenberg-Marquardt on the weighted residuals over the parameters ``cols``."""
+    def cost(x: Array) -> tuple[float, Array, Array]:
+        e = qm.errors(model.poses(x, q, base), t)
+        r, d = qm.residuals(e, t, kind)
+        return float((r ** 2).sum()), r.ravel(), d.ravel()
+
+    c0, r, d = cost(p)
+    lam = 1e-3
+    it = 0
+    while it < iterations:
+        it += 1
+        jac = jacobian(model, p, cols, q, base, t) * d[:, None]
+        jtj, g = jac.T @ jac, jac.T @ r
+        improved = False
+        for _ in range(10):
+            a = jtj + lam * np.diag(np.diag(jtj) + 1e-12)
+            dp = -np.linalg.solve(a, g)
+            trial = p.copy()
+            trial[cols] += dp
+            c1, r1, d1 = cost(trial)
+            if c1 < c0:
+                improved = True
+                break
+            lam *= 10
+        if not improved:
+            break
+        p, r, d = trial, r1, d1
+        lam = max(lam / 10, 1e-9)
+        done = c0 - c1 < 1e-10 * c0 + 1e-14
+        c0 = c1
+        if done:
+            break
+    return p, it
+
+
+def structural_rank(model: ErrorModel, rotations: bool = True, samples: int = 40) -> int:
+    """How many parameters readings at generic configurations identify (random configurations
+    within the joint limits, seed 0; position-only when ``rotations`` is False)."""
+    joints = [j for j in model.path if j.actuated]
+    lo = np.array([j.limits.lower if j.limits else -np.pi for j in joints])
+    hi = np.array([j.limits.upper if j.limits else np.pi for j in joints])
+    q = np.random.default_rng(0).uniform(lo, hi, (samples, len(joints)))
+    t = qm.targets([Measurement(qk, np.zeros(3), np.zeros(3) if rotations else None,
+                                sigma_m=1e-3, sigma_rad=1e-3) for qk in q], 1e-3, 1e-3)
+    jac = jacobian(model, np.zeros(model.size), range(model.size), q, np.eye(4), t)
+    jac *= t.used.ravel()[:, None]
+    return len(select_identifiable(jac, preference(model))[0])
+
+
+def preference(model: ErrorModel) -> list[int]:
+    idx = {n: i for i, n in enumerate(model.names)}
+    first = [idx[n] for n in model.names if n.startswith(("base.", "tool."))]
+    return first + [i for i in range(model.size) if i not in first]

@@ -1,0 +1,88 @@
+"""The server side of ``usar-arm calibrate --robot`` and of ``usar-arm urdf``'s default
+calibration: describe, calibrate on the server through the tip sensor, print before/after."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+
+from usar_arm.calibration import WireCalibration, calibrate_description
+from usar_arm.cli.common import err, out, print_json
+from usar_arm.description import DescribeOptions, Description, write_description
+from usar_arm.embedded import describe
+from usar_arm.errors import EXIT_OK
+
+
+def _mm(x: float) -> str:
+    return f"{x * 1e3:.3f}"
+
+
+def has_tip_sensor(desc: Description) -> bool:
+    """Whether the server reported a tip pose sensor for the described arm."""
+    return bool(desc.discovery.get("chain", {}).get("tip_sensor"))
+
+
+def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: str | None,
+              seed: int, say: Callable[[str], None] = out
+              ) -> tuple[Description, WireCalibration]:
+    """Calibrate with a progress line on stderr, then ``say`` the before/after figures."""
+    err(f"calibrating {desc.chain.name}: a tour through {poses} poses, reading its tip "
+        "sensor...")
+
+    def tick(done: int, total: int) -> None:
+        err(f"  poses {done}/{total}")
+
+    calibrated, result = calibrate_description(desc, options, poses, scene, seed, tick)
+    fit, val = result.calibration.fit.summary(), result.validation.summary()
+    cal = result.calibration
+    say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
+        f"s ({cal.quantisation}, rank {cal.rank}, {len(cal.unidentifiable)} unidentifiable, "
+        f"{len(cal.rejected)} rejected)")
+    say(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
+        f"{_mm(fit['max_before_rad'])} -> {_mm(fit['max_after_rad'])} mrad "
+        "(from each reading's interval middle)")
+    say(f"  held out   max {_mm(val['max_before_m'])} -> {_mm(val['max_after_m'])} mm, "
+        f"{_mm(val['max_before_rad'])} -> {_mm(val['max_after_rad'])} mrad")
+    truth = calibrated.discovery.get("accuracy_vs_simulator")
+    before = calibrated.discovery["calibration"].get("as_learnt_accuracy_vs_simulator")
+    if truth and before:
+        say(f"  against the simulator's own model ({truth['configurations']} configurations): "
+            f"flange {_mm(before['max_flange_error_m'])} -> {_mm(truth['max_flange_error_m'])} "
+            f"mm, joint axes {_mm(before['max_joint_axis_error_rad'])} -> "
+            f"{_mm(truth['max_joint_axis_error_rad'])} mrad")
+    say(f"  tool point: {result.tool_point}")
+    return calibrated, result
+
+
+def residual_picture(result: WireCalibration, path: Path) -> Path:
+    """The residuals-per-reading picture."""
+    from usar_arm.export.residual_plot import plot_residuals
+
+    f, v = result.calibration.fit, result.validation
+    return plot_residuals(path, (f.before_m, f.before_rad, f.after_m, f.after_rad),
+                          (v.before_m, v.before_rad, v.after_m, v.after_rad),
+                          f"calibration of {path.stem.split('.')[0]}: {result.readings} "
+                          f"readings, {result.poses} poses")
+
+
+def calibrate_robot(args: argparse.Namespace) -> int:
+    """``calibrate --robot``: describe, calibrate, write the calibrated description and the
+    residual picture into --out."""
+    options = DescribeOptions(robot=args.robot, host=args.host, port=args.port,
+                              start=args.start_position, wire_precision=args.wire_precision,
+                              timeout=args.timeout)
+    err(f"discovering {options.robot_class}...")
+    desc = describe(options)
+    calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed,
+                                   err if args.json else out)
+    paths = write_description(calibrated, args.out)
+    picture = residual_picture(result, Path(args.out) / f"{desc.chain.name}.calibration.png")
+    if args.json:
+        print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
+                    "picture": str(picture), "calibration": calibrated.discovery["calibration"]})
+        return EXIT_OK
+    for kind, path in paths.items():
+        out(f"wrote {path}  ({kind})")
+    out(f"wrote {picture}  (residuals per reading)")
+    return EXIT_OK
