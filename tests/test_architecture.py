@@ -30,7 +30,8 @@ ALLOWED: dict[str, set[str]] = {
     "calibrate": {"discover", "planning", "control", "urdf", "model"} | UTILITIES,
 }
 # orchestration
-FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "__init__",
+FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "calibration",
+           "__init__",
            "__main__"}
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
 HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1}

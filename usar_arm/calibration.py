@@ -322,3 +322,26 @@ def calibrate_description(desc: Description, options: DescribeOptions, poses: in
         except OSError as exc:
             log.warning("cannot cache the calibrated description in %s: %s", entry, exc)
     return calibrated, result
+
+
+def is_calibrated(arm: Arm) -> bool:
+    """Whether ``arm``'s description carries a calibration (discovery.json section)."""
+    return any(name.endswith(".discovery.json") and '"calibration"' in text
+               for name, text in arm.robot.files.items())
+
+
+def ensure_calibrated(options: DescribeOptions, poses: int = 14,
+                      progress: Progress | None = None) -> WireCalibration | None:
+    """Calibrate the arm ``options`` name unless the description cache already holds its
+    calibrated description or it has no tip sensor; the calibration (None when none was
+    made). The next :meth:`Arm.connect` of it comes calibrated."""
+    with Arm.connect(robot=options.robot, host=options.host, port=options.port,
+                     start=options.start, timeout=options.timeout, naming=options.naming,
+                     wire_precision=options.wire_precision,
+                     velocity_limits=options.velocity_limits) as arm:
+        if is_calibrated(arm) or arm.tip_sensor() is None:
+            return None
+    from usar_arm.embedded import describe
+
+    _, result = calibrate_description(describe(options), options, poses, None, 0, progress)
+    return result

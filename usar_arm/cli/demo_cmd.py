@@ -13,9 +13,11 @@ from pathlib import Path
 from typing import Any
 
 from usar_arm.arm import Arm
+from usar_arm.calibration import ensure_calibrated, is_calibrated
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import execution_options
 from usar_arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
+from usar_arm.description import DescribeOptions
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.fileio import write_atomic
 from usar_arm.motion import MotionOptions
@@ -39,7 +41,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="output folder (default demo-output; its files are replaced)")
     p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
                    help="udk (default): numbers as UDK prints them, so the learnt model is "
-                        "2-3 mm off at the tool; full: exact numbers (an extension)")
+                        "2-3 mm off at the tool until calibrated; full: exact numbers (an "
+                        "extension)")
+    p.add_argument("--no-calibrate", action="store_true",
+                   help="use the description as learnt: by default (udk numbers) the KR60 is "
+                        "calibrated through its tip sensor first, once (cached)")
     p.add_argument("--tip-correction", action="store_true",
                    help="correct every move's goal with the tip GroundTruth sensor (about 8 s "
                         "per move; brings a UDK-learnt arm within 1 mm / 1 mrad)")
@@ -147,11 +153,26 @@ def run(args: argparse.Namespace) -> int:
     if folder.exists() and not folder.is_dir():
         raise InvalidInputError(f"--out {folder}: exists and is not a folder")
     begin = time.perf_counter()
+    if args.wire_precision == "udk" and not args.no_calibrate:
+        progress("[0/4] calibrating the KR60 through its tip sensor, once per arm (the "
+                 "description cache keeps it; --no-calibrate skips it)...")
+        made = ensure_calibrated(DescribeOptions(robot="KR60", wire_precision="udk"),
+                                 progress=lambda done, total: progress(
+                                     f"  calibration tour: {done}/{total} poses"))
+        if made is not None:
+            f = made.validation.summary()
+            progress(f"  calibrated from {made.readings} readings in {made.seconds:.0f} s; "
+                     f"held-out readings {f['max_before_m'] * 1e3:.2f} -> "
+                     f"{f['max_after_m'] * 1e3:.2f} mm at worst")
+        else:
+            progress("  the cached description is calibrated already")
     progress(f"[1/4] starting the embedded simulator ({args.wire_precision} numbers) and "
         "discovering the KR60...")
-    with Arm.connect("KR60", wire_precision=args.wire_precision) as arm:
+    with Arm.connect("KR60", wire_precision=args.wire_precision,
+                     calibrated=not args.no_calibrate) as arm:
         written = arm.write_description(folder / "description")
-        progress(f"[2/4] wrote its description: {', '.join(str(p) for p in written)}")
+        progress(f"[2/4] wrote its {'calibrated ' if is_calibrated(arm) else ''}description: "
+                 f"{', '.join(str(p) for p in written)}")
         progress("[3/4] pick-and-place in the table scene (the first move starts with a 2 s swing "
             "that learns the drives' response)" + (", correcting the tool with the tip "
                                                    "sensor" if args.tip_correction else ""))
@@ -190,9 +211,9 @@ def run(args: argparse.Namespace) -> int:
         f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad"
         f"{', simulator truth' if with_truth else ''})")
     if not ok and args.wire_precision == "udk" and not args.tip_correction:
-        out("  (the description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
-            "the Tip prints to the centimetre; --tip-correction or --wire-precision full close "
-            "the gap)")
+        out("  (a description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
+            "the Tip prints to the centimetre; calibration (the default), --tip-correction or "
+            "--wire-precision full close the gap)")
     out(f"\nwrote into {folder}/ in {time.perf_counter() - begin:.0f} s:")
     for what, path in files.items():
         out(f"  {what:<17} {path}")

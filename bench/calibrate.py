@@ -1,0 +1,152 @@
+"""Calibration stage: how accurate the description ``usar-arm urdf`` writes is after its
+calibration on the wire, how long that takes, and how the accuracy grows with the tour's poses.
+No peer calibrates; our figures only.
+
+As a solver (its own process)::
+
+    python bench/calibrate.py PROBLEMS.json RESULTS.json
+
+Each problem names a robot and a number of poses. Timed: what ``usar-arm urdf --robot R`` does
+on the embedded simulator at --speed 1 over the default UDK wire (discovery and description,
+calibration, writing the files). Judged: tool0 of the as-learnt and of the calibrated URDF
+(forward kinematics by the judge's own Pinocchio model of the URDF text, ``verify.Kinematics``)
+against the simulator's own geometry (``usar_arm.sim.truth.tool0_by_spec``: the spec the
+simulator's physics is built from; nothing learnt, nothing of ``usar_arm.calibrate``) at 1,000
+seeded random configurations: the largest position (m) and rotation (rad) error.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from typing import Any
+
+import common
+import numpy as np
+from common import Context, peerio
+from judge_reading import JudgedRobot
+from verify import Kinematics
+
+from usar_arm.calibration import calibrate_description
+from usar_arm.description import DescribeOptions, write_description
+from usar_arm.embedded import describe
+from usar_arm.sim.robot_spec import builtin_robots
+from usar_arm.sim.truth import tool0_by_spec
+
+POSES = {"quick": (14,), "full": (6, 10, 14, 20)}
+"""The tour lengths tried (KR60); 14 is the default of usar-arm urdf."""
+DEFAULT_POSES = 14
+ROBOTS = {"quick": ("KR60",), "full": ("KR60", "Fanuc_M16iB20")}
+CONFIGURATIONS = 1000
+
+
+def tool0_errors(urdf: str, robot: str, samples: int = CONFIGURATIONS, seed: int = 11
+                 ) -> tuple[float, float]:
+    """Largest tool0 position (m) and rotation (rad) error of ``urdf`` against the simulator's
+    spec at ``samples`` seeded configurations within the spec's limits."""
+    act = next(a for a in builtin_robots()[f"USARBot.{robot}"].actuators if a.tip_sensor)
+    judged = JudgedRobot.from_text(urdf, None)
+    kin = Kinematics(judged, list(judged.joints))
+    lo = np.array([j.limit_low for j in act.joints])
+    hi = np.array([j.limit_high for j in act.joints])
+    rng = np.random.default_rng(seed)
+    worst_m = worst_rad = 0.0
+    for _ in range(samples):
+        q = rng.uniform(lo, hi)
+        kin.update(q)
+        got, truth = kin.frame("tool0"), tool0_by_spec(act, q)
+        worst_m = max(worst_m, float(np.linalg.norm(got[:3, 3] - truth[:3, 3])))
+        cos = (np.trace(got[:3, :3].T @ truth[:3, :3]) - 1.0) / 2.0
+        worst_rad = max(worst_rad, float(np.arccos(np.clip(cos, -1.0, 1.0))))
+    return worst_m, worst_rad
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    spec, out = peerio.args()
+
+    def solve(p: dict[str, Any]) -> dict[str, Any]:
+        options = DescribeOptions(robot=p["robot"])
+        begin = time.perf_counter()
+        desc = describe(options)
+        t_describe = time.perf_counter() - begin
+        try:
+            calibrated, result = calibrate_description(desc, options, p["poses"])
+        except Exception as exc:  # a failed calibration is a result: the as-learnt figures
+            learnt = tool0_errors(desc.urdf, p["robot"])
+            return {"success": False, "error": f"{type(exc).__name__}: {exc}",
+                    "learnt_m": learnt[0], "learnt_rad": learnt[1]}
+        with tempfile.TemporaryDirectory() as folder:
+            write_description(calibrated, folder)
+        seconds = time.perf_counter() - begin
+        learnt = tool0_errors(desc.urdf, p["robot"])
+        after = tool0_errors(calibrated.urdf, p["robot"])
+        return {"success": True, "seconds": seconds, "describe_seconds": t_describe,
+                "calibration_seconds": result.seconds, "readings": result.readings,
+                "poses": result.poses, "rank": result.calibration.rank,
+                "consistent": result.calibration.consistent,
+                "learnt_m": learnt[0], "learnt_rad": learnt[1],
+                "calibrated_m": after[0], "calibrated_rad": after[1],
+                "validation": result.validation.summary()}
+
+    peerio.write(out, peer="usar-arm", dist="usar-arm", stage="calibrate",
+                 results=peerio.solve_all(spec["problems"], solve, warmup=0))
+    return 0
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Calibrate each robot at each tour length once; judge each description."""
+    started = time.perf_counter()
+    problems = [{"id": i, "robot": r, "poses": n} for i, (r, n) in enumerate(
+        [("KR60", n) for n in POSES[ctx.mode]]
+        + [(r, DEFAULT_POSES) for r in ROBOTS[ctx.mode] if r != "KR60"])]
+    spec = {"stage": "calibrate", "problems": problems}
+    path = ctx.work / "calibrate_problems.json"
+    common.write_json(path, spec)
+    solver = common.ours("usar-arm", "calibrate.py",
+                         note="describe + calibrate_description + write_description")
+    outcome = common.run_alternating(spec, [solver], ctx.work, 1, "calibrate")["usar-arm"]
+    cases = {}
+    for p, r in zip(problems, outcome.results, strict=True):
+        summary = common.base_summary([r], [bool(r.get("success"))])
+        summary.update({k: r.get(k) for k in (
+            "seconds", "describe_seconds", "calibration_seconds", "readings", "rank",
+            "consistent", "learnt_m", "learnt_rad", "calibrated_m", "calibrated_rad",
+            "validation", "error")})
+        raw = {k: [r.get(k)] for k in ("id", "success", "seconds")}
+        cases[f"{p['robot']} ({p['poses']} poses)"] = {
+            "robot": p["robot"], "poses": p["poses"],
+            "problems": {"file": None, "count": 1,
+                         "settings": {"configurations": CONFIGURATIONS, "wire": "udk",
+                                      "speed": 1.0}},
+            "solvers": {"usar-arm": common.solver_record(outcome, raw, summary)},
+            "ratios": {}}
+    return common.stage_document("calibrate", ctx.mode,
+                                 {"poses": list(POSES[ctx.mode]),
+                                  "configurations": CONFIGURATIONS}, cases, _targets(cases),
+                                 started)
+
+
+def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for robot in ("KR60", "Fanuc_M16iB20"):
+        case = cases.get(f"{robot} ({DEFAULT_POSES} poses)")
+        if case is None:
+            continue
+        s = case["solvers"]["usar-arm"]["summary"]
+        note = "tool0 against the simulator's spec, 1,000 configurations"
+        if s.get("error"):
+            note = f"calibration failed: {s['error'][:120]}"
+        out.append(common.target(f"{robot} calibrated over the UDK wire: max tool0 position "
+                                 "error", s.get("calibrated_m"), 0.0002, "<=", "m", note))
+        out.append(common.target(f"{robot} calibrated over the UDK wire: max tool0 rotation "
+                                 "error", s.get("calibrated_rad"), 0.0002, "<=", "rad", note))
+        if robot == "KR60":
+            out.append(common.target("usar-arm urdf --robot KR60 with calibration, --speed 1",
+                                     s.get("seconds"), 45.0, "<=", "s",
+                                     f"{DEFAULT_POSES} poses, {s.get('readings')} readings"))
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(solver_main())
