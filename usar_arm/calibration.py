@@ -90,6 +90,20 @@ def _fold_base(urdf: str, correction: Array) -> str:
     return replace_origin(urdf, first, correction @ first.origin.matrix())
 
 
+def _tip_onto_sensor(calibrated: str, learnt: str, tip_joint: str, mount_joint: str) -> str:
+    """``calibrated`` with the Tip joint (which carries the flange and tool0) moved onto the
+    calibrated sensor frame: its position, and its rotation turned as the sensor's was (the
+    sensor sits at the Tip, so the fit's turn of the sensor frame is the Tip's)."""
+    after, _ = parse_urdf(calibrated)
+    before, _ = parse_urdf(learnt)
+    mount_after = after.joint(mount_joint).origin.matrix()
+    mount_before = before.joint(mount_joint).origin.matrix()
+    tip = before.joint(tip_joint)
+    pose = mount_after @ np.linalg.inv(mount_before) @ tip.origin.matrix()
+    pose[:3, 3] = mount_after[:3, 3]
+    return replace_origin(calibrated, after.joint(tip_joint), pose)
+
+
 def _mount_joint(urdf: str, frame: str) -> str:
     chain, _ = parse_urdf(urdf)
     for j in chain.joints:
@@ -267,7 +281,9 @@ def calibrate_arm(arm: Arm, poses: int = 8, scene: str | None = None,
     base_guess = sensor.platform_pose() @ FLIP
     cal = identify(fit_urdf, frame, fit, base_guess, options or CalibrationOptions())
     validation = cal.validate(fit_urdf, frame, held)
-    calibrated = _usarsim_axes(cal.apply(fit_urdf, tip_joint), mount, FLIP)
+    calibrated = _usarsim_axes(cal.apply(fit_urdf), mount, FLIP)
+    if tip_joint is not None:
+        calibrated = _tip_onto_sensor(calibrated, arm.urdf, tip_joint, mount)
     calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
     return WireCalibration(cal, validation, calibrated, len(configurations), len(readings),
                            time.monotonic() - start, tool_point, tip_joint)
