@@ -21,7 +21,7 @@ base_link):
 
 Problem ``i`` of a set draws from ``default_rng([SEED, set, i])``, so a quick set is the start
 of the full one. The Fanuc description is discovered from the embedded simulator into
-``<out>/robots/`` (deterministic); the KR60's is the checked-in ``robots/generated``.
+``<out>/robots/`` (deterministic); the KR60's is the checked-in ``robots/generated/as-learnt``.
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ QUICK = Sizes(30, 20, 200, 50, 2, 1, 1, scenes.BOX_COUNTS[:3], 6)
 def robot_paths(name: str, out: Path) -> tuple[Path, Path]:
     """(URDF, SRDF) of a benchmark robot; the Fanuc is described on first use."""
     if name == KR60:
-        d = common.ROOT / "robots" / "generated"
+        d = common.ROOT / "robots" / "generated" / "as-learnt"  # deterministic, golden
     else:
         d = out / "robots" / name
         if not (d / f"{name}.urdf").is_file():

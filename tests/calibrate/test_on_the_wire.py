@@ -23,7 +23,7 @@ from usar_arm.usarsim.inbox import Received
 from usar_arm.usarsim.numbers import printed_steps
 
 ROOT = Path(__file__).resolve().parents[2]
-KR60_URDF = (ROOT / "robots/generated/KR60.urdf").read_text()
+KR60_URDF = (ROOT / "robots/generated/as-learnt/KR60.urdf").read_text()
 
 
 def _received(line: str) -> Received:
