@@ -396,8 +396,12 @@ def wait_until(condition: Callable[[], bool], timeout: float) -> bool:
     return False
 
 
-def kill_campaign(writer: str, folder: Path, rounds: int, budget_s: float, seed: int
-                  ) -> dict[str, Any]:
+def kill_campaign(writer: str, folder: Path, rounds: int, budget_s: float, seed: int,
+                  inside_minimum: int = 0, overtime_s: float = 0.0) -> dict[str, Any]:
+    """Kill ``writer`` ``rounds`` times within ``budget_s`` (s); then, while fewer than
+    ``inside_minimum`` kills have landed inside a write, go on for up to ``overtime_s`` more
+    (a slow writer on a busy machine gets fewer kills in the budget; the campaign runs longer
+    rather than count less)."""
     rng = np.random.default_rng(seed)
     target = folder / TARGET[writer]
     out = folder / "out"
@@ -416,7 +420,13 @@ def kill_campaign(writer: str, folder: Path, rounds: int, budget_s: float, seed:
                 parse(writer, folder / f"ref{v}" / name, key)
         before: Snapshot | None = None
         begin = time.monotonic()
-        while tally["kills"] < rounds and time.monotonic() - begin < budget_s:
+        def more() -> bool:
+            spent = time.monotonic() - begin
+            if tally["kills"] < rounds and spent < budget_s:
+                return True
+            return tally[INSIDE] < inside_minimum and spent < budget_s + overtime_s
+
+        while more():
             if rng.random() < 0.15:
                 remove(target)  # this round starts from no file
                 before = None
@@ -471,11 +481,15 @@ def kill_campaign(writer: str, folder: Path, rounds: int, budget_s: float, seed:
 
 
 INSIDE = "kills that left temporaries (inside a write)"
+INSIDE_MINIMUM = 10
+"""Kills inside a write each writer must see in the slow run (the render and plot writers, 0.3 s
+a write, got 9 in their 12 s on a busy machine once: they now go on for up to 36 s more)."""
 
 
-def _run(writer: str, tmp_path: Path, rounds: int, budget_s: float, minimum: int
-         ) -> dict[str, Any]:
-    result = kill_campaign(writer, tmp_path, rounds, budget_s, seed=len(writer))
+def _run(writer: str, tmp_path: Path, rounds: int, budget_s: float, minimum: int,
+         inside_minimum: int = 0) -> dict[str, Any]:
+    result = kill_campaign(writer, tmp_path, rounds, budget_s, seed=len(writer),
+                           inside_minimum=inside_minimum, overtime_s=3 * budget_s)
     print(f"\n{writer}: {json.dumps(result)}")
     (tmp_path / "atomic_writes.json").write_text(json.dumps({writer: result}, indent=1) + "\n")
     assert result["kills"] >= minimum
@@ -497,11 +511,11 @@ def test_hundreds_of_kills_leave_old_or_new(tmp_path: Path) -> None:
         folder = tmp_path / writer
         folder.mkdir()
         result = _run(writer, folder, rounds=ROUNDS[writer], budget_s=12.0,
-                      minimum=ROUNDS[writer] // 4)
+                      minimum=ROUNDS[writer] // 4, inside_minimum=INSIDE_MINIMUM)
         inside[writer] = result.get(INSIDE, 0)
     print(f"\nkills inside a write: {inside}")
     assert sum(inside.values()) >= 100, inside
-    assert min(inside.values()) >= 10, inside
+    assert min(inside.values()) >= INSIDE_MINIMUM, inside
 
 
 if __name__ == "__main__":

@@ -18,7 +18,6 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -255,7 +254,7 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
     return recorder.measurements()
 
 
-def calibrate_arm(arm: Arm, poses: int = 8, scene: str | None = None,
+def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
                   seed: int = 0, progress: Progress | None = None,
                   options: CalibrationOptions | None = None) -> WireCalibration:
     """Calibrate ``arm`` on its server (see the module). Raises
@@ -287,15 +286,6 @@ def calibrate_arm(arm: Arm, poses: int = 8, scene: str | None = None,
     calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
     return WireCalibration(cal, validation, calibrated, len(configurations), len(readings),
                            time.monotonic() - start, tool_point, tip_joint)
-
-
-def summary(result: WireCalibration) -> dict[str, Any]:
-    """Figures for a report line (m, rad)."""
-    fit, val = result.calibration.fit.summary(), result.validation.summary()
-    return {"poses": result.poses, "readings": result.readings,
-            "seconds": round(result.seconds, 1), "rank": result.calibration.rank,
-            "consistent": result.calibration.consistent, "fit": fit, "validation": val,
-            "tool_point": result.tool_point}
 
 
 def calibrate_description(desc: Description, options: DescribeOptions, poses: int = 14,
