@@ -11,11 +11,18 @@ from usar_arm.calibration import WireCalibration, calibrate_description
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK
+from usar_arm.errors import EXIT_OK, InvalidInputError
 
 
 def _mm(x: float) -> str:
     return f"{x * 1e3:.3f}"
+
+
+def check_poses(poses: int) -> None:
+    """Refuse a tour too short to calibrate before anything is spawned."""
+    if poses < 3:
+        raise InvalidInputError(f"--poses must be at least 3 (got {poses}): a calibration "
+                                "tour needs three poses to identify anything")
 
 
 def has_tip_sensor(desc: Description) -> bool:
@@ -69,6 +76,7 @@ def residual_picture(result: WireCalibration, path: Path) -> Path:
 def calibrate_robot(args: argparse.Namespace) -> int:
     """``calibrate --robot``: describe, calibrate, write the calibrated description and the
     residual picture into --out."""
+    check_poses(args.poses)
     options = DescribeOptions(robot=args.robot, host=args.host, port=args.port,
                               start=args.start_position, wire_precision=args.wire_precision,
                               timeout=args.timeout)

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from usar_arm.cli.calibrate_cmd import POSES
-from usar_arm.cli.calibrate_robot import calibrate, has_tip_sensor
+from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
@@ -79,6 +79,8 @@ def _print_table(desc: Description) -> None:
 def run_urdf(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     options = options_from(args)
+    if not args.no_calibrate:
+        check_poses(args.poses)
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
     desc = describe(options)
