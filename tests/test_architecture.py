@@ -28,13 +28,15 @@ ALLOWED: dict[str, set[str]] = {
     "control": {"usarsim", "planning", "model"} | UTILITIES,
     "export": {"control", "planning", "urdf", "model"} | UTILITIES,
     "calibrate": {"discover", "planning", "control", "urdf", "model"} | UTILITIES,
+    "workspace": {"planning", "model"} | UTILITIES,
 }
 # orchestration
 FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "calibration",
+           "jobs",
            "__init__",
            "__main__"}
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
-HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1}
+HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1}
 
 
 def _modules() -> list[tuple[str, Path]]:

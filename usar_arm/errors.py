@@ -21,6 +21,7 @@ EXIT_UNKNOWN_ROBOT = 10
 EXIT_UNKNOWN_START = 11
 EXIT_CONNECTION_LOST = 12
 EXIT_BAD_DESCRIPTION = 13
+EXIT_WORKER_FAILED = 14
 EXIT_INVALID_INPUT = 65  # sysexits EX_DATAERR
 EXIT_UNAVAILABLE = 69  # sysexits EX_UNAVAILABLE
 EXIT_INTERNAL = 70  # sysexits EX_SOFTWARE
@@ -360,3 +361,59 @@ class CalibrationError(UsarArmError):
         if readings is not None and needed is not None:
             text += f" ({readings} readings, at least {needed} needed)"
         super().__init__(text + "; nothing was written")
+
+
+# --------------------------------------------------------------------------- workspace jobs
+
+
+class MapTooLargeError(InvalidInputError):
+    """A reachability map would not fit in this machine's memory; nothing was computed."""
+
+    def __init__(self, voxels: int, need_bytes: int, available_bytes: int,
+                 resolution_that_fits_m: float):
+        self.voxels = voxels
+        self.need_bytes = need_bytes
+        self.available_bytes = available_bytes
+        self.resolution_that_fits_m = resolution_that_fits_m
+        super().__init__(
+            f"a map of {voxels:,} voxels needs about {need_bytes / 2**30:.1f} GiB, more than "
+            f"half of the {available_bytes / 2**30:.1f} GiB available; use a resolution of at "
+            f"least {resolution_that_fits_m:g} m (or restrict the map)")
+
+
+class UnreachableTargetError(IKError):
+    """A target pose of a placement study is reachable (collision-free) from no candidate
+    base; the others may be."""
+
+    def __init__(self, target: str, candidates: int, detail: str = ""):
+        self.target = target
+        self.candidates = candidates
+        text = (f"target '{target}' is reachable collision-free from none of the {candidates} "
+                f"candidate base poses")
+        super().__init__(text + (f" ({detail})" if detail else ""))
+
+
+class ChunkFailedError(UsarArmError):
+    """A chunk of a distributed job failed twice (its worker died or raised); the chunks done
+    so far are kept, and ``--resume`` continues from them."""
+
+    exit_code = EXIT_WORKER_FAILED
+
+    def __init__(self, chunk: int, attempts: int, reason: str):
+        self.chunk = chunk
+        self.attempts = attempts
+        self.reason = reason
+        super().__init__(f"chunk {chunk} failed {attempts} times ({reason}); the finished "
+                         "chunks are kept: run again with --resume to continue")
+
+
+class ClusterUnavailableError(UsarArmError):
+    """The execution backend cannot be used: a Ray cluster that does not answer, or Ray not
+    installed."""
+
+    exit_code = EXIT_UNAVAILABLE
+
+    def __init__(self, address: str, reason: str):
+        self.address = address
+        self.reason = reason
+        super().__init__(f"cannot use the Ray cluster at '{address}': {reason}")

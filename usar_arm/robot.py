@@ -24,7 +24,7 @@ from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import validate_allow
-from usar_arm.urdf.reader import apply_joint_limits, parse_srdf, parse_urdf
+from usar_arm.urdf.reader import apply_joint_limits_text, parse_srdf, parse_urdf
 from usar_arm.version import __version__
 
 log = logging.getLogger("usar_arm.robot")
@@ -101,39 +101,60 @@ def _wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
 def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
                      joint_limits: str | Path | None = None) -> Robot:
     """A Robot from a URDF (and SRDF, joint_limits.yaml; found beside the URDF when not given,
-    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``)."""
+    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``, with ``<Robot>.discovery.json``)."""
     path = Path(urdf)
     try:
         text = path.read_text()
     except OSError as exc:
         raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
-    chain, notes = parse_urdf(text, str(path))
-    for note in notes:
-        log.warning("%s: %s", path, note)
     stem = path.name.removesuffix(".urdf")
     srdf_path = Path(srdf) if srdf else path.with_name(f"{stem}.srdf")
-    disabled: set[Pair] = set()
-    states: dict[str, dict[str, float]] = {}
-    if srdf_path.exists():
-        disabled, states = parse_srdf(srdf_path.read_text(), str(srdf_path))
-    elif srdf:
+    if srdf and not srdf_path.exists():
         raise FileFormatError(str(srdf_path), "no such SRDF file")
     limits_path = Path(joint_limits) if joint_limits else path.with_name(
         f"{stem}.joint_limits.yaml")
-    if limits_path.exists():
-        chain = apply_joint_limits(chain, limits_path)
-    actuator, links, tip_sensor = None, tuple(range(1, chain.dof + 1)), None
     info = path.with_name(f"{stem}.discovery.json")
-    if info.exists():
-        doc = json.loads(info.read_text())
+    roles = {f"{stem}.srdf": srdf_path, f"{stem}.joint_limits.yaml": limits_path,
+             f"{stem}.discovery.json": info}
+    files = {path.name: text, **{name: p.read_text() for name, p in roles.items()
+                                 if p.exists()}}
+    return robot_from_texts(files, path.name, str(path))
+
+
+def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
+                     source: str = "") -> Robot:
+    """A Robot from a description's files given as text (name -> text): ``X.urdf`` and, when
+    present, ``X.srdf``, ``X.joint_limits.yaml`` and ``X.discovery.json``. What a worker
+    process builds its arm from (the files travel by value; the solvers do not pickle)."""
+    if urdf_name is None:
+        names = [n for n in files if n.endswith(".urdf")]
+        if len(names) != 1:
+            raise FileFormatError(source or "<description>",
+                                  f"expected one .urdf file, got {names or 'none'}")
+        urdf_name = names[0]
+    stem = urdf_name.removesuffix(".urdf")
+    where = source or urdf_name
+    text = files[urdf_name]
+    chain, notes = parse_urdf(text, where)
+    for note in notes:
+        log.warning("%s: %s", where, note)
+    disabled: set[Pair] = set()
+    states: dict[str, dict[str, float]] = {}
+    if f"{stem}.srdf" in files:
+        disabled, states = parse_srdf(files[f"{stem}.srdf"], f"{stem}.srdf")
+    if f"{stem}.joint_limits.yaml" in files:
+        chain = apply_joint_limits_text(chain, files[f"{stem}.joint_limits.yaml"],
+                                        f"{stem}.joint_limits.yaml")
+    actuator, links, tip_sensor = None, tuple(range(1, chain.dof + 1)), None
+    if f"{stem}.discovery.json" in files:
+        doc = json.loads(files[f"{stem}.discovery.json"])
         roles = doc.get("chain", {}).get("frames", {})
         chain = KinematicChain(chain.name, chain.links, chain.joints,
                                {**chain.frames, **roles}, chain.notes)
         actuator = doc.get("robot", {}).get("actuator")
         links, tip_sensor = _wire_facts(doc)
-    files = {p.name: p.read_text() for p in (path, srdf_path, limits_path, info)
-             if p.exists()}
-    return Robot(chain, text, disabled, states, actuator, str(path), links, tip_sensor, files)
+    return Robot(chain, text, disabled, states, actuator, where, links, tip_sensor,
+                 dict(files))
 
 
 def cache_dir() -> Path:

@@ -109,7 +109,8 @@ EXIT_CODES_HELP = f"""exit codes:
   {errors.EXIT_CONNECTION_LOST}   the server closed the connection mid-way
   {errors.EXIT_BAD_DESCRIPTION}   invalid data from the server: a line that is not USARSim (garbage,
        not UTF-8, too long, malformed), or an arm description failing its checks
+  {errors.EXIT_WORKER_FAILED}   a chunk of a reach/place/batch job failed twice (--resume continues)
   {errors.EXIT_INVALID_INPUT}   invalid input (file or value)
-  {errors.EXIT_UNAVAILABLE}   simulator unreachable, not answering, or answering too slowly
-       (within --timeout)
+  {errors.EXIT_UNAVAILABLE}   simulator or Ray cluster unreachable, not answering, or answering too
+       slowly (within --timeout); Ray not installed
   {errors.EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""

@@ -15,7 +15,7 @@ import numpy as np
 
 from usar_arm.errors import FileFormatError
 from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
-from usar_arm.yamlio import load_yaml
+from usar_arm.yamlio import load_yaml, loads_yaml
 
 Pair = tuple[str, str]
 
@@ -151,7 +151,17 @@ def parse_srdf(text: str, path: str = "<srdf>") -> tuple[set[Pair], dict[str, di
 
 def apply_joint_limits(chain: KinematicChain, path: str | Path) -> KinematicChain:
     """The chain with acceleration/jerk (and velocity) limits from a MoveIt joint_limits.yaml."""
-    data = load_yaml(path)
+    return apply_joint_limits_data(chain, load_yaml(path))
+
+
+def apply_joint_limits_text(chain: KinematicChain, text: str, name: str = "<joint_limits>"
+                            ) -> KinematicChain:
+    """:func:`apply_joint_limits` from the file's text."""
+    return apply_joint_limits_data(chain, loads_yaml(text, name))
+
+
+def apply_joint_limits_data(chain: KinematicChain, data: object) -> KinematicChain:
+    """:func:`apply_joint_limits` from the loaded YAML document."""
     table = (data or {}).get("joint_limits", {}) if isinstance(data, dict) else {}
     joints = []
     for j in chain.joints:

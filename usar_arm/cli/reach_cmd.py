@@ -1,0 +1,135 @@
+"""``usar-arm reach``: a reachability map of tool0 (voxels x orientations, collision-free IK)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+from usar_arm import jobs
+from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
+from usar_arm.cli.job_args import (
+    add_job_args,
+    backend_from_args,
+    interrupted,
+    run_record,
+    versions,
+)
+from usar_arm.cli.progress_bar import ProgressBar
+from usar_arm.cli.robot_args import add_robot_args, robot_from_args
+from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.export.reach_plot import reach_slice_png
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.planning.scene import EMPTY
+from usar_arm.planning.scene_file import load_scene
+from usar_arm.workspace.reach import ReachSettings
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "reach", help="reachability map: where tool0 reaches, in how many orientations",
+        description="Voxelise the arm's reach (its extent from the description, a rail "
+                    "included) and, at every voxel centre, solve collision-free IK for a "
+                    "fixed, near-uniform set of tool orientations. Writes DIR/reach.npz "
+                    "(index, manipulability, joint margin, a witness configuration per "
+                    "voxel), DIR/reach.json and slice pictures DIR/reach-xz.png, "
+                    "DIR/reach-xy.png.")
+    p.add_argument("--scene", default=None, metavar="FILE",
+                   help="obstacles (a YAML file, or one of empty, table, shelf, cage)")
+    p.add_argument("--resolution", type=float, default=0.05, metavar="M",
+                   help="voxel edge in metres (default 0.05)")
+    p.add_argument("--orientations", type=int, default=64, metavar="N",
+                   help="tool orientations per voxel (default 64)")
+    p.add_argument("--cone", type=float, default=None, metavar="DEG",
+                   help="only orientations whose tool z axis is within DEG degrees of "
+                        "--cone-axis (e.g. 30: pointing down +/- 30 deg)")
+    p.add_argument("--cone-axis", type=float, nargs=3, default=(0.0, 0.0, -1.0),
+                   metavar=("X", "Y", "Z"), help="the cone's axis in base_link (default down)")
+    p.add_argument("--view", action="store_true",
+                   help="afterwards, serve an interactive 3D view (needs the viz extra)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_job_args(p)
+    add_robot_args(p)
+    add_verbosity(p)
+    p.set_defaults(handler=run)
+
+
+def settings_from(args: argparse.Namespace) -> ReachSettings:
+    """ReachSettings from the arguments (checked)."""
+    if not (math.isfinite(args.resolution) and args.resolution > 0):
+        raise InvalidInputError(f"--resolution is a voxel edge in metres (> 0), got "
+                                f"{args.resolution}")
+    if args.orientations < 1:
+        raise InvalidInputError(f"--orientations must be at least 1, got {args.orientations}")
+    if args.cone is not None and not 0 < args.cone <= 180:
+        raise InvalidInputError(f"--cone is a half-angle in (0, 180] degrees, got {args.cone}")
+    if not np.any(np.asarray(args.cone_axis) != 0):
+        raise InvalidInputError("--cone-axis is a direction: not all zero")
+    return ReachSettings(args.resolution, args.orientations, args.cone,
+                         tuple(float(v) for v in args.cone_axis))  # type: ignore[arg-type]
+
+
+def run(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    settings = settings_from(args)
+    backend = backend_from_args(args)
+    scene = load_scene(args.scene) if args.scene else EMPTY
+    robot = robot_from_args(args)
+    plan = jobs.plan_map(robot, settings)
+    progress(f"{robot.chain.name}: {len(plan.voxels):,} of {plan.grid.size:,} voxels within "
+             f"reach ({plan.bound.radius:.3f} m of the first revolute joint), "
+             f"{len(plan.orientations)} orientations: {plan.queries:,} queries on "
+             f"{backend.describe()}")
+    bar = ProgressBar("queries", enabled=verbosity(args) >= 0)
+    try:
+        done = jobs.reach_map(robot, scene, settings, backend, args.out, args.resume, bar,
+                              plan)
+    except KeyboardInterrupt:
+        bar.close()
+        interrupted(args.out)
+        raise
+    bar.close()
+    reach, stats = done.map, done.stats
+    reached = int((reach.index > 0).sum())
+    record = {
+        "robot": {"name": robot.chain.name, "source": robot.source,
+                  "joints": list(robot.chain.joint_names)},
+        "scene": {"name": scene.name, "objects": [o.name for o in scene.objects]},
+        "settings": {"resolution_m": settings.resolution,
+                     "orientations": len(plan.orientations), "cone_deg": settings.cone_deg,
+                     "cone_axis": list(settings.cone_axis) if settings.cone_deg else None,
+                     "frame": "base_link"},
+        "grid": {"origin_m": plan.grid.origin.tolist(), "shape": list(plan.grid.shape),
+                 "reach_radius_m": plan.bound.radius,
+                 "sweep_m": [plan.bound.sweep_low.tolist(), plan.bound.sweep_high.tolist()]},
+        "counts": {"voxels": plan.grid.size, "voxels_within_reach": len(plan.voxels),
+                   "voxels_reached": reached, "queries": plan.queries,
+                   "collision_checks": done.collision_checks},
+        "run": run_record(stats),
+        "memory_estimate_bytes": plan.memory_bytes,
+        "versions": versions(),
+    }
+    centre = (plan.bound.sweep_low + plan.bound.sweep_high) / 2
+    files: dict[str, str | bytes] = {
+        "reach.npz": reach.to_bytes(),
+        "reach-xz.png": reach_slice_png(reach.index, reach.origin, reach.resolution, "xz",
+                                        robot.chain, scene, at=0.0),
+        "reach-xy.png": reach_slice_png(reach.index, reach.origin, reach.resolution, "xy",
+                                        robot.chain, scene, at=float(centre[2])),
+        "reach.json": json.dumps(record, indent=2) + "\n",
+    }
+    written = write_tree_atomic(args.out, files)
+    jobs.finish(args.out)
+    if args.json:
+        print_json({**record, "files": [str(p) for p in written]})
+    else:
+        out(f"{reached:,} voxels reached of {len(plan.voxels):,} within reach "
+            f"({plan.queries:,} queries, {stats.seconds:.1f} s on {stats.backend})")
+        for path in written:
+            out(f"  {path}")
+    if args.view:
+        from usar_arm.export.reach_view import serve_reach
+        serve_reach(robot.urdf, reach.index, reach.origin, reach.resolution, scene)
+    return EXIT_OK

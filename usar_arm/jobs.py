@@ -1,0 +1,120 @@
+"""Reach, place and batch jobs for a described arm: the facade over :mod:`usar_arm.workspace`.
+
+It picks the execution backend (in this process, a local process pool, or Ray), gives the job
+a builder that rebuilds the arm from its description's text in each worker, and keeps the
+finished chunks of a job in ``DIR/.chunks`` until its outputs are written, so an interrupted
+run can be resumed.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+from usar_arm.errors import ClusterUnavailableError
+from usar_arm.planning.scene import Scene
+from usar_arm.robot import Robot, robot_from_texts
+from usar_arm.version import __version__
+from usar_arm.workspace.arm_model import ArmBuilder
+from usar_arm.workspace.engine import (
+    Backend,
+    ChunkStore,
+    InProcess,
+    Job,
+    Progress,
+    RunStats,
+    run_job,
+)
+from usar_arm.workspace.pool import ProcessBackend
+from usar_arm.workspace.reach import (
+    ReachPlan,
+    ReachSettings,
+    assemble,
+    collision_checks,
+    plan_reach,
+    reach_job,
+)
+from usar_arm.workspace.reach_map import ReachMap
+
+CHUNKS = ".chunks"
+"""Folder (inside a job's output folder) of its finished chunks."""
+
+
+def backend_for(workers: int | None = None, ray: str | None = None,
+                timeout: float = 10.0) -> Backend:
+    """The backend: Ray at ``ray`` (``local``, ``auto``, an address), else ``workers`` local
+    processes (0: this process; None: one per core).
+
+    Raises:
+        ClusterUnavailableError: Ray asked for but not installed.
+    """
+    if ray is not None:
+        try:
+            from usar_arm.workspace.ray_backend import RayBackend
+        except ImportError as exc:
+            raise ClusterUnavailableError(
+                ray, f"Ray is not installed ({exc}); install the extra: "
+                     "pip install 'usar-arm[ray]'") from None
+        return RayBackend(ray, workers, timeout)
+    if workers == 0:
+        return InProcess()
+    return ProcessBackend(workers)
+
+
+def arm_builder(robot: Robot) -> ArmBuilder:
+    """A picklable callable that rebuilds ``robot`` from its description's text."""
+    urdf_name = next((n for n in robot.files if n.endswith(".urdf")), None)
+    files = dict(robot.files) if urdf_name else {f"{robot.chain.name}.urdf": robot.urdf}
+    return functools.partial(robot_from_texts, files, urdf_name or f"{robot.chain.name}.urdf",
+                             robot.source)
+
+
+def description_text(robot: Robot) -> str:
+    """What a job's results depend on in the description (URDF and SRDF text)."""
+    srdf = next((t for n, t in robot.files.items() if n.endswith(".srdf")), "")
+    return robot.urdf + "\n" + srdf
+
+
+def _run(job: Job, backend: Backend, out_dir: str | Path | None, resume: bool,
+         progress: Progress | None) -> tuple[list, RunStats, ChunkStore | None]:
+    store = ChunkStore(Path(out_dir) / CHUNKS, job) if out_dir is not None else None
+    results, stats = run_job(job, backend, store, resume, progress)
+    return results, stats, store
+
+
+def plan_map(robot: Robot, settings: ReachSettings) -> ReachPlan:
+    """The grid, candidate voxels and memory estimate of a map (raises MapTooLargeError)."""
+    return plan_reach(robot.chain, settings)
+
+
+@dataclass(frozen=True)
+class ReachRun:
+    """A computed map, how the run went, its plan and the collision checks it cost."""
+
+    map: ReachMap
+    stats: RunStats
+    plan: ReachPlan
+    collision_checks: int
+
+
+def reach_map(robot: Robot, scene: Scene, settings: ReachSettings, backend: Backend,
+              out_dir: str | Path | None = None, resume: bool = False,
+              progress: Progress | None = None, plan: ReachPlan | None = None) -> ReachRun:
+    """The reachability map of ``robot`` in ``scene``. With ``out_dir``, finished chunks are
+    kept in ``out_dir/.chunks`` (and, with ``resume``, taken from there) until the caller has
+    written the map and calls :func:`finish`."""
+    plan = plan or plan_map(robot, settings)
+    job = reach_job(plan, arm_builder(robot), scene, description_text(robot), __version__)
+    results, stats, _ = _run(job, backend, out_dir, resume, progress)
+    return ReachRun(assemble(plan, results, robot.chain.joint_names), stats, plan,
+                    collision_checks(results))
+
+
+def finish(out_dir: str | Path) -> None:
+    """Drop a finished job's chunk files (its outputs are written)."""
+    folder = Path(out_dir) / CHUNKS
+    if folder.exists():
+        for f in folder.iterdir():
+            f.unlink()
+        folder.rmdir()

@@ -1,0 +1,162 @@
+"""Compiled kernels of the reachability queries: every IK solution of a batch of tool poses,
+with each solution's manipulability and joint-limit margin.
+
+:func:`analytic_solutions` (ortho-parallel arms, :mod:`usar_arm.planning.opw`) takes every
+closed-form branch, winds it into the limits nearest the middle of each joint's range (the
+winding with the widest margin), polishes it by Newton steps on the exact chain (the learnt arm
+is never exactly OPW) and keeps it when it reaches the tolerance inside the limits.
+:func:`numeric_solutions` (any serial chain) runs Levenberg-Marquardt from a fixed set of seeds.
+Both drop duplicates (every joint within ``distinct``) and fill rows of a (M, K, n) array;
+collisions are judged afterwards, in batches (:mod:`.query`).
+
+Manipulability is Yoshikawa's sqrt(det(J J^T)) of tool0's 6 x n Jacobian (linear rows in m,
+angular in rad; so it carries the units of the arm's size); the margin is the smallest distance
+of any joint to one of its limits (rad, or m for a prismatic joint).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usar_arm.planning import ik_kernel
+from usar_arm.planning.jit import kernel
+from usar_arm.spatial import Array
+
+IndexArray = NDArray[np.int64]
+
+MAX_SOLUTIONS = 8
+"""Rows per target: an ortho-parallel arm has at most 8 branches."""
+
+
+@kernel
+def manipulability(jac: Array) -> float:
+    """Yoshikawa's measure sqrt(det(J J^T)) of a 6 x n Jacobian (0 at a singularity)."""
+    n = jac.shape[1]
+    a = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for k in range(n):
+                s += jac[i, k] * jac[j, k]
+            a[i, j] = s
+    det = 1.0
+    for k in range(6):
+        best, row = abs(a[k, k]), k
+        for i in range(k + 1, 6):
+            if abs(a[i, k]) > best:
+                best, row = abs(a[i, k]), i
+        if best < 1e-300:
+            return 0.0
+        if row != k:
+            for j in range(6):
+                a[k, j], a[row, j] = a[row, j], a[k, j]
+            det = -det
+        det *= a[k, k]
+        for i in range(k + 1, 6):
+            f = a[i, k] / a[k, k]
+            for j in range(k, 6):
+                a[i, j] -= f * a[k, j]
+    return math.sqrt(det) if det > 0.0 else 0.0
+
+
+@kernel
+def margin(q: Array, lo: Array, hi: Array) -> float:
+    """The smallest distance (rad or m) of a joint to one of its limits (< 0 outside)."""
+    worst = math.inf
+    for i in range(q.shape[0]):
+        worst = min(worst, q[i] - lo[i], hi[i] - q[i])
+    return worst
+
+
+@kernel
+def _keep(q: Array, m: int, q_out: Array, count: int, distinct: float) -> bool:
+    """True when ``q`` differs from every solution already kept for target ``m``."""
+    for j in range(count):
+        same = True
+        for i in range(q.shape[0]):
+            if abs(q[i] - q_out[m, j, i]) >= distinct:
+                same = False
+                break
+        if same:
+            return False
+    return True
+
+
+@kernel
+def analytic_solutions(rots: Array, poss: Array, c: Array, lo: Array, hi: Array, rev: Array,
+                       wide: Array, mid: Array, axes: Array, points: Array, tool: Array,
+                       tol_p: float, tol_r: float, steps: int, max_step: float, slack: float,
+                       distinct: float, q_out: Array, count_out: IndexArray, manip_out: Array,
+                       margin_out: Array) -> None:
+    """Every solution of each target (rots (M, 3, 3), poss (M, 3)) of an ortho-parallel arm
+    (constants ``c`` from :func:`usar_arm.planning.ik_kernel.pack`) into ``q_out`` (M, 8, 6),
+    with their count (M,), manipulability and margin (M, 8)."""
+    cand = np.empty((8, 6))
+    q = np.empty(6)
+    err = np.empty(6)
+    jac = np.empty((6, 6))
+    for m in range(rots.shape[0]):
+        n = ik_kernel.branches(rots[m], poss[m], c, cand)
+        kept = 0
+        for b in range(n):
+            for i in range(6):
+                q[i] = cand[b, i]
+            ik_kernel.wind(q, mid, lo, hi, rev, wide)
+            if -margin(q, lo, hi) > slack:
+                continue
+            ok, _, _ = ik_kernel.polish(q, rots[m], poss[m], axes, points, rev, tool, tol_p,
+                                        tol_r, steps, max_step)
+            if not ok:
+                continue
+            ik_kernel.wind(q, mid, lo, hi, rev, wide)
+            room = margin(q, lo, hi)
+            if room < 0.0 or not _keep(q, m, q_out, kept, distinct):
+                continue
+            ik_kernel.pose_error(q, rots[m], poss[m], axes, points, rev, tool, err, jac)
+            for i in range(6):
+                q_out[m, kept, i] = q[i]
+            manip_out[m, kept] = manipulability(jac)
+            margin_out[m, kept] = room
+            kept += 1
+        count_out[m] = kept
+
+
+@kernel
+def numeric_solutions(rots: Array, poss: Array, seeds: Array, lo: Array, hi: Array,
+                      rev: Array, wide: Array, mid: Array, axes: Array, points: Array,
+                      tool: Array, tol_p: float, tol_r: float, iterations: int, damping: float,
+                      floor: float, max_step: float, distinct: float, q_out: Array,
+                      count_out: IndexArray, manip_out: Array, margin_out: Array) -> None:
+    """Solutions of each target for any serial chain: Levenberg-Marquardt from every row of
+    ``seeds`` (S, n), up to ``q_out.shape[1]`` distinct ones inside the limits."""
+    n = seeds.shape[1]
+    q = np.empty(n)
+    err = np.empty(6)
+    jac = np.empty((6, n))
+    cap = q_out.shape[1]
+    for m in range(rots.shape[0]):
+        kept = 0
+        for s in range(seeds.shape[0]):
+            if kept == cap:
+                break
+            for i in range(n):
+                q[i] = seeds[s, i]
+            ok, _, _ = ik_kernel.levenberg_marquardt(q, rots[m], poss[m], axes, points, rev,
+                                                     tool, tol_p, tol_r, iterations, damping,
+                                                     floor, max_step)
+            if not ok:
+                continue
+            ik_kernel.wind(q, mid, lo, hi, rev, wide)
+            room = margin(q, lo, hi)
+            if room < 0.0 or not _keep(q, m, q_out, kept, distinct):
+                continue
+            ik_kernel.pose_error(q, rots[m], poss[m], axes, points, rev, tool, err, jac)
+            for i in range(n):
+                q_out[m, kept, i] = q[i]
+            manip_out[m, kept] = manipulability(jac)
+            margin_out[m, kept] = room
+            kept += 1
+        count_out[m] = kept

@@ -1,0 +1,149 @@
+"""The local execution backend: a pool of worker processes on this machine.
+
+Each worker is a process forked from this one when this one runs a single thread (it then
+starts in milliseconds with every module already imported), or started by the ``forkserver``
+method otherwise (a clean process, whatever threads this one runs, e.g. an embedded
+simulator: forking a threaded process can deadlock the child). It builds the job's context
+once and then runs one chunk at a time, sent over its own pipe. The parent watches every pipe
+and every process at once (:func:`multiprocessing.connection.wait`), so it always knows which
+chunk a worker was running when it died: that chunk is retried once on a fresh worker, and a
+second failure stops the run (:class:`~usar_arm.errors.ChunkFailedError`). Workers ignore
+Ctrl-C; the parent terminates them when it is interrupted, or when it stops for any other
+reason.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import signal
+import threading
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection, wait
+from multiprocessing.process import BaseProcess
+from typing import Any
+
+from usar_arm.errors import ChunkFailedError
+from usar_arm.workspace.engine import ATTEMPTS, Job, Result, describe_failure, run_chunk
+
+SHUTDOWN_TIMEOUT = 5.0
+"""s to wait for a worker to leave after being told to, before it is killed."""
+
+
+def _serve(conn: Connection, key: str, prepare: Callable[[], Any],
+           work: Callable[[Any, Any], Result]) -> None:
+    """A worker's loop: (index, chunk) in, ("ok" | "error", index, result | reason) out."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        i, chunk = message
+        try:
+            result = run_chunk(key, prepare, work, chunk)
+        except Exception as exc:  # reported to the parent, which retries the chunk once
+            conn.send(("error", i, describe_failure(exc)))
+            continue
+        conn.send(("ok", i, result))
+
+
+@dataclass(eq=False)
+class _Worker:
+    process: BaseProcess
+    conn: Connection
+    chunk: int | None = None
+    closed: bool = field(default=False)
+
+    def stop(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self.conn.send(None)
+        except (OSError, ValueError):
+            pass
+        self.process.join(SHUTDOWN_TIMEOUT)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(SHUTDOWN_TIMEOUT)
+        self.conn.close()
+
+
+class ProcessBackend:
+    """Chunks run in ``workers`` local processes (default: one per core)."""
+
+    def __init__(self, workers: int | None = None, start_method: str = "auto"):
+        if workers is not None and workers < 1:
+            raise ValueError(f"--workers must be at least 1, got {workers}")
+        self.workers = int(workers or os.cpu_count() or 1)
+        self.start_method = start_method
+
+    def describe(self) -> str:
+        return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
+
+    def _start(self, context: Any, job: Job) -> _Worker:
+        parent, child = context.Pipe()
+        process = context.Process(target=_serve, args=(child, job.key, job.prepare, job.work),
+                                  daemon=True, name="usar-arm-worker")
+        process.start()
+        child.close()
+        return _Worker(process, parent)
+
+    def _method(self) -> str:
+        if self.start_method != "auto":
+            return self.start_method
+        return "fork" if threading.active_count() == 1 else "forkserver"
+
+    def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
+        context = mp.get_context(self._method())
+        queue = deque(todo)
+        failures: dict[int, list[str]] = {}
+        workers: list[_Worker] = []
+        try:
+            workers = [self._start(context, job) for _ in range(min(self.workers, len(queue)))]
+            while queue or any(w.chunk is not None for w in workers):
+                for w in workers:
+                    if w.chunk is None and queue:
+                        w.chunk = queue.popleft()
+                        w.conn.send((w.chunk, job.chunks[w.chunk]))
+                busy = [w for w in workers if w.chunk is not None]
+                ready = set(wait([w.conn for w in busy] + [w.process.sentinel for w in busy]))
+                for k, w in enumerate(workers):
+                    if w.chunk is None or not (w.conn in ready or w.process.sentinel in ready):
+                        continue
+                    i = w.chunk
+                    reply = self._reply(w)
+                    if reply is not None and reply[0] == "ok":
+                        w.chunk = None
+                        yield i, reply[2]
+                        continue
+                    reason = reply[2] if reply is not None else (
+                        f"its worker process died (exit code {w.process.exitcode})")
+                    failures.setdefault(i, []).append(reason)
+                    if len(failures[i]) >= ATTEMPTS:
+                        raise ChunkFailedError(i, len(failures[i]), reason)
+                    queue.appendleft(i)
+                    w.chunk = None
+                    if reply is None:  # a dead worker is replaced by a fresh one
+                        w.stop()
+                        workers[k] = self._start(context, job)
+        finally:
+            for w in workers:
+                w.stop()
+
+    @staticmethod
+    def _reply(w: _Worker) -> tuple[str, int, Any] | None:
+        """The worker's reply, or None when it died before giving one."""
+        try:
+            if w.conn.poll():
+                reply: tuple[str, int, Any] = w.conn.recv()
+                return reply
+        except (EOFError, OSError):
+            pass
+        w.process.join(SHUTDOWN_TIMEOUT)
+        return None
