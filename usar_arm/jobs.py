@@ -12,9 +12,12 @@ import functools
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_arm.errors import ClusterUnavailableError
+import numpy as np
+
+from usar_arm.errors import ClusterUnavailableError, IKError, UnreachableTargetError
 from usar_arm.planning.scene import Scene
 from usar_arm.robot import Robot, robot_from_texts
+from usar_arm.spatial import Array
 from usar_arm.version import __version__
 from usar_arm.workspace.arm_model import ArmBuilder
 from usar_arm.workspace.engine import (
@@ -26,6 +29,17 @@ from usar_arm.workspace.engine import (
     RunStats,
     run_job,
 )
+from usar_arm.workspace.placement import (
+    Candidates,
+    PlaceSettings,
+    Ranking,
+    candidates,
+    place_job,
+    prepare_context,
+    rank,
+    references,
+    target_margins,
+)
 from usar_arm.workspace.pool import ProcessBackend
 from usar_arm.workspace.reach import (
     ReachPlan,
@@ -36,6 +50,8 @@ from usar_arm.workspace.reach import (
     reach_job,
 )
 from usar_arm.workspace.reach_map import ReachMap
+from usar_arm.workspace.solver import AllSolutions
+from usar_arm.workspace.targets import Target
 
 CHUNKS = ".chunks"
 """Folder (inside a job's output folder) of its finished chunks."""
@@ -118,3 +134,61 @@ def finish(out_dir: str | Path) -> None:
         for f in folder.iterdir():
             f.unlink()
         folder.rmdir()
+
+
+@dataclass(frozen=True)
+class PlaceRun:
+    """A placement study: the candidates (and how many the grid had before the reach bound
+    dropped some), their ranking, the references of the margins (m_ref, d_ref), how the run
+    went, and for the best base each target's collision-free solutions with their margins,
+    best first."""
+
+    candidates: Candidates
+    grid_candidates: int
+    ranking: Ranking
+    references: tuple[float, float]
+    stats: RunStats
+    best: int
+    solutions: list[tuple[Array, Array]]
+
+
+def place(robot: Robot, scene: Scene, targets: list[Target], settings: PlaceSettings,
+          backend: Backend, out_dir: str | Path | None = None, resume: bool = False,
+          progress: Progress | None = None) -> PlaceRun:
+    """Rank candidate base poses on the floor by the worst target's margin.
+
+    Raises:
+        UnreachableTargetError: a target no candidate reaches collision-free (named).
+        IKError: every target is reachable from some base, but none reaches them all.
+    """
+    found, total = candidates(robot.chain, targets, settings)
+    build = arm_builder(robot)
+    solver = AllSolutions(robot.chain, robot.ik_solver())
+    refs = references(solver)
+    job = place_job(found, build, scene, targets, settings, refs, description_text(robot),
+                    __version__)
+    results, stats, _ = _run(job, backend, out_dir, resume, progress)
+    ranking = rank(results) if results else Ranking(np.zeros((0, len(targets))),
+                                                    np.zeros(0), np.zeros(0, np.int64))
+    if len(ranking.order) == 0:
+        _explain_no_base(targets, ranking, len(found))
+    best = int(ranking.order[0])
+    context = prepare_context(build, scene, np.array([t.pose for t in targets]), settings.floor,
+                            refs)
+    _, solutions = target_margins(context, found.pose(best, settings.floor))
+    return PlaceRun(found, total, ranking, refs, stats, best, solutions)
+
+
+def _explain_no_base(targets: list[Target], ranking: Ranking, n: int) -> None:
+    reached = (ranking.margins >= 0).sum(axis=0) if n else np.zeros(len(targets), int)
+    for t, count in zip(targets, reached, strict=True):
+        if count == 0:
+            raise UnreachableTargetError(t.name, n, "from any base pose on the grid: move it, "
+                                                    "or widen --region")
+    covers = (ranking.margins >= 0).sum(axis=1)
+    best = int(np.argmax(covers))
+    missing = [t.name for t, ok in zip(targets, ranking.margins[best] >= 0, strict=True)
+               if not ok]
+    raise IKError(f"no candidate base reaches all {len(targets)} targets (each is reachable "
+                  f"from some); the best reaches {int(covers[best])}, missing "
+                  f"{', '.join(missing)}")

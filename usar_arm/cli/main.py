@@ -7,11 +7,13 @@ import sys
 from collections.abc import Sequence
 
 from usar_arm.cli import (
+    batch_cmd,
     calibrate_cmd,
     demo_cmd,
     execute_cmd,
     ik_cmd,
     picture_cmds,
+    place_cmd,
     plan_cmd,
     reach_cmd,
     sim_cmd,
@@ -21,7 +23,7 @@ from usar_arm.cli.common import EXIT_CODES_HELP, report_error
 from usar_arm.version import __version__
 
 COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd, calibrate_cmd,
-            reach_cmd]
+            reach_cmd, place_cmd, batch_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

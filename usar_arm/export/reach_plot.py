@@ -72,6 +72,11 @@ def _hull(points: Array) -> Array:
     return np.array([*ring, ring[0]])
 
 
+def outline(obj: SceneObject, h: int, v: int) -> Array:
+    """The closed outline (k, 2) of an object projected on the plane of axes ``h``, ``v``."""
+    return _hull(_corners(obj)[:, [h, v]])
+
+
 def plot_reach_slice(path: str | Path, index: NDArray[np.floating[Any]], origin: Array,
                      resolution: float, plane: str, chain: KinematicChain,
                      scene: Scene | None = None, at: float = 0.0, title: str = "") -> Path:
@@ -112,7 +117,7 @@ def reach_slice_png(index: NDArray[np.floating[Any]], origin: Array, resolution:
     fig.colorbar(image, ax=ax, shrink=0.85,
                  label="reachability index (fraction of orientations reached)")
     for obj in (scene.objects if scene is not None else ()):
-        ring = _hull(_corners(obj)[:, [h, v]])
+        ring = outline(obj, h, v)
         ax.plot(ring[:, 0], ring[:, 1], color="#d62728", lw=1.2, ls="--")
         ax.annotate(obj.name, ring[:-1].mean(axis=0), color="#d62728", fontsize=7,
                     ha="center")

@@ -10,6 +10,7 @@ This is the only module that imports ``fcl``.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -95,21 +96,39 @@ class CollisionWorld:
         self._half = np.array([c.length / 2 + self.padding for c in cyls])
         self._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
                        for r, h in zip(self._radius, self._half, strict=True)]
-        self._static = [fcl.CollisionObject(shape_geometry(o.shape), _fcl_transform(o.pose))
-                        for o in scene.objects]
-        self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
-        self._names = self._links + [o.name for o in scene.objects]
         self._poses = np.zeros((len(self._links), 4, 4))
-        self._init_bounds(chain, links, scene)
+        self._init_robot_bounds(chain, links)
+        self._init_scene(scene)
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self._levers: Array | None = None
         self._link_levers: Array | None = None
         self.set_disabled(disabled)
 
-    def _init_bounds(self, chain: KinematicChain, links: list, scene: Scene) -> None:
-        """Plain arrays for the compiled broadphase: the chain as twists at zero, each link
-        cylinder's pose at zero and the obstacles as boxes, spheres and capsules."""
+    def in_scene(self, scene: Scene) -> CollisionWorld:
+        """The same arm (geometry, disabled pairs, padding) in another scene: only the scene's
+        part is built, so a study that moves the scene around the arm (base placement) pays
+        for the obstacles alone."""
+        other = copy.copy(self)
+        other._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
+                        for r, h in zip(self._radius, self._half, strict=True)]
+        other._poses = np.zeros_like(self._poses)
+        other._init_scene(scene)
+        other.set_disabled(self.disabled)
+        return other
+
+    def _init_scene(self, scene: Scene) -> None:
+        """The scene's FCL objects, boxes and compiled arrays."""
+        self.scene = scene
+        self._static = [fcl.CollisionObject(shape_geometry(o.shape), _fcl_transform(o.pose))
+                        for o in scene.objects]
+        self._static_box = np.array([self._aabb(o) for o in scene.objects]).reshape(-1, 2, 3)
+        self._names = self._links + [o.name for o in scene.objects]
+        self._init_scene_bounds(scene)
+
+    def _init_robot_bounds(self, chain: KinematicChain, links: list) -> None:
+        """Plain arrays for the compiled broadphase: the chain as twists at zero and each link
+        cylinder's pose at zero."""
         poe = PoeModel(chain)
         zero = chain.link_poses(np.zeros(chain.dof))
         self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
@@ -118,6 +137,9 @@ class CollisionWorld:
         self._moved_by = np.array([poe.joints_moving(lk.name) for lk in links], dtype=np.int64)
         self._zero = np.array([zero[lk.name] @ local for lk, local in
                                zip(links, self._local, strict=True)]).reshape(-1, 4, 4)
+
+    def _init_scene_bounds(self, scene: Scene) -> None:
+        """The obstacles as boxes, spheres, capsules and mesh hulls for the broadphase."""
         kinds, poses, sizes = [], [], []
         for o in scene.objects:
             shape, pose = o.shape, np.asarray(o.pose, float)

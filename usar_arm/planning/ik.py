@@ -214,6 +214,11 @@ class IKSolver:
                 self.revolute.astype(float), self.wide.astype(float), poe.axes, poe.points,
                 np.ascontiguousarray(chain.frame_pose(self.frame, np.zeros(6))))
 
+    def reseed(self, seed: int | None = None) -> None:
+        """Restart the numeric search's random restarts from ``seed`` (default: the options'
+        seed), so the next query's answer does not depend on the queries before it."""
+        self._rng = np.random.default_rng(self.options.seed if seed is None else seed)
+
     def _build_analytic(self) -> OrthoParallelArm:
         if not all(self.revolute) or len(self.names) != 6:
             raise NotOrthoParallel("needs exactly 6 revolute joints")

@@ -121,6 +121,27 @@ def edge_configurations(a: Array, b: Array, resolution: float, levers: Array | N
     return a + (b - a) * fractions[order][:, None]
 
 
+def reseed(seed: int) -> None:
+    """Make the next plan of this process depend on ``seed`` alone.
+
+    OMPL draws every RNG's seed from one process-global generator, and each plan here creates
+    its own state space, planner and simplifier (so its own RNGs). Seeding that generator
+    right before a plan therefore makes the plan the same whatever this process planned
+    before (measured: a plan after three others equals the same plan in a fresh process).
+    OMPL still prints that changing the seed after sampling started is not deterministic, which
+    holds for RNGs created earlier, not for ours: the message is silenced for this call.
+    """
+    if seed < 0:
+        raise InvalidInputError(f"seed must be >= 0, got {seed}")
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LOG_NONE)
+    try:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses 0
+    finally:
+        ou.setLogLevel(level)
+    _seeded[:] = [int(seed)]
+
+
 def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
               state_valid: Callable[[Array], bool],
               segment_free: Callable[[Array, Array, int], bool], options: OmplOptions,

@@ -63,6 +63,21 @@ def manipulability(jac: Array) -> float:
 
 
 @kernel
+def manipulabilities(qs: Array, axes: Array, points: Array, rev: Array, tool: Array) -> Array:
+    """:func:`manipulability` of tool0 at each configuration of ``qs`` (N, n)."""
+    n = qs.shape[1]
+    out = np.empty(qs.shape[0])
+    err = np.empty(6)
+    jac = np.empty((6, n))
+    eye = np.eye(3)
+    zero = np.zeros(3)
+    for i in range(qs.shape[0]):
+        ik_kernel.pose_error(qs[i], eye, zero, axes, points, rev, tool, err, jac)
+        out[i] = manipulability(jac)
+    return out
+
+
+@kernel
 def margin(q: Array, lo: Array, hi: Array) -> float:
     """The smallest distance (rad or m) of a joint to one of its limits (< 0 outside)."""
     worst = math.inf

@@ -82,6 +82,11 @@ class AllSolutions:
         """Number of joints."""
         return int(self.lower.shape[0])
 
+    def manipulability(self, qs: Array) -> Array:
+        """Yoshikawa's manipulability of tool0 at configurations (N, n)."""
+        return np.asarray(kernels.manipulabilities(np.ascontiguousarray(qs, float).reshape(
+            -1, self.dof), self.axes, self.points, self.revolute, self.tool))
+
     def solve(self, rots: Array, poss: Array) -> Candidates:
         """Every solution of M targets given as rotations (M, 3, 3) and positions (M, 3)."""
         rots = np.ascontiguousarray(rots, float).reshape(-1, 3, 3)

@@ -1,0 +1,90 @@
+"""``usar-arm batch``: many IK or plan problems from a JSON Lines file, answered in order."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import Counter
+from typing import Any
+
+from usar_arm import batch
+from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
+from usar_arm.cli.job_args import add_job_args, backend_from_args, interrupted, run_record, versions
+from usar_arm.cli.progress_bar import ProgressBar
+from usar_arm.cli.robot_args import add_robot_args, robot_from_args
+from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.jobs import finish
+from usar_arm.motion import MotionOptions
+from usar_arm.planning.ompl_adapter import OmplOptions
+from usar_arm.workspace.batch_file import read_problems
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "batch", help="solve many IK or plan problems from a JSON Lines file",
+        description="Read one problem per line (an IK pose, or a plan from joints to joints or "
+                    "to a pose, each with an optional scene), solve them in chunks on the "
+                    "chosen backend and write DIR/results.jsonl: one JSON object per problem, "
+                    "in the input order, with the answer or the failure's type, message and "
+                    "exit code; DIR/batch.json summarises the run. The format is in "
+                    "docs/workspace.md.")
+    p.add_argument("file", metavar="FILE", help="the problems, one JSON object per line")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="seed of every search (IK restarts, OMPL), reseeded per problem "
+                        "(default 0)")
+    p.add_argument("--time-limit", type=float, default=2.0, metavar="S",
+                   help="planning budget per plan problem in seconds (default 2)")
+    p.add_argument("--trajectories", action="store_true",
+                   help="include each plan's sampled trajectory (t, q) in its result")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    add_job_args(p)
+    add_robot_args(p)
+    add_verbosity(p)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    if args.seed < 0:
+        raise InvalidInputError(f"--seed must be >= 0, got {args.seed}")
+    options = batch.BatchOptions(args.seed, MotionOptions(
+        ompl=OmplOptions(time_limit=args.time_limit, seed=args.seed)), args.trajectories)
+    problems, bad = read_problems(args.file)
+    backend = backend_from_args(args)
+    robot = robot_from_args(args)
+    progress(f"{len(problems)} problems and {len(bad)} invalid lines from {args.file}, on "
+             f"{backend.describe()}")
+    bar = ProgressBar("problems", enabled=verbosity(args) >= 0)
+    try:
+        lines, stats = batch.run_batch(robot, problems, bad, options, backend, args.out,
+                                       args.resume, bar)
+    except KeyboardInterrupt:
+        bar.close()
+        interrupted(args.out)
+        raise
+    bar.close()
+    docs = [json.loads(line) for line in lines]
+    failures = Counter(d["error"]["type"] for d in docs if not d["ok"])
+    summary: dict[str, Any] = {
+        "file": args.file, "robot": {"name": robot.chain.name, "source": robot.source},
+        "counts": {"results": len(docs), "ok": sum(d["ok"] for d in docs),
+                   "failed": sum(not d["ok"] for d in docs), "failures": dict(failures)},
+        "settings": {"seed": args.seed, "time_limit_s": args.time_limit,
+                     "trajectories": args.trajectories},
+        "run": run_record(stats), "versions": versions(),
+    }
+    written = write_tree_atomic(args.out, {
+        "results.jsonl": "".join(line + "\n" for line in lines),
+        "batch.json": json.dumps(summary, indent=2) + "\n"})
+    finish(args.out)
+    if args.json:
+        print_json({**summary, "files": [str(p) for p in written]})
+        return EXIT_OK
+    c = summary["counts"]
+    kinds = ", ".join(f"{n} {k}" for k, n in failures.most_common()) or "none"
+    out(f"{c['ok']} of {c['results']} problems solved ({stats.seconds:.1f} s on "
+        f"{stats.backend}); failures: {kinds}")
+    for path in written:
+        out(f"  {path}")
+    return EXIT_OK

@@ -1,0 +1,169 @@
+"""Problems of a batch job, one JSON object per line (JSON Lines).
+
+``{"id": "a", "ik": {"pose": [1.2, 0, 1.0, 3.14159, 0, 0], "seed": [0, -1, 1, 0, 0.5, 0]}}``
+``{"id": "b", "ik": {"pose": <4x4 rows>, "all": true}, "scene": "table"}``
+``{"id": "c", "plan": {"start": [...6], "goal": [...6]}, "scene": "table"}``
+``{"id": "d", "plan": {"start": [...6], "pose": [1.4, -0.4, 1.0, 3.14, 0, 0], "motion": "lin"}}``
+
+Poses are tool0 in base_link: X Y Z (m) and roll, pitch, yaw (rad, fixed axes), or a 4x4
+matrix. ``scene`` (optional) names a shipped scene or a scene file. ``id`` is any JSON value,
+copied to the result. Blank lines and lines starting with ``#`` are skipped. A line that is not
+a valid problem becomes a :class:`BadLine` (its result says why); the others still run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from usar_arm.errors import FileFormatError
+from usar_arm.spatial import Array, rpy_to_matrix, transform
+
+KINDS = ("ik", "plan")
+MOTIONS = ("ptp", "lin")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One problem (every array in SI units; joints in the arm's order).
+
+    Attributes:
+        line: its 1-based line in the file. id: the line's ``id`` (any JSON value) or None.
+        kind: ``ik`` or ``plan``. scene: a scene name or file, or None (no obstacles).
+        pose: 4x4 goal of tool0 (ik; plan to a pose). seed: joints to stay near (ik).
+        all: every IK solution (ik). start, goal: joints (plan). motion: ``ptp`` or ``lin``.
+    """
+
+    line: int
+    id: Any
+    kind: str
+    scene: str | None = None
+    pose: Array | None = None
+    seed: Array | None = None
+    all: bool = False
+    start: Array | None = None
+    goal: Array | None = None
+    motion: str = "ptp"
+
+
+@dataclass(frozen=True)
+class BadLine:
+    """A line that is not a valid problem, and why."""
+
+    line: int
+    id: Any
+    message: str
+
+
+class _Bad(Exception):
+    pass
+
+
+def _vector(value: Any, what: str) -> Array:
+    if not isinstance(value, list) or not value or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise _Bad(f"{what} must be a list of numbers, got {json.dumps(value)[:80]}")
+    out = np.asarray(value, float)
+    if not np.all(np.isfinite(out)):
+        raise _Bad(f"{what} has a non-finite number")
+    return out
+
+
+def _pose(value: Any, what: str) -> Array:
+    if isinstance(value, list) and len(value) == 4 and all(isinstance(r, list) for r in value):
+        rows = [_vector(r, what) for r in value]
+        if any(len(r) != 4 for r in rows):
+            raise _Bad(f"{what} as a matrix must be 4x4")
+        t = np.array(rows)
+        rot = t[:3, :3]
+        if (np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6 or np.linalg.det(rot) < 0
+                or np.abs(t[3] - (0, 0, 0, 1)).max() > 1e-9):
+            raise _Bad(f"{what} is not a rigid transform (orthonormal rotation, det +1, "
+                       "bottom row 0 0 0 1)")
+        return t
+    v = _vector(value, what)
+    if len(v) != 6:
+        raise _Bad(f"{what} needs 6 numbers (X Y Z m, roll pitch yaw rad) or a 4x4 matrix, "
+                   f"got {len(v)}")
+    return transform(rpy_to_matrix(v[3:]), v[:3])
+
+
+def _problem(line: int, doc: Any) -> Problem:
+    if not isinstance(doc, dict):
+        raise _Bad("a problem is a JSON object with 'ik' or 'plan'")
+    kinds = [k for k in KINDS if k in doc]
+    if len(kinds) != 1:
+        raise _Bad(f"a problem has exactly one of 'ik' or 'plan', got {sorted(doc)}")
+    unknown = sorted(set(doc) - {"id", "scene", *KINDS})
+    if unknown:
+        raise _Bad(f"unknown key {unknown[0]!r} (expected id, scene, ik or plan)")
+    scene = doc.get("scene")
+    if scene is not None and (not isinstance(scene, str) or not scene):
+        raise _Bad("'scene' names a shipped scene or a scene file")
+    kind = kinds[0]
+    body = doc[kind]
+    if not isinstance(body, dict):
+        raise _Bad(f"'{kind}' must be an object")
+    if kind == "ik":
+        extra = sorted(set(body) - {"pose", "seed", "all"})
+        if extra or "pose" not in body:
+            raise _Bad(f"'ik' takes pose (required), seed, all; got {sorted(body)}")
+        if not isinstance(body.get("all", False), bool):
+            raise _Bad("'all' is true or false")
+        seed = _vector(body["seed"], "ik.seed") if "seed" in body else None
+        return Problem(line, doc.get("id"), kind, scene, _pose(body["pose"], "ik.pose"), seed,
+                       bool(body.get("all", False)))
+    extra = sorted(set(body) - {"start", "goal", "pose", "motion"})
+    if extra or "start" not in body or (("goal" in body) == ("pose" in body)):
+        raise _Bad(f"'plan' takes start and exactly one of goal (joints) or pose; got "
+                   f"{sorted(body)}")
+    motion = body.get("motion", "ptp")
+    if motion not in MOTIONS:
+        raise _Bad(f"plan.motion is ptp or lin, got {motion!r}")
+    return Problem(line, doc.get("id"), kind, scene, _pose(body["pose"], "plan.pose")
+                   if "pose" in body else None, None, False,
+                   _vector(body["start"], "plan.start"),
+                   _vector(body["goal"], "plan.goal") if "goal" in body else None, motion)
+
+
+def parse_problems(text: str) -> tuple[list[Problem], list[BadLine]]:
+    """The problems of a JSON Lines text and the lines that are not problems."""
+    good: list[Problem] = []
+    bad: list[BadLine] = []
+    for n, raw in enumerate(text.splitlines(), start=1):
+        stripped = raw.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        try:
+            doc = json.loads(stripped, parse_constant=lambda c: math.nan)
+        except json.JSONDecodeError as exc:
+            bad.append(BadLine(n, None, f"not JSON: {exc.msg} at column {exc.colno}"))
+            continue
+        try:
+            good.append(_problem(n, doc))
+        except _Bad as exc:
+            bad.append(BadLine(n, doc.get("id") if isinstance(doc, dict) else None, str(exc)))
+    return good, bad
+
+
+def read_problems(path: str | Path) -> tuple[list[Problem], list[BadLine]]:
+    """:func:`parse_problems` of a file.
+
+    Raises:
+        FileFormatError: the file cannot be read, is not UTF-8 or holds no line at all.
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(str(path), f"not UTF-8 text (offset {exc.start})") from None
+    good, bad = parse_problems(text)
+    if not good and not bad:
+        raise FileFormatError(str(path), "no problems (expected one JSON object per line)")
+    return good, bad
