@@ -183,8 +183,9 @@ def _explain_no_base(targets: list[Target], ranking: Ranking, n: int) -> None:
     reached = (ranking.margins >= 0).sum(axis=0) if n else np.zeros(len(targets), int)
     for t, count in zip(targets, reached, strict=True):
         if count == 0:
-            raise UnreachableTargetError(t.name, n, "from any base pose on the grid: move it, "
-                                                    "or widen --region")
+            raise UnreachableTargetError(t.name, n, "the candidates are the base poses within "
+                                                    "reach of every target: move it, or widen "
+                                                    "--region")
     covers = (ranking.margins >= 0).sum(axis=1)
     best = int(np.argmax(covers))
     missing = [t.name for t, ok in zip(targets, ranking.margins[best] >= 0, strict=True)

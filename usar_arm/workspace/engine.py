@@ -94,6 +94,11 @@ def run_chunk(job_key: str, prepare: Callable[[], Any], work: Callable[[Any, Any
     return work(context, chunk)
 
 
+def forget_contexts() -> None:
+    """Drop the contexts this process built (a new worker starts from none)."""
+    _CONTEXTS.clear()
+
+
 def describe_failure(exc: BaseException) -> str:
     """The last line of a traceback: the exception and its message."""
     lines = traceback.format_exception_only(type(exc), exc)

@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from usar_arm.errors import UnreachableTargetError
 from usar_arm.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.scene import Scene, SceneObject
@@ -108,9 +109,12 @@ def candidates(chain: KinematicChain, targets: list[Target], settings: PlaceSett
     gx, gy, gyaw = np.meshgrid(xs * settings.step, ys * settings.step, yaws, indexing="ij")
     x, y, yaw = gx.ravel(), gy.ravel(), gyaw.ravel()
     keep = np.ones(len(x), bool)
-    for p in points:
-        local = _to_base(p, x, y, yaw, settings.floor)
-        keep &= bound.distance(local) <= bound.radius
+    for target, p in zip(targets, points, strict=True):
+        near = bound.distance(_to_base(p, x, y, yaw, settings.floor)) <= bound.radius
+        if not near.any():
+            raise UnreachableTargetError(target.name, len(x), "it lies beyond the arm's reach "
+                                         "from every base pose of the grid")
+        keep &= near
     return Candidates(x[keep], y[keep], yaw[keep]), len(x)
 
 

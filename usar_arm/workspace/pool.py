@@ -26,7 +26,14 @@ from multiprocessing.process import BaseProcess
 from typing import Any
 
 from usar_arm.errors import ChunkFailedError
-from usar_arm.workspace.engine import ATTEMPTS, Job, Result, describe_failure, run_chunk
+from usar_arm.workspace.engine import (
+    ATTEMPTS,
+    Job,
+    Result,
+    describe_failure,
+    forget_contexts,
+    run_chunk,
+)
 
 SHUTDOWN_TIMEOUT = 5.0
 """s to wait for a worker to leave after being told to, before it is killed."""
@@ -36,6 +43,7 @@ def _serve(conn: Connection, key: str, prepare: Callable[[], Any],
            work: Callable[[Any, Any], Result]) -> None:
     """A worker's loop: (index, chunk) in, ("ok" | "error", index, result | reason) out."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    forget_contexts()  # (a forked worker builds its own, whatever its parent had)
     while True:
         try:
             message = conn.recv()

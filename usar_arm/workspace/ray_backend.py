@@ -11,13 +11,15 @@ failure stops the run.
 Addresses: ``local`` always starts a fresh Ray instance on this machine (and stops it at the
 end); ``auto`` joins the cluster ``RAY_ADDRESS`` names, or the one ``ray start`` left on this
 machine; ``HOST:PORT`` (a head node's GCS, port 6379 by default) or ``ray://HOST:PORT`` joins
-that cluster. An address that does not answer within ``timeout`` seconds is an error saying so,
-checked before Ray is asked (whose own wait is much longer).
+that cluster. An address that does not answer within ``timeout`` seconds is an error saying so:
+a refused connection is found before Ray is asked, and Ray's own retries (about one a second,
+20 by default) are bounded by the timeout.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import os
 import socket
 from collections import deque
@@ -31,6 +33,9 @@ from usar_arm.workspace.engine import ATTEMPTS, Job, Result, run_chunk
 
 log = logging.getLogger("usar_arm.workspace")
 
+WAIT_VARIABLE = "RAY_gcs_server_port_wait_time_s"
+"""Ray's own setting of how many ~1 s attempts it makes to reach a cluster's GCS (20 by
+default): something may accept TCP on an address without being a Ray head (a proxy)."""
 LOCAL_OBJECT_STORE = 256 * 2**20
 """Bytes of object store for a local instance (results are small; Ray's default takes 30 % of
 the machine's memory)."""
@@ -92,17 +97,31 @@ class RayBackend:
                 raise ClusterUnavailableError(
                     self.address, f"no answer from {target[0]}:{target[1]} within "
                                   f"{self.timeout:g} s ({exc.strerror or exc})") from None
-        if ray.is_initialized():
+        if ray.is_initialized():  # this process already joined a cluster: only that one
+            current = ray.get_runtime_context().gcs_address
+            if self.address not in ("auto", "local") and target is not None and \
+                    current.rpartition(":")[2] != str(target[1]):
+                raise ClusterUnavailableError(
+                    self.address, f"this process is already connected to the Ray cluster at "
+                                  f"{current}")
             return False
         options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
                                    "logging_level": logging.WARNING}
         if self.address == "local":
             options.update(num_cpus=self.requested or os.cpu_count() or 1,
                            object_store_memory=LOCAL_OBJECT_STORE)
+        wait = WAIT_VARIABLE not in os.environ and self.address != "local"
+        if wait:  # Ray retries its GCS about once a second: bound the retries by the timeout
+            os.environ[WAIT_VARIABLE] = str(max(1, math.ceil(self.timeout)))
         try:
             ray.init(address=self.address, **options)
         except (ConnectionError, RuntimeError, ValueError) as exc:
-            raise ClusterUnavailableError(self.address, str(exc).splitlines()[0]) from None
+            raise ClusterUnavailableError(
+                self.address, f"{str(exc).splitlines()[0]} (waited {self.timeout:g} s)"
+            ) from None
+        finally:
+            if wait:
+                del os.environ[WAIT_VARIABLE]
         return True
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:

@@ -1,0 +1,37 @@
+"""Arms and a small reachability map shared by the workspace tests."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from usar_arm import jobs
+from usar_arm.description import DescribeOptions
+from usar_arm.embedded import describe
+from usar_arm.planning.scene import EMPTY
+from usar_arm.robot import Robot, robot_from_description, robot_from_files
+from usar_arm.workspace.reach import ReachSettings
+
+ROOT = Path(__file__).resolve().parents[2]
+SMALL = ReachSettings(resolution=0.25, orientations=24)
+"""A map that takes about a second: 25 cm voxels, 24 orientations."""
+
+
+@pytest.fixture(scope="session")
+def kr60() -> Robot:
+    """The KR60 of the checked-in description."""
+    return robot_from_files(ROOT / "robots/generated/KR60.urdf")
+
+
+@pytest.fixture(scope="session")
+def fanuc() -> Robot:
+    """The Fanuc M16iB20 on its rail (7 joints, the first prismatic), as discovered."""
+    return robot_from_description(describe(DescribeOptions(robot="Fanuc_M16iB20",
+                                                           accuracy_samples=0)))
+
+
+@pytest.fixture(scope="session")
+def small_map(kr60: Robot) -> jobs.ReachRun:
+    """:data:`SMALL` map of the KR60 in the empty scene, computed in this process."""
+    return jobs.reach_map(kr60, EMPTY, SMALL, jobs.backend_for(0))
