@@ -1,6 +1,7 @@
 """Run the benchmarks: usar-arm beside its peers, stage by stage, on one shared problem set.
 
-    python bench/run.py [--quick] [--stages ik,collision,plan,timing,discovery,execution,calibrate]
+    python bench/run.py [--quick] [--stages ik,collision,plan,timing,discovery,execution,
+                                            calibrate,workspace]
                         [--out bench/results] [--problems DIR] [--rounds R] [--peers a,b]
 
 1. Writes the problem set (``bench/problems.py``; default ``bench/problems/<quick|full>``).
@@ -30,9 +31,11 @@ from pathlib import Path
 import common
 import problems as problem_sets
 
-STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate")
+STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate",
+          "workspace")
 MODULES = {"ik": "ik", "collision": "collision", "plan": "plan", "timing": "timing",
-           "discovery": "discovery", "execution": "execution", "calibrate": "calibrate"}
+           "discovery": "discovery", "execution": "execution", "calibrate": "calibrate",
+           "workspace": "workspace"}
 ROUNDS = {"quick": 1, "full": 3}
 
 

@@ -58,6 +58,13 @@ def pick_and_place(home: Array) -> list[Move]:
             Move("home", "ptp", joints=np.asarray(home, float))]
 
 
+def through(targets: list[tuple[str, Array]], home: Array) -> list[Move]:
+    """A cycle that visits named tool0 poses (4x4, base_link) in order by PTP moves and ends
+    at ``home`` (joint values): e.g. the targets of a placement study, from its best base."""
+    return [*(Move(name, "ptp", pose) for name, pose in targets),
+            Move("home", "ptp", joints=np.asarray(home, float))]
+
+
 @dataclass
 class MoveResult:
     """What one move did: its plan, its execution report, and the wall time it took (s)."""
