@@ -7,7 +7,8 @@ What runs is the command a user types (``usar-arm reach`` / ``usar-arm place``, 
 processes): the KR60 map in the empty scene with 1 and 2 local workers, on a fresh local Ray
 instance (``--ray local``) and on a local Ray cluster already running (``ray start --head``,
 then ``--ray auto``), timed whole (``wall``) and inside the job (``job``: chunks on the
-backend, the workers' and, for ``--ray local``, Ray's start included). Then the 2-worker map is judged:
+backend, the workers' and, for ``--ray local``, Ray's start included). Then the 2-worker map
+is judged:
 
 * every sampled marked voxel's witness configuration: FK at the voxel's centre in the voxel's
   orientation, inside the limits, free by brute force;
