@@ -196,3 +196,19 @@ def test_batch_answers_in_input_order_with_typed_failures_whatever_the_workers(
     assert "nosuch" in by_id["h"]["error"]["message"]
     summary = json.loads((tmp_path / "2" / "batch.json").read_text())
     assert summary["counts"]["results"] == len(docs)
+
+
+def test_the_3d_view_serves_the_map(small_map: object) -> None:
+    pytest.importorskip("viser", reason="the viz extra is not installed")
+    import urllib.request
+
+    from usar_arm.export.reach_view import serve_reach
+
+    run = small_map
+    m = run.map  # type: ignore[attr-defined]
+    viewer = serve_reach(Path(URDF).read_text(), m.index, m.origin, m.resolution, port=0)
+    try:
+        with urllib.request.urlopen(viewer.url, timeout=10) as page:
+            assert page.status == 200
+    finally:
+        viewer.stop()

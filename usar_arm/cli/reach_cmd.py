@@ -9,7 +9,15 @@ import math
 import numpy as np
 
 from usar_arm import jobs
-from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
+from usar_arm.cli.common import (
+    add_verbosity,
+    err,
+    out,
+    print_json,
+    progress,
+    setup_logging,
+    verbosity,
+)
 from usar_arm.cli.job_args import (
     add_job_args,
     backend_from_args,
@@ -48,7 +56,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--cone-axis", type=float, nargs=3, default=(0.0, 0.0, -1.0),
                    metavar=("X", "Y", "Z"), help="the cone's axis in base_link (default down)")
     p.add_argument("--view", action="store_true",
-                   help="afterwards, serve an interactive 3D view (needs the viz extra)")
+                   help="afterwards, serve an interactive 3D view in a web browser until "
+                        "Ctrl-C (needs the viz extra: pip install 'usar-arm[viz]')")
+    p.add_argument("--view-port", type=int, default=8080, metavar="PORT",
+                   help="port of the 3D view (default 8080; the next free one if taken)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_job_args(p)
     add_robot_args(p)
@@ -131,5 +142,9 @@ def run(args: argparse.Namespace) -> int:
             out(f"  {path}")
     if args.view:
         from usar_arm.export.reach_view import serve_reach
-        serve_reach(robot.urdf, reach.index, reach.origin, reach.resolution, scene)
+
+        viewer = serve_reach(robot.urdf, reach.index, reach.origin, reach.resolution, scene,
+                             port=args.view_port)
+        err(f"3D view at {viewer.url} (Ctrl-C to stop)")
+        viewer.wait()
     return EXIT_OK
