@@ -10,7 +10,7 @@ import pytest
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "examples").glob("[0-9]*.py"))
 EXPECTED = {"01": "wrote", "02": "solutions", "03": "blended", "04": "back home, settled: True",
-            "05": "cycle.bag", "06": "held out"}
+            "05": "cycle.bag", "06": "held out", "07": "best base"}
 
 
 def test_every_example_has_an_expected_output() -> None:

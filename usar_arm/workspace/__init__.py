@@ -1,0 +1,39 @@
+"""Workspace analysis: reachability maps, base placement and batch jobs, on any backend.
+
+A layer above :mod:`usar_arm.planning` (docs/workspace.md). Its modules:
+
+* :mod:`.orientations`: deterministic near-uniform tool orientations (Super-Fibonacci), or
+  those within a cone;
+* :mod:`.grid`: the reach bound from the description (a rail included), the voxel grid and the
+  memory estimate;
+* :mod:`.kernels`, :mod:`.solver`: every IK solution of a batch of poses, compiled, with its
+  manipulability and joint margin;
+* :mod:`.query`: collision verdicts of those solutions, lazily and in batches;
+* :mod:`.reach`, :mod:`.reach_map`: the map's job, its assembly and its file (``reach.npz``);
+* :mod:`.placement`, :mod:`.targets`: inverse reachability (base poses ranked by the worst
+  target's margin) and its targets file;
+* :mod:`.batch_file`: the JSON Lines problems of a batch job;
+* :mod:`.engine`, :mod:`.pool`, :mod:`.ray_backend`: jobs cut into chunks, run in this process,
+  in local worker processes or on a Ray cluster (the optional ``ray`` extra), with retries,
+  Ctrl-C and resume;
+* :mod:`.arm_model`: what a job needs of an arm, and how a worker rebuilds it from text.
+
+On a described arm (a :class:`usar_arm.robot.Robot`, e.g. ``Arm.from_files(...).robot``), the
+facade :mod:`usar_arm.jobs` runs them: ``jobs.reach_map(robot, scene, ReachSettings(...),
+jobs.backend_for(workers=2))``, ``jobs.place(...)``; :mod:`usar_arm.batch` runs batch jobs.
+"""
+
+from __future__ import annotations
+
+from usar_arm.workspace.engine import InProcess, RunStats
+from usar_arm.workspace.grid import ReachBound, VoxelGrid, reach_bound
+from usar_arm.workspace.orientations import OrientationSet, orientation_set
+from usar_arm.workspace.placement import PlaceSettings
+from usar_arm.workspace.pool import ProcessBackend
+from usar_arm.workspace.reach import ReachPlan, ReachSettings
+from usar_arm.workspace.reach_map import ReachMap
+from usar_arm.workspace.targets import Target, load_targets
+
+__all__ = ["InProcess", "OrientationSet", "PlaceSettings", "ProcessBackend", "ReachBound",
+           "ReachMap", "ReachPlan", "ReachSettings", "RunStats", "Target", "VoxelGrid",
+           "load_targets", "orientation_set", "reach_bound"]
