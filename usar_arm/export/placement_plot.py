@@ -38,8 +38,7 @@ def placement_png(x: Array, y: Array, yaw: Array, score: Array, best: int, step:
     ax = fig.add_subplot(1, 1, 1)
     extent = ((x0 - 0.5) * step, (ix.max() + 0.5) * step, (y0 - 0.5) * step,
               (iy.max() + 0.5) * step)
-    cmap = colormaps["viridis"].copy()
-    cmap.set_bad("#f2f2f2")
+    cmap = colormaps["viridis"].with_extremes(bad="#f2f2f2")
     image = ax.imshow(np.ma.masked_invalid(grid.T), origin="lower", extent=extent, cmap=cmap,
                       vmin=0.0, vmax=max(1e-6, float(np.nanmax(grid)) if np.isfinite(grid).any()
                                          else 1.0), interpolation="nearest")

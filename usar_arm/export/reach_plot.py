@@ -109,8 +109,8 @@ def reach_slice_png(index: NDArray[np.floating[Any]], origin: Array, resolution:
     fig = Figure(figsize=(7.5, 6.5), dpi=110)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
-    cmap = ListedColormap(colormaps["viridis"](np.linspace(0, 1, 256)))
-    cmap.set_under("white")
+    cmap = ListedColormap(colormaps["viridis"](np.linspace(0, 1, 256))).with_extremes(
+        under="white")
     shown = np.where(picture > 0, picture, -1.0).T  # rows = vertical axis
     image = ax.imshow(shown, origin="lower", extent=extent, cmap=cmap, vmin=1e-6, vmax=1.0,
                       interpolation="nearest")
