@@ -9,12 +9,16 @@ from typing import Any
 
 from usar_arm import batch
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
-from usar_arm.cli.job_args import add_job_args, backend_from_args, interrupted, run_record, versions
-from usar_arm.cli.progress_bar import ProgressBar
+from usar_arm.cli.job_args import (
+    add_job_args,
+    backend_from_args,
+    run_record,
+    run_with_progress,
+    versions,
+    write_outputs,
+)
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.jobs import finish
 from usar_arm.motion import MotionOptions
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.workspace.batch_file import read_problems
@@ -55,15 +59,8 @@ def run(args: argparse.Namespace) -> int:
     robot = robot_from_args(args)
     progress(f"{len(problems)} problems and {len(bad)} invalid lines from {args.file}, on "
              f"{backend.describe()}")
-    bar = ProgressBar("problems", enabled=verbosity(args) >= 0)
-    try:
-        lines, stats = batch.run_batch(robot, problems, bad, options, backend, args.out,
-                                       args.resume, bar)
-    except KeyboardInterrupt:
-        bar.close()
-        interrupted(args.out)
-        raise
-    bar.close()
+    lines, stats = run_with_progress(args, "problems", lambda bar: batch.run_batch(
+        robot, problems, bad, options, backend, args.out, args.resume, bar))
     docs = [json.loads(line) for line in lines]
     failures = Counter(d["error"]["type"] for d in docs if not d["ok"])
     summary: dict[str, Any] = {
@@ -74,10 +71,9 @@ def run(args: argparse.Namespace) -> int:
                      "trajectories": args.trajectories},
         "run": run_record(stats), "versions": versions(),
     }
-    written = write_tree_atomic(args.out, {
+    written = write_outputs(args.out, {
         "results.jsonl": "".join(line + "\n" for line in lines),
         "batch.json": json.dumps(summary, indent=2) + "\n"})
-    finish(args.out)
     if args.json:
         print_json({**summary, "files": [str(p) for p in written]})
         return EXIT_OK

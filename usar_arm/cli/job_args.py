@@ -5,14 +5,19 @@ from __future__ import annotations
 
 import argparse
 import platform
+from collections.abc import Callable
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from usar_arm import jobs
-from usar_arm.cli.common import err
+from usar_arm.cli.common import err, verbosity
+from usar_arm.cli.progress_bar import ProgressBar
 from usar_arm.errors import InvalidInputError
-from usar_arm.workspace.engine import Backend, RunStats
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.workspace.engine import Backend, Progress, RunStats
+
+T = TypeVar("T")
 
 VERSIONED = ("usar-arm", "numpy", "numba", "pin", "python-fcl", "ray")
 
@@ -61,6 +66,27 @@ def run_record(stats: RunStats) -> dict[str, Any]:
             "chunks_resumed": stats.chunks_resumed,
             "units_per_second": rate,
             "units_per_second_per_worker": rate / stats.workers if rate else None}
+
+
+def run_with_progress(args: argparse.Namespace, unit: str, work: Callable[[Progress], T]) -> T:
+    """``work(progress)`` with a progress bar on stderr (not with -q); on Ctrl-C, say where the
+    finished chunks are kept, then let the interruption go on (exit code 130)."""
+    bar = ProgressBar(unit, enabled=verbosity(args) >= 0)
+    try:
+        return work(bar)
+    except KeyboardInterrupt:
+        bar.close()
+        interrupted(args.out)
+        raise
+    finally:
+        bar.close()
+
+
+def write_outputs(out_dir: str | Path, files: dict[str, str | bytes]) -> list[Path]:
+    """Write a job's outputs together (the last one named last), then drop its chunks."""
+    written = write_tree_atomic(out_dir, files)
+    jobs.finish(out_dir)
+    return written
 
 
 def interrupted(out_dir: str | Path) -> None:

@@ -12,12 +12,17 @@ import numpy as np
 
 from usar_arm import jobs
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
-from usar_arm.cli.job_args import add_job_args, backend_from_args, interrupted, run_record, versions
-from usar_arm.cli.progress_bar import ProgressBar
+from usar_arm.cli.job_args import (
+    add_job_args,
+    backend_from_args,
+    run_record,
+    run_with_progress,
+    versions,
+    write_outputs,
+)
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.export.placement_plot import placement_png
-from usar_arm.fileio import write_tree_atomic
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.spatial import matrix_to_rpy
@@ -87,14 +92,8 @@ def run(args: argparse.Namespace) -> int:
     robot = robot_from_args(args)
     progress(f"{robot.chain.name}: {len(targets)} targets, base poses every {settings.step:g} m "
              f"x {settings.yaw_steps} headings, on {backend.describe()}")
-    bar = ProgressBar("target checks", enabled=verbosity(args) >= 0)
-    try:
-        done = jobs.place(robot, scene, targets, settings, backend, args.out, args.resume, bar)
-    except KeyboardInterrupt:
-        bar.close()
-        interrupted(args.out)
-        raise
-    bar.close()
+    done = run_with_progress(args, "target checks", lambda bar: jobs.place(
+        robot, scene, targets, settings, backend, args.out, args.resume, bar))
     c, r = done.candidates, done.ranking
     names = [t.name for t in targets]
 
@@ -130,9 +129,8 @@ def run(args: argparse.Namespace) -> int:
                             [(t.name, t.pose) for t in targets], scene,
                             f"{robot.chain.name} base placement: {len(r.order):,} feasible of "
                             f"{len(c):,} base poses")
-    written = write_tree_atomic(args.out, {"placement.png": picture,
-                                           "placement.json": json.dumps(record, indent=2) + "\n"})
-    jobs.finish(args.out)
+    written = write_outputs(args.out, {"placement.png": picture,
+                                       "placement.json": json.dumps(record, indent=2) + "\n"})
     if args.json:
         print_json({**record, "files": [str(p) for p in written]})
         return EXIT_OK

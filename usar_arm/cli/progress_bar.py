@@ -77,3 +77,4 @@ class ProgressBar:
         if self.enabled and self.tty and self._drawn:
             self.stream.write("\n")
             self.stream.flush()
+            self._drawn = False

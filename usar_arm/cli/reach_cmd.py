@@ -21,15 +21,14 @@ from usar_arm.cli.common import (
 from usar_arm.cli.job_args import (
     add_job_args,
     backend_from_args,
-    interrupted,
     run_record,
+    run_with_progress,
     versions,
+    write_outputs,
 )
-from usar_arm.cli.progress_bar import ProgressBar
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.export.reach_plot import reach_slice_png
-from usar_arm.fileio import write_tree_atomic
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.workspace.reach import ReachSettings
@@ -93,15 +92,8 @@ def run(args: argparse.Namespace) -> int:
              f"reach ({plan.bound.radius:.3f} m of the first revolute joint), "
              f"{len(plan.orientations)} orientations: {plan.queries:,} queries on "
              f"{backend.describe()}")
-    bar = ProgressBar("queries", enabled=verbosity(args) >= 0)
-    try:
-        done = jobs.reach_map(robot, scene, settings, backend, args.out, args.resume, bar,
-                              plan)
-    except KeyboardInterrupt:
-        bar.close()
-        interrupted(args.out)
-        raise
-    bar.close()
+    done = run_with_progress(args, "queries", lambda bar: jobs.reach_map(
+        robot, scene, settings, backend, args.out, args.resume, bar, plan))
     reach, stats = done.map, done.stats
     reached = int((reach.index > 0).sum())
     record = {
@@ -131,8 +123,7 @@ def run(args: argparse.Namespace) -> int:
                                         robot.chain, scene, at=float(centre[2])),
         "reach.json": json.dumps(record, indent=2) + "\n",
     }
-    written = write_tree_atomic(args.out, files)
-    jobs.finish(args.out)
+    written = write_outputs(args.out, files)
     if args.json:
         print_json({**record, "files": [str(p) for p in written]})
     else:

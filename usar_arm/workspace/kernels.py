@@ -101,6 +101,26 @@ def _keep(q: Array, m: int, q_out: Array, count: int, distinct: float) -> bool:
 
 
 @kernel
+def _store(q: Array, m: int, kept: int, rots: Array, poss: Array, lo: Array, hi: Array,
+           rev: Array, wide: Array, mid: Array, axes: Array, points: Array, tool: Array,
+           distinct: float, err: Array, jac: Array, q_out: Array, manip_out: Array,
+           margin_out: Array) -> bool:
+    """Wind a converged solution of target ``m`` nearest the middle of the limits and keep it
+    as row ``kept`` (with its manipulability and margin) when it is inside the limits and new;
+    True when kept."""
+    ik_kernel.wind(q, mid, lo, hi, rev, wide)
+    room = margin(q, lo, hi)
+    if room < 0.0 or not _keep(q, m, q_out, kept, distinct):
+        return False
+    ik_kernel.pose_error(q, rots[m], poss[m], axes, points, rev, tool, err, jac)
+    for i in range(q.shape[0]):
+        q_out[m, kept, i] = q[i]
+    manip_out[m, kept] = manipulability(jac)
+    margin_out[m, kept] = room
+    return True
+
+
+@kernel
 def analytic_solutions(rots: Array, poss: Array, c: Array, lo: Array, hi: Array, rev: Array,
                        wide: Array, mid: Array, axes: Array, points: Array, tool: Array,
                        tol_p: float, tol_r: float, steps: int, max_step: float, slack: float,
@@ -126,16 +146,9 @@ def analytic_solutions(rots: Array, poss: Array, c: Array, lo: Array, hi: Array,
                                         tol_r, steps, max_step)
             if not ok:
                 continue
-            ik_kernel.wind(q, mid, lo, hi, rev, wide)
-            room = margin(q, lo, hi)
-            if room < 0.0 or not _keep(q, m, q_out, kept, distinct):
-                continue
-            ik_kernel.pose_error(q, rots[m], poss[m], axes, points, rev, tool, err, jac)
-            for i in range(6):
-                q_out[m, kept, i] = q[i]
-            manip_out[m, kept] = manipulability(jac)
-            margin_out[m, kept] = room
-            kept += 1
+            if _store(q, m, kept, rots, poss, lo, hi, rev, wide, mid, axes, points, tool,
+                      distinct, err, jac, q_out, manip_out, margin_out):
+                kept += 1
         count_out[m] = kept
 
 
@@ -164,14 +177,7 @@ def numeric_solutions(rots: Array, poss: Array, seeds: Array, lo: Array, hi: Arr
                                                      floor, max_step)
             if not ok:
                 continue
-            ik_kernel.wind(q, mid, lo, hi, rev, wide)
-            room = margin(q, lo, hi)
-            if room < 0.0 or not _keep(q, m, q_out, kept, distinct):
-                continue
-            ik_kernel.pose_error(q, rots[m], poss[m], axes, points, rev, tool, err, jac)
-            for i in range(n):
-                q_out[m, kept, i] = q[i]
-            manip_out[m, kept] = manipulability(jac)
-            margin_out[m, kept] = room
-            kept += 1
+            if _store(q, m, kept, rots, poss, lo, hi, rev, wide, mid, axes, points, tool,
+                      distinct, err, jac, q_out, manip_out, margin_out):
+                kept += 1
         count_out[m] = kept
