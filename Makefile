@@ -3,6 +3,8 @@
 PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
+WARM_UP := from usar_arm.planning.compiled import warm_up; warm_up(); \
+	from usar_arm.workspace.kernels import warm_up; warm_up()
 
 .PHONY: demo test test-all test-slow lint typecheck bench bench-quick load soak clean
 
@@ -10,14 +12,14 @@ $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
 	$(DEMO_VENV)/bin/pip install --quiet --upgrade pip
 	$(DEMO_VENV)/bin/pip install --quiet .
-	$(DEMO_VENV)/bin/python -c "from usar_arm.planning.compiled import warm_up; warm_up()"
+	$(DEMO_VENV)/bin/python -c "$(WARM_UP)"
 	touch $@
 
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
 	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray]"
-	$(TEST_VENV)/bin/python -c "from usar_arm.planning.compiled import warm_up; warm_up()"
+	$(TEST_VENV)/bin/python -c "$(WARM_UP)"
 	touch $@
 
 demo: $(DEMO_VENV)/.installed

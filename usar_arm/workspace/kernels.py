@@ -181,3 +181,17 @@ def numeric_solutions(rots: Array, poss: Array, seeds: Array, lo: Array, hi: Arr
                       distinct, err, jac, q_out, manip_out, margin_out):
                 kept += 1
         count_out[m] = kept
+
+
+def warm_up() -> None:
+    """Compile the kernels for the argument types :mod:`.solver` passes (numba caches the
+    machine code on disk; ``make`` runs this once after installing)."""
+    from usar_arm.workspace.solver import warm_up_arrays
+
+    for args in warm_up_arrays():
+        if len(args) == 21:
+            analytic_solutions(*args)
+        else:
+            numeric_solutions(*args)
+    z = np.zeros((1, 6))
+    manipulabilities(z, np.zeros((6, 3)), np.zeros((6, 3)), np.ones(6), np.eye(4))
