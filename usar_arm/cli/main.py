@@ -14,12 +14,14 @@ from usar_arm.cli import (
     picture_cmds,
     plan_cmd,
     sim_cmd,
+    tesseract_cmd,
     urdf_cmd,
 )
 from usar_arm.cli.common import EXIT_CODES_HELP, report_error
 from usar_arm.version import __version__
 
-COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd, calibrate_cmd]
+COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd, calibrate_cmd,
+            tesseract_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:
