@@ -52,6 +52,9 @@ def _pipeline(name: str, planners: tuple[tuple[str, str], ...]) -> list[str]:
     for terminal in ("DoneTask", "ErrorTask"):
         lines += [f"            {terminal}:", f"              class: {terminal}Factory",
                   "              config:", "                conditional: false"]
+    # Without trigger_abort the pipeline ends at ErrorTask *successfully*: a failed planner
+    # would hand back its unplanned input as a "successful" result.
+    lines.append("                trigger_abort: true")
     lines += _task("MinLengthTask", "MinLengthTaskFactory", "input_data", "output_data")
     order = ["MinLengthTask"]
     for k, (node, factory) in enumerate(planners):
