@@ -110,9 +110,6 @@ def choose_solver(chain: KinematicChain, options: TesseractOptions
 
 def _check(chain: KinematicChain, srdf: str, package: str) -> list[str]:
     problems = []
-    if not _PACKAGE.fullmatch(package):
-        problems.append(f"the folder name '{package}' cannot be a package name (letters, "
-                        "digits, '_', '.', '-')")
     if "</robot>" not in srdf or f'<group name="{GROUP}"' not in srdf:
         problems.append(f"the SRDF has no <robot> element with a '{GROUP}' group")
     if "plugin_config" in srdf:
@@ -209,9 +206,14 @@ def tesseract_config(chain: KinematicChain, urdf: str, srdf: str, package: str,
     example's motion.
 
     Raises:
-        ValidationError: listing every problem (folder name, SRDF, frames).
+        InvalidInputError: the folder name cannot be a package name.
+        ValidationError: listing every problem of the SRDF and the chain.
     """
     options = options or TesseractOptions()
+    if not _PACKAGE.fullmatch(package):
+        raise InvalidInputError(f"the folder name '{package}' cannot be a package name: "
+                                "Tesseract finds package://NAME/ by the folder's name (use "
+                                "letters, digits, '_', '.', '-')")
     problems = _check(chain, srdf, package)
     if problems:
         raise ValidationError(f"Tesseract config of {chain.name}", problems)
