@@ -1,4 +1,5 @@
-"""A Tesseract (ROS-Industrial) config folder for a described arm.
+"""A Tesseract (ROS-Industrial) config folder for a described arm (docs/conventions.md
+section 6).
 
 Files, for a robot ``R`` written into a folder ``PKG`` (the folder's name is its package name:
 Tesseract's ``GeneralResourceLocator`` resolves ``package://PKG/...`` to a folder called PKG
