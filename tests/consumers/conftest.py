@@ -8,10 +8,8 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 
-from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
 from usar_arm.robot import Robot, robot_from_files
 from usar_arm.urdf.tesseract import TesseractConfig, tesseract_config
 
@@ -41,26 +39,6 @@ def run_driver(request: dict[str, Any], work: Path, timeout: float = 600) -> dic
                           capture_output=True, text=True, timeout=timeout, check=False)
     assert done.returncode == 0, f"driver failed ({done.returncode}):\n{done.stderr[-4000:]}"
     return dict(json.loads(out.read_text()))
-
-
-def scene_items(scene: Scene) -> list[dict[str, Any]]:
-    """A scene's obstacles as the driver takes them (pose as a 4x4 matrix, meshes inline)."""
-    items = []
-    for o in scene.objects:
-        d: dict[str, Any] = {"name": o.name, "pose": np.asarray(o.pose).tolist(),
-                             "allow": list(o.allow)}
-        s = o.shape
-        if isinstance(s, Box):
-            d.update(type="box", size=list(s.size))
-        elif isinstance(s, CylinderShape):
-            d.update(type="cylinder", radius=s.radius, length=s.length)
-        elif isinstance(s, Sphere):
-            d.update(type="sphere", radius=s.radius)
-        elif isinstance(s, Mesh):
-            d.update(type="mesh", vertices=np.asarray(s.vertices).tolist(),
-                     faces=np.asarray(s.faces).tolist())
-        items.append(d)
-    return items
 
 
 def _spherical_wrist(folder: Path) -> tuple[Path, Path]:

@@ -8,8 +8,9 @@ answers the request with Tesseract alone:
 
 * ``description``: links, joints (type, limits) and the kinematic group's joints;
 * ``fk``: the tip's 4x4 pose at each configuration (the group's ``calcFwdKin``);
-* ``collisions``: per scene (obstacles added to the environment as links fixed to the root,
-  each ``allow`` pair added to the allowed collision matrix), the contact pairs of each
+* ``collisions``: per scene (read from the scene file itself: obstacles added to the
+  environment as links fixed to the root, meshes loaded by Tesseract, each ``allow`` pair
+  added to the allowed collision matrix), the contact pairs of each
   configuration from the default discrete manager, margin 0, ``ContactTestType_ALL``;
 * ``ik``: every solution of the group's default inverse kinematics for each pose, from its seed
   and then from up to ``ik_restarts`` random seeds while none comes back;
@@ -25,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 request = json.loads(Path(sys.argv[1]).read_text())
 FOLDER = Path(request["folder"])
@@ -80,6 +82,38 @@ def fk(env: te.Environment, qs: list) -> list:
     return [group.calcFwdKin(np.asarray(q, dtype=np.float64))[TIP].matrix().tolist() for q in qs]
 
 
+def _rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rz(yaw) Ry(pitch) Rx(roll), the scene files' fixed-axis convention."""
+    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
+                              np.cos(yaw), np.sin(yaw))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def read_scene(path: str) -> list:
+    """The obstacles of a usar-arm scene file, read here (box, cylinder, sphere, mesh; xyz, rpy,
+    allow), each with its 4x4 pose."""
+    doc = yaml.safe_load(Path(path).read_text())
+    items = []
+    for o in doc.get("objects") or []:
+        pose = np.eye(4)
+        pose[:3, :3] = _rpy(*o.get("rpy", [0.0, 0.0, 0.0]))
+        pose[:3, 3] = o["xyz"]
+        item = {"name": o["name"], "pose": pose.tolist(), "allow": o.get("allow", [])}
+        if "box" in o:
+            item.update(type="box", size=o["box"])
+        elif "cylinder" in o:
+            item.update(type="cylinder", **o["cylinder"])
+        elif "sphere" in o:
+            item.update(type="sphere", **o["sphere"])
+        else:
+            item.update(type="mesh", file=str(Path(path).parent / o["mesh"]["file"]),
+                        scale=float(o["mesh"].get("scale", 1.0)))
+        items.append(item)
+    return items
+
+
 def shape(item: dict) -> geo.Geometry:
     kind = item["type"]
     if kind == "box":
@@ -88,11 +122,8 @@ def shape(item: dict) -> geo.Geometry:
         return geo.Cylinder(item["radius"], item["length"])
     if kind == "sphere":
         return geo.Sphere(item["radius"])
-    vertices = common.VectorVector3d()
-    for v in item["vertices"]:
-        vertices.append(np.asarray(v, dtype=np.float64))
-    faces = np.array([x for f in item["faces"] for x in (3, *f)], dtype=np.int32)
-    return geo.Mesh(vertices, faces)
+    scale = item["scale"]
+    return geo.createMeshFromPath(item["file"], np.array([scale, scale, scale]))[0]
 
 
 def add_scene(env: te.Environment, items: list, root: str) -> None:
@@ -216,11 +247,12 @@ def main() -> None:
     if "ik" in request:
         out["ik"] = ik(env, request["ik"], root, request.get("ik_restarts", 0))
     if "collisions" in request:
-        out["collisions"] = {name: collisions(case["q"], case["scene"], root)
+        out["collisions"] = {name: collisions(case["q"], read_scene(case["scene_file"]), root)
                              for name, case in request["collisions"].items()}
     if "plans" in request:
         case = request["plans"]
-        out["plans"] = plans(case["problems"], case["scene"], root, case["pipeline"])
+        out["plans"] = plans(case["problems"], read_scene(case["scene_file"]), root,
+                             case["pipeline"])
     Path(sys.argv[2]).write_text(json.dumps(out))
 
 

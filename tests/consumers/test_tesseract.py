@@ -6,9 +6,10 @@ a script that imports nothing from usar-arm, loads the folder and answers; usar-
 
 * names and limits of every link and joint;
 * FK of tool0 at 1,000 random configurations, equal to usar-arm's to 1e-9 m and 1e-9 rad;
-* contacts at 1,000 random configurations in each shipped scene, the same pairs as usar-arm's
-  brute-force python-fcl judge (Tesseract never checks two bodies that are both fixed: the base
-  against a fixed obstacle; the judge's such pairs are counted apart and must be none);
+* contacts at 1,000 random configurations in each shipped scene (the driver reads the scene
+  file itself), the same pairs as usar-arm's brute-force python-fcl judge (Tesseract never
+  checks two bodies that are both fixed: the base against a fixed obstacle; the judge's such
+  pairs are counted apart and must be none);
 * its default inverse kinematics (OPW or KDL) on 100 poses, every solution put on the pose by
   usar-arm's FK (OPW 1e-9; KDL within its own stopping tolerance, 1e-5 m / 1e-4 rad). The seed
   is the true configuration moved up to 0.3 rad per joint; KDL (local) gets up to
@@ -38,12 +39,14 @@ from tests.consumers.conftest import (
     SPHERICAL_WRIST,
     configure,
     run_driver,
-    scene_items,
 )
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.robot import Robot
 from usar_arm.urdf.tesseract import KDL_SOLVER, OPW_SOLVER, TesseractConfig
 
+SCENE_FILES = Path(__file__).resolve().parents[2] / "usar_arm" / "data" / "scenes"
+"""The shipped scene files: the driver reads them itself (its own YAML reading, pose formula
+and Tesseract's mesh loader), usar-arm's judge through usar-arm's scene reader."""
 NAMES = ("KR60", "KR60-as-learnt", "Fanuc_M16iB20", SPHERICAL_WRIST)
 FK_SAMPLES, CONTACT_SAMPLES, IK_POSES, PLANS = 1000, 1000, 100, 5
 KDL_TOLERANCE = (1e-5, 1e-4)
@@ -98,12 +101,12 @@ def consumed(request: pytest.FixtureRequest, descriptions: dict[str, tuple[Path,
                  for q, s in zip(truth, seeds, strict=True)]
     req["ik_restarts"] = 0 if config.solver == OPW_SOLVER else IK_RESTARTS
     if name != SPHERICAL_WRIST:
-        req["collisions"] = {s: {"scene": scene_items(load_scene(s)),
+        req["collisions"] = {s: {"scene_file": str(SCENE_FILES / f"{s}.yaml"),
                                  "q": rng.uniform(lo, hi, (CONTACT_SAMPLES, chain.dof)).tolist()}
                              for s in SCENES}
         table = load_scene("table")
         world = robot.collision_world(table)
-        req["plans"] = {"scene": scene_items(table), "pipeline": "OMPLPipeline",
+        req["plans"] = {"scene_file": str(SCENE_FILES / "table.yaml"), "pipeline": "OMPLPipeline",
                         "problems": [_free_pair(robot, world, rng) for _ in range(PLANS)]}
     return Consumed(name, robot, config, req, run_driver(req, work))
 
