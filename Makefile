@@ -26,8 +26,11 @@ demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo
 
 # The default suite: unit, integration and end-to-end tests against the embedded simulator
-# (everything not marked slow), on both cores.
+# (everything not marked slow), on both cores. The consumer tests (tests/consumers, about 100 s
+# run alone) drive Tesseract in its own venv, bench/.venvs/tesseract (created here once, about
+# 2 minutes and 320 MB; never a dependency of the package).
 test: $(TEST_VENV)/.installed
+	$(PYTHON) bench/peers/venvs.py --only tesseract
 	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow and not realtime" tests
 
 # The long campaigns and slow end-to-end runs (marked slow): the 10-minute soak, the 64-client

@@ -26,6 +26,7 @@ import common
 import numpy as np
 from common import Context, peerio
 from scenes import from_json as scene_from_json
+from tesseract_config import with_tesseract
 from verify import Judge
 
 from usar_arm.robot import robot_from_files
@@ -87,12 +88,15 @@ def run(ctx: Context) -> dict[str, Any]:
     """Run the collision cases (one per scene) and return the stage document."""
     started = time.perf_counter()
     path, spec = ctx.problem("collision_KR60")
+    spec = with_tesseract(spec, ctx.work)
     solvers = [common.ours("usar-arm", "collision.py", "--api", "single",
                            note="CollisionWorld.in_collision(q), one call per configuration"),
                common.ours("usar-arm batch", "collision.py", "--api", "many",
                            note=f"CollisionWorld.in_collision_many, {BATCH} per call"),
                ctx.peer("mplib", "collision", "robot.set_qpos + is_state_colliding (FCL)"),
-               ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)")]
+               ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)"),
+               ctx.peer("tesseract", "collision", "setState + contactTest (Bullet, the "
+                        "config's default manager); tool0 FK compared with the judge's")]
     outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "collision_KR60")
     cases: dict[str, Any] = {}
     for name, group in _by_scene(spec["problems"]).items():
@@ -100,18 +104,25 @@ def run(ctx: Context) -> dict[str, Any]:
         truth = judge.colliding(np.array([p["q"] for p in group], float))
         truth_of = {p["id"]: bool(t) for p, t in zip(group, truth, strict=True)}
 
-        def check(p: dict[str, Any], r: dict[str, Any],
-                  truth_of: dict[Any, bool] = truth_of) -> dict[str, Any]:
+        def check(p: dict[str, Any], r: dict[str, Any], truth_of: dict[Any, bool] = truth_of,
+                  judge: Judge = judge) -> dict[str, Any]:
             t = truth_of[p["id"]]
             answer = r.get("collision") if r.get("success") else None
-            return {"verified": answer is not None and answer == t, "collision": answer,
-                    "truth": t}
+            row = {"verified": answer is not None and answer == t, "collision": answer,
+                   "truth": t}
+            if r.get("tool0") is not None:  # a peer's FK of tool0, against the judge's
+                judge.kin.update(np.array(p["q"], float))
+                row["fk_error_m"] = float(np.linalg.norm(
+                    judge.kin.frame("tool0")[:3, 3] - np.array(r["tool0"])[:3, 3]))
+            return row
 
         def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
             pairs = list(zip(raw["collision"], raw["truth"], strict=True))
+            fk = [e for e in raw.get("fk_error_m", []) if e is not None]
             return {"false_negatives": sum(1 for a, t in pairs if a is False and t),
                     "false_positives": sum(1 for a, t in pairs if a is True and not t),
-                    "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None}
+                    "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None,
+                    **({"fk_max_error_m": max(fk)} if fk else {})}
 
         sub = {**spec, "problems": group}
         ids = set(truth_of)

@@ -26,6 +26,7 @@ import os
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +35,7 @@ import numpy as np
 import verify
 from common import Context, peerio
 from scenes import from_json as scene_from_json
+from tesseract_config import with_tesseract
 
 from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits
@@ -85,11 +87,20 @@ def solver_main(argv: list[str] | None = None) -> int:
 
 
 # ------------------------------------------------------------------------------ the stage
-def _solvers(ctx: Context) -> list[common.Solver]:
+def _solvers(ctx: Context, case: str) -> list[common.Solver]:
+    ompl = ctx.peer("tesseract", "plan", "task composer OMPLPipeline, default profiles (5 s "
+                    "RRTConnect, not settable from Python), contact check and iterative spline")
+    trajopt = replace(ompl, name="tesseract trajopt",
+                      command=(*ompl.command, "--pipeline", "TrajOptPipeline"),
+                      note="task composer TrajOptPipeline, default profiles (seeded with the "
+                           "straight joint line), contact check and iterative spline")
+    if case != "KR60":
+        ompl = replace(ompl, skip=ompl.skip or "run on the KR60 problem set only")
+        trajopt = replace(trajopt, skip=trajopt.skip or "run on the KR60 problem set only")
     return [common.ours("usar-arm", "plan.py", note="plan_to_joints: RRTConnect + simplify"),
             ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify), as plan_qpos; "
                      "checks edges at discrete states only"),
-            ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter")]
+            ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter"), ompl, trajopt]
 
 
 def run(ctx: Context) -> dict[str, Any]:
@@ -98,7 +109,9 @@ def run(ctx: Context) -> dict[str, Any]:
     cases: dict[str, Any] = {}
     for case, key in CASES:
         path, spec = ctx.problem(key)
-        outcomes = common.run_alternating(spec, _solvers(ctx), ctx.work, ctx.rounds, key)
+        if case == "KR60":
+            spec = with_tesseract(spec, ctx.work)
+        outcomes = common.run_alternating(spec, _solvers(ctx, case), ctx.work, ctx.rounds, key)
         robot = robot_from_files(spec["urdf"], spec["srdf"])
         judges = {n: verify.Judge.for_scene(spec, n) for n in spec["scenes"]}
         budget = float(spec["time_limit_s"])

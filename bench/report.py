@@ -169,6 +169,16 @@ def collision_section(doc: dict[str, Any]) -> list[str]:
                 f"({fmt_pct(frac)} in collision)", "",
                 *table([*HEAD, "missed / invented contacts", NOTES],
                        solver_rows("collision", case, fn))]
+    fk = [(n, c["solvers"][n]["summary"]["fk_max_error_m"]) for c in doc["cases"].values()
+          for n in c["solvers"] if (c["solvers"][n].get("summary") or {}).get("fk_max_error_m")
+          is not None]
+    if fk:
+        worst: dict[str, float] = {}
+        for n, e in fk:
+            worst[n] = max(worst.get(n, 0.0), e)
+        out += ["FK of tool0 at the same configurations against the judge's (Pinocchio on the "
+                "same URDF), largest position difference over every scene: " + ", ".join(
+                    f"{n} {e:.2g} m" for n, e in worst.items()) + ".", ""]
     out += ["### Cost against the number of obstacles (KR60, boxes of 0.1 m), mean per "
             "configuration", ""]
     names = list(next(iter(doc["cases"].values()))["solvers"])

@@ -141,3 +141,11 @@ def test_the_version_comes_from_the_package_metadata() -> None:
     literal = [p for p in PACKAGE.rglob("*.py") if "__version__ = \"" in p.read_text()
                or ("version(\"usar-arm\")" in p.read_text() and p.name != "version.py")]
     assert literal == [], f"a second version string in {literal}"
+
+
+def test_the_package_never_imports_tesseract() -> None:
+    """Tesseract is a consumer of what usar-arm writes (tests/consumers, bench peers, each in
+    its own venv), never a dependency."""
+    users = [module for module, path in _modules() for name in _imports(path)
+             if name.split(".")[0] in ("tesseract_robotics", "tesseract_robotics_viewer")]
+    assert users == []

@@ -32,6 +32,10 @@ PEERS: dict[str, list[str]] = {
     "opw": ["py-opw-kinematics==1.3.0"],
     "ikpy": ["ikpy==4.2.1"],
     "toppra": ["toppra==0.6.10"],
+    # ROS-Industrial's planning stack (OMPL, TrajOpt, OPW/KDL, Bullet/FCL): the consumer tests'
+    # instrument (tests/consumers; pyyaml: it reads the scene files itself) as well as a
+    # benchmark peer; never a dependency of usar-arm.
+    "tesseract": ["tesseract-robotics==0.5.1", "pyyaml==6.0.3"],
 }
 MARKER = ".installed"
 

@@ -12,8 +12,10 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate")
-PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"}, "collision": {"mplib", "roboplan"},
-         "plan": {"mplib", "roboplan"}, "timing": {"toppra", "roboplan"},
+PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"},
+         "collision": {"mplib", "roboplan", "tesseract"},
+         "plan": {"mplib", "roboplan", "tesseract", "tesseract trajopt"},
+         "timing": {"toppra", "roboplan"},
          "discovery": set(), "execution": set(), "calibrate": set()}
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -75,3 +75,16 @@ def test_the_rviz_layout_opens_the_motion_planning_display(package: tuple) -> No
     classes = [d["Class"] for d in doc["Visualization Manager"]["Displays"]]
     assert "moveit_rviz_plugin/MotionPlanning" in classes
     assert doc["Visualization Manager"]["Global Options"]["Fixed Frame"] == "base_link"
+
+
+def test_the_package_holds_exactly_the_file_list_the_readme_gives(package: tuple) -> None:
+    _, files = package
+    config = {"KR60.urdf", "KR60.srdf", "KR60.urdf.xacro", "KR60.ros2_control.xacro",
+              "initial_positions.yaml", "kinematics.yaml", "joint_limits.yaml",
+              "pilz_cartesian_limits.yaml", "moveit_controllers.yaml", "ros2_controllers.yaml",
+              "ompl_planning.yaml", "sensors_3d.yaml", "moveit.rviz"}
+    launches = {"demo", "move_group", "moveit_rviz", "rsp", "setup_assistant",
+                "spawn_controllers", "static_virtual_joint_tfs", "warehouse_db"}
+    assert set(files) == ({"package.xml", "CMakeLists.txt", ".setup_assistant"}
+                          | {f"config/{c}" for c in config}
+                          | {f"launch/{n}.launch.py" for n in launches})

@@ -17,13 +17,14 @@ from usar_arm.cli import (
     plan_cmd,
     reach_cmd,
     sim_cmd,
+    tesseract_cmd,
     urdf_cmd,
 )
 from usar_arm.cli.common import EXIT_CODES_HELP, report_error
 from usar_arm.version import __version__
 
 COMMANDS = [demo_cmd, sim_cmd, urdf_cmd, ik_cmd, plan_cmd, execute_cmd, calibrate_cmd,
-            reach_cmd, place_cmd, batch_cmd]
+            tesseract_cmd, reach_cmd, place_cmd, batch_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

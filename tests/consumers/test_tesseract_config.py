@@ -1,0 +1,73 @@
+"""``usar-arm tesseract-config`` end to end: the folder it writes is complete, its
+``plan_example.py`` (quoted whole in its README) plans in the Tesseract venv, and bad input is
+refused with a clear message before anything is written."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.consumers.conftest import ROOT, tesseract_python
+
+USAR_ARM = str(Path(sys.executable).parent / "usar-arm")
+AS_LEARNT = ROOT / "robots" / "generated" / "as-learnt" / "KR60.urdf"
+FILES = {"KR60.urdf", "KR60.srdf", "KR60.kinematics_plugins.yaml",
+         "KR60.contact_managers_plugins.yaml", "task_composer_plugins.yaml", "package.xml",
+         "plan_example.py", "README.md"}
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([USAR_ARM, "tesseract-config", *args], capture_output=True, text=True,
+                          timeout=300, check=False)
+
+
+def test_the_folder_is_complete_and_its_example_plans(tmp_path: Path) -> None:
+    out = tmp_path / "kr60_tesseract"
+    done = _cli("--urdf", str(AS_LEARNT), "--out", str(out), "--json")
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    assert doc["package"] == "kr60_tesseract" and doc["ik_solver"] == "KDLInvKinChainLMA"
+    assert doc["reason"].startswith("KDL: OPW forward kinematics deviates")
+    assert {Path(f).name for f in doc["files"]} == FILES == {p.name for p in out.iterdir()}
+    srdf = (out / "KR60.srdf").read_text()
+    assert '<kinematics_plugin_config filename="package://kr60_tesseract/KR60.kinematics_' \
+           'plugins.yaml"/>' in srdf
+    assert "contact_managers_plugin_config" in srdf
+    script = (out / "plan_example.py").read_text()
+    assert script.rstrip() in (out / "README.md").read_text()
+    run = subprocess.run([str(tesseract_python()), str(out / "plan_example.py")], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    rows = re.findall(r"t = +([0-9.]+) s +q = \[([^\]]+)\]", run.stdout)
+    assert len(rows) >= 2
+    first = [float(x) for x in rows[0][1].split()]
+    last = [float(x) for x in rows[-1][1].split()]
+    assert first == pytest.approx([0.0] * 6) and last == pytest.approx([0.5] + [0.0] * 5)
+    assert float(rows[-1][0]) > 0.0
+
+
+def test_discovering_the_robot_writes_the_same_folder(tmp_path: Path) -> None:
+    out = tmp_path / "kr60_t"
+    done = _cli("--robot", "KR60", "--out", str(out), "-q")
+    assert done.returncode == 0, done.stderr
+    assert {p.name for p in out.iterdir()} == FILES
+    assert "wrote Tesseract config kr60_t (8 files, inverse kinematics KDLInvKinChainLMA)" \
+        in done.stdout
+
+
+def test_bad_input_is_refused_and_nothing_is_written(tmp_path: Path) -> None:
+    bad = tmp_path / "no room"
+    done = _cli("--urdf", str(AS_LEARNT), "--out", str(bad))
+    assert done.returncode == 65 and "cannot be a package name" in done.stderr
+    assert not bad.exists()
+    lonely = tmp_path / "in" / "KR60.urdf"
+    lonely.parent.mkdir()
+    lonely.write_text(AS_LEARNT.read_text())
+    done = _cli("--urdf", str(lonely), "--out", str(tmp_path / "out"))
+    assert done.returncode == 65 and "no SRDF beside the URDF" in done.stderr
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,86 @@
+"""``usar-arm tesseract-config``: a Tesseract (ROS-Industrial) config folder for a robot."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
+from usar_arm.errors import EXIT_OK, FileFormatError
+from usar_arm.fileio import write_tree_atomic
+from usar_arm.robot import robot_from_files
+from usar_arm.urdf.tesseract import TesseractConfig, TesseractOptions, tesseract_config
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "tesseract-config", help="write a Tesseract config folder for a robot",
+        description="Discover ROBOT as `usar-arm urdf` does (or read --urdf/--srdf) and write a "
+                    "Tesseract config folder into DIR: the URDF, the SRDF with Tesseract's "
+                    "kinematics_plugin_config and contact_managers_plugin_config entries, the "
+                    "kinematics plugins (OPW inverse kinematics when the arm is OPW within "
+                    "--opw-tolerance, measured against its own forward kinematics; KDL "
+                    "otherwise), the contact managers, task composer pipelines, package.xml, "
+                    "plan_example.py and a README. DIR's name is the package name its "
+                    "package:// URLs use.")
+    add_server_args(p)
+    add_description_args(p)
+    p.add_argument("--urdf", default=None, metavar="FILE",
+                   help="describe this URDF instead of discovering the robot (its SRDF is read "
+                        "from beside it unless --srdf is given)")
+    p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
+    p.add_argument("--out", required=True, metavar="DIR", help="folder to write")
+    p.add_argument("--opw-tolerance", type=float, nargs=2, default=(1e-6, 1e-6),
+                   metavar=("M", "RAD"),
+                   help="largest deviation of OPW forward kinematics from the arm's (position "
+                        "in m, rotation in rad) for OPW to be chosen (default 1e-6 1e-6)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_verbosity(p)
+    p.set_defaults(handler=run)
+
+
+def _from_files(args: argparse.Namespace, folder: Path, options: TesseractOptions
+                ) -> TesseractConfig:
+    robot = robot_from_files(args.urdf, args.srdf)
+    srdf_path = Path(args.srdf) if args.srdf else Path(args.urdf).with_name(
+        Path(args.urdf).name.removesuffix(".urdf") + ".srdf")
+    if not srdf_path.is_file():
+        raise FileFormatError(str(srdf_path), "no SRDF beside the URDF: Tesseract needs its "
+                                              "groups and disabled collisions (give --srdf)")
+    return tesseract_config(robot.chain, robot.urdf, srdf_path.read_text(), folder.name,
+                            robot.states.get("home"),
+                            options)
+
+
+def run(args: argparse.Namespace) -> int:
+    setup_logging(verbosity(args))
+    folder = Path(args.out).resolve()
+    options = TesseractOptions(*args.opw_tolerance)
+    if args.urdf:
+        config = _from_files(args, folder, options)
+    else:
+        from usar_arm.embedded import describe
+
+        desc = describe(options_from(args))
+        config = tesseract_config(desc.chain, desc.urdf, desc.srdf, folder.name, desc.home,
+                                  options)
+    paths = write_tree_atomic(folder, dict(sorted(config.files.items(),
+                                                  key=lambda kv: kv[0] == "README.md")))
+    if args.json:
+        print_json({"package": config.package, "folder": str(folder),
+                    "files": sorted(str(p) for p in paths), "ik_solver": config.solver,
+                    "reason": config.reason,
+                    "opw": None if config.opw is None else {
+                        **{k: getattr(config.opw.parameters, k) for k in (
+                            "a1", "a2", "b", "c1", "c2", "c3", "c4", "offsets",
+                            "sign_corrections")},
+                        "position_error_m": config.opw.position_error_m,
+                        "rotation_error_rad": config.opw.rotation_error_rad}})
+        return EXIT_OK
+    err(config.reason)
+    out(f"wrote Tesseract config {config.package} ({len(paths)} files, inverse kinematics "
+        f"{config.solver}) in {folder}")
+    for p in sorted(paths):
+        out(f"  {p}")
+    return EXIT_OK
