@@ -38,6 +38,7 @@ from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
+from usar_arm.usarsim.numbers import ROUNDED_SCALARS
 
 log = logging.getLogger(__name__)
 FLIP = transform(FLIP_X)
@@ -220,7 +221,8 @@ class _Recorder:
                 continue
             seen.add(key)
             out.append(Measurement(q=q, position=loc, rpy=rpy, step_m=step_m,
-                                   step_rad=step_rad, step_q=step_q, label=f"t={t:.4f} s"))
+                                   step_rad=step_rad, step_q=step_q, q_rounded=ROUNDED_SCALARS,
+                                   label=f"t={t:.4f} s"))
         return out
 
 

@@ -50,8 +50,9 @@ class Measurement:
     each printed number truncated toward zero to this step (0: not quantised). ``sigma_m`` /
     ``sigma_rad``: 1-sigma noise of each number. ``label``: where it came from. ``step_q``: the
     joint values as printed, each truncated toward zero to this step (rad, or m for prismatic
-    joints; 0: exact); the fit uses their intervals' middles and widens the pose intervals by
-    what the joint intervals allow.
+    joints; 0: exact), or rounded to it with ``q_rounded`` (ASTA prints raw engine floats,
+    rounded); the fit uses their intervals' middles and widens the pose intervals by what the
+    joint intervals allow.
     """
 
     q: Array
@@ -63,6 +64,7 @@ class Measurement:
     sigma_rad: float = 0.0
     label: str = ""
     step_q: float = 0.0      # each joint value printed truncated toward zero to this step
+    q_rounded: bool = False  # the joint values were printed rounded to step_q, not truncated
 
 
 @dataclass(frozen=True)
