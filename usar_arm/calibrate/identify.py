@@ -36,7 +36,7 @@ from usar_arm.spatial import Array
 
 # The quantisation model "auto" stands for: measured best on synthetic quantised readings
 # (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
-AUTO_MODEL = "set-membership"
+AUTO_MODEL = "likelihood"
 MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
 
 
@@ -201,7 +201,9 @@ def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t
 def _subset(t: qm.Targets, keep: Array) -> qm.Targets:
     return qm.Targets(t.mid[keep], t.half[keep], t.sigma[keep], t.used[keep],
                       t.quantised_rot[keep], t.rotations[keep],
-                      tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k))
+                      tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k),
+                      None if t.joint_sigma is None else t.joint_sigma[keep],
+                      None if t.joint_extra is None else t.joint_extra[keep])
 
 
 def _std(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
