@@ -16,43 +16,28 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from usar_arm.arm import Arm
 from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
-from usar_arm.calibrate.measurements import Measurement
-from usar_arm.calibrate.observability import select_poses
 from usar_arm.calibrate.parameters import replace_origin
 from usar_arm.calibrate.report import calibration_dict
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.validation import split_held_out
-from usar_arm.control.splice import join_trajectories
-from usar_arm.control.trajectory import MotionLimits, Trajectory
+from usar_arm.calibration_tour import Progress, choose_configurations, collect
 from usar_arm.description import DescribeOptions, Description, write_description
-from usar_arm.errors import CalibrationError, ExecutionAbortedError, InvalidInputError
+from usar_arm.errors import CalibrationError, InvalidInputError
 from usar_arm.robot import CALIBRATED
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
-from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.inbox import Received
-from usar_arm.usarsim.numbers import ROUNDED_SCALARS
 
 log = logging.getLogger(__name__)
 FLIP = transform(FLIP_X)
-SPEED_SCALES = (1.0, 0.5, 0.25)
-"""The tour runs at the arm's full limits: readings pair a sensor pose with the joint values of
-the same instant, so how closely the arm follows the plan matters only for safety (the
-executor's tracking bound), and a fast tour gives more different readings a second. An arm
-whose drives cannot follow its full limits within that bound (the Fanuc's rail) tours again at
-half of them."""
 HOLD_OUT_EVERY = 5
 """Every fifth reading is held out for validation and never fitted."""
 
-Progress = Callable[[int, int], None]
-"""Called with (poses reached, poses planned)."""
 
 
 @dataclass(frozen=True)
@@ -131,129 +116,6 @@ def _tip_joint(arm: Arm, urdf: str, frame: str, tip_step: float) -> tuple[str | 
         f"the tip sensor {frame} is {gap * 1e3:.1f} mm from the printed Tip: the sensor-to-Tip "
         "offset is not observable from its readings, so the printed Tip offset (step "
         f"{tip_step * 1e3:.0f} mm) stays the only source of the tool point")
-
-
-def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) -> Array:
-    """``count`` collision-free configurations (in ``scene``, 5 cm clear) maximising the
-    identification Jacobian's smallest singular value, the arm's home first."""
-    world = arm.robot.collision_world(arm.world(scene).scene, padding=0.05)
-    frame = str(arm.robot.tip_sensor)
-    chosen = select_poses(arm.urdf, frame, count, lambda q: not world.in_collision(q), seed)
-    return np.asarray(chosen, float)
-
-
-def _at_rest(arm: Arm, tolerance: float = 1e-3, timeout: float = 10.0) -> Array:
-    """The arm's joints once two ASTA readings 0.3 s of simulated time apart differ by less
-    than ``tolerance`` (rad or m) in every joint (an aborted tour leaves it moving)."""
-    deadline = time.monotonic() + timeout
-    q, t = arm.joints(), arm.asta_time()
-    while True:
-        later = arm.joints(newer_than=t + 0.3)
-        if float(np.max(np.abs(later - q))) < tolerance:
-            return later
-        if time.monotonic() > deadline:
-            raise CalibrationError(f"the arm did not come to rest within {timeout:.0f} s "
-                                   f"(still moving by {np.max(np.abs(later - q)):.4f})")
-        q, t = later, arm.asta_time()
-
-
-def _tour(arm: Arm, configurations: Array, scene: str | None, scale: float) -> Trajectory:
-    """One trajectory from the arm's joints through ``configurations`` (nearest first), each
-    leg planned collision-free from rest to rest at ``scale`` of the limits."""
-    pieces: list[tuple[float, Trajectory]] = []
-    start, clock = _at_rest(arm), 0.0
-    limits = MotionLimits.from_chain(arm.robot.chain)
-    for q in tour_order(start, configurations, limits.velocity):
-        traj = arm.plan(joints=q, scene=scene, start=start, speed_scale=scale).trajectory
-        pieces.append((clock, traj))
-        start, clock = traj.q[-1], clock + traj.duration
-    return join_trajectories(pieces)
-
-
-def tour_order(start: Array, configurations: Array, velocity: Array) -> Array:
-    """``configurations`` in nearest-neighbour order from ``start``, distance being the time
-    the slowest joint needs at its velocity limit (s): a short tour gives the same readings'
-    spread in less time (measured: 14 poses, 56 s of motion in the chosen order)."""
-    left = list(range(len(configurations)))
-    order: list[int] = []
-    here = np.asarray(start, float)
-    while left:
-        times = [float(np.max(np.abs(configurations[k] - here) / velocity)) for k in left]
-        k = left.pop(int(np.argmin(times)))
-        order.append(k)
-        here = configurations[k]
-    return np.asarray(configurations, float)[order]
-
-
-class _Recorder:
-    """Every tip-sensor reading the server streams, paired with the ASTA line of the same
-    simulated time (the server prints both from one state, ten times a second)."""
-
-    def __init__(self, actuator: str, tip_sensor: str, wire_links: tuple[int, ...]):
-        self.actuator, self.tip_sensor, self.links = actuator, tip_sensor.lower(), wire_links
-        self.joints: dict[float, tuple[Array, float]] = {}
-        self.poses: dict[float, tuple[Array, Array, float, float]] = {}
-
-    def __call__(self, rec: Received) -> None:
-        msg = rec.message
-        if isinstance(msg, m.Asta) and msg.name == self.actuator and msg.time is not None:
-            values = dict(msg.values)
-            if all(k in values for k in self.links):
-                self.joints[msg.time] = (np.array([values[k] for k in self.links], float),
-                                         rec.step("Value"))
-        elif (isinstance(msg, m.Sen) and (msg.name or "").lower() == self.tip_sensor
-              and msg.time is not None and msg.location is not None
-              and msg.orientation is not None):
-            self.poses[msg.time] = (np.array(msg.location, float),
-                                    np.array(msg.orientation, float), rec.step("Location"),
-                                    rec.step("Orientation"))
-
-    def measurements(self) -> list[Measurement]:
-        """One measurement per distinct printed reading, in time order (a reading repeated
-        while the arm rests carries no new information and would weigh that pose more)."""
-        out: list[Measurement] = []
-        seen: set[tuple[float, ...]] = set()
-        for t in sorted(set(self.joints) & set(self.poses)):
-            q, step_q = self.joints[t]
-            loc, rpy, step_m, step_rad = self.poses[t]
-            key = tuple(np.concatenate([q, loc, rpy]).tolist())
-            if key in seen:
-                continue
-            seen.add(key)
-            out.append(Measurement(q=q, position=loc, rpy=rpy, step_m=step_m,
-                                   step_rad=step_rad, step_q=step_q, q_rounded=ROUNDED_SCALARS,
-                                   label=f"t={t:.4f} s"))
-        return out
-
-
-def collect(arm: Arm, configurations: Array, scene: str | None,
-            progress: Progress | None = None) -> list[Measurement]:
-    """Move through ``configurations`` in one motion (each leg planned collision-free in
-    ``scene`` from rest to rest, the legs joined, no settling between them) and keep every
-    tip-sensor reading taken on the way, in motion and at rest, with the joint values the
-    server reported at the same simulated time. The arm's motion moves each printed number
-    through its step, so the truncation dithers by itself."""
-    client = arm.client
-    if client is None:
-        raise InvalidInputError("calibration needs an arm connected to a server")
-    recorder = _Recorder(str(arm.robot.actuator), str(arm.robot.tip_sensor),
-                         arm.robot.wire_links)
-    unsubscribe = client.subscribe(recorder)
-    try:
-        for scale in SPEED_SCALES:
-            try:
-                arm.execute(_tour(arm, configurations, scene, scale))
-                break
-            except ExecutionAbortedError as exc:
-                if scale == SPEED_SCALES[-1]:
-                    raise
-                log.warning("the calibration tour at %.0f %% of the limits was aborted (%s); "
-                            "touring again slower", 100 * scale, exc)
-    finally:
-        unsubscribe()
-    if progress is not None:
-        progress(len(configurations), len(configurations))
-    return recorder.measurements()
 
 
 def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,

@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 from usar_arm.arm import Arm
-from usar_arm.calibration import FLIP, _fold_base, _Recorder, _usarsim_axes, tour_order
+from usar_arm.calibration import FLIP, _fold_base, _usarsim_axes
+from usar_arm.calibration_tour import Recorder, drive_caps, tour_order
 from usar_arm.cli import main
+from usar_arm.control.drive import DriveModel
 from usar_arm.embedded import accuracy_report
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.sim.robot_spec import builtin_robots
@@ -31,7 +33,7 @@ def _received(line: str) -> Received:
 
 
 def test_readings_pair_the_sensor_with_the_joints_of_the_same_instant() -> None:
-    rec = _Recorder("KR60Arm", "KR60ArmTipTruth", (1, 2))
+    rec = Recorder("KR60Arm", "KR60ArmTipTruth", (1, 2))
     lines = [
         "ASTA {Time 1.1000} {Name KR60Arm} {Link 1} {Value 0.1234} {Link 2} {Value -0.5000}",
         "SEN {Time 1.1000} {Type GroundTruth} {Name KR60ArmTipTruth} {Location 1.234,0.500,"
@@ -67,6 +69,16 @@ def test_the_tour_visits_every_pose_once_nearest_first() -> None:
         times = np.max(np.abs(rest - here) / speed, axis=1)
         assert float(np.max(np.abs(q - here) / speed)) == pytest.approx(float(times.min()))
         here = q
+
+
+def test_the_tour_caps_only_the_joints_whose_drives_cannot_follow() -> None:
+    """A drive's stiffness is its force limit, so its feedforward lead (lag v + inertia a)
+    saturates at 1 rad or m; an under-damped drive (the Fanuc's carriage) gets half of that."""
+    drive = DriveModel(np.array([0.35, 0.2, 0.5, 0.165]), np.zeros(4), np.zeros(4),
+                       inertia=np.array([0.35, 0.0, 0.0, 0.001]))
+    caps = drive_caps(drive, np.array([1.0, 6.1, 9.08, 2.234]),
+                      np.array([2.0, 12.0, 18.0, 6.11]))
+    np.testing.assert_allclose(caps, [0.5 / 1.05, 1 / 1.22, 1 / 4.54, 1.0], rtol=1e-3)
 
 
 def test_turning_the_sensor_frame_twice_gives_the_urdf_back() -> None:
