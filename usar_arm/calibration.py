@@ -1,6 +1,8 @@
-"""Calibrating a live arm: poses chosen for observability, readings of the arm's tip
-GroundTruth sensor (dithered so that truncation falls at different places in its steps), the
-fit, validation on held-out readings, and the calibrated description.
+"""Calibrating a live arm: a tour reading the arm's tip GroundTruth sensor
+(:mod:`usar_arm.calibration_tour`), the fit, validation on held-out readings, and the calibrated
+description. The fit depends on the as-learnt description and the tour's readings alone
+(:class:`~usar_arm.calibrate.tour_readings.TourReadings`), so a description calibrated from a
+readings file is the same byte for byte as the one calibrated on the tour that recorded them.
 
 The readings are the sensor's world pose as the server prints it (USARSim world, z down), so the
 fit runs in that frame: the measured frame is the sensor's frame with USARSim's axes (the URDF's
@@ -17,18 +19,21 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
 from usar_arm.arm import Arm
 from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
 from usar_arm.calibrate.parameters import replace_origin
-from usar_arm.calibrate.report import calibration_dict
+from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.residuals import Residuals
+from usar_arm.calibrate.tour_readings import TourReadings, read_tour
 from usar_arm.calibrate.validation import split_held_out
 from usar_arm.calibration_tour import Progress, choose_configurations, collect
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.errors import CalibrationError, InvalidInputError
+from usar_arm.model import JointType
 from usar_arm.robot import CALIBRATED
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
@@ -43,7 +48,8 @@ HOLD_OUT_EVERY = 5
 @dataclass(frozen=True)
 class WireCalibration:
     """A calibration made on the wire: the fit, its validation on held-out readings, the
-    calibrated URDF text and what fixes the tool point."""
+    calibrated URDF text, what fixes the tool point, and the tour's readings (``seconds``:
+    how long the tour took)."""
 
     calibration: Calibration
     validation: Residuals
@@ -53,6 +59,7 @@ class WireCalibration:
     seconds: float
     tool_point: str
     tip_joint: str | None
+    tour: TourReadings | None = None
 
 
 def _usarsim_axes(urdf: str, joint: str, turn: Array) -> str:
@@ -97,7 +104,7 @@ def _mount_joint(urdf: str, frame: str) -> str:
     raise CalibrationError(f"the measured frame '{frame}' hangs from no fixed joint in the URDF")
 
 
-def _tip_joint(arm: Arm, urdf: str, frame: str, tip_step: float) -> tuple[str | None, str]:
+def _tip_joint(urdf: str, frame: str, tip_step: float) -> tuple[str | None, str]:
     """The fixed joint that carries the flange when the sensor sits at the Tip, and a sentence
     saying what fixes the tool point."""
     chain, _ = parse_urdf(urdf)
@@ -118,10 +125,33 @@ def _tip_joint(arm: Arm, urdf: str, frame: str, tip_step: float) -> tuple[str | 
         f"{tip_step * 1e3:.0f} mm) stays the only source of the tool point")
 
 
+def fit_tour(urdf: str, tour: TourReadings, tip_step: float,
+             options: CalibrationOptions | None = None) -> WireCalibration:
+    """Fit ``urdf`` (as learnt) to a tour's readings, validate on the held-out ones and build
+    the calibrated URDF (see the module; ``tip_step``: the Tip's printed step, m). Raises
+    :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
+    does not hold on the held-out readings."""
+    frame = tour.sensor
+    mount = _mount_joint(urdf, frame)
+    fit_urdf = _usarsim_axes(urdf, mount, FLIP)
+    tip_joint, tool_point = _tip_joint(urdf, frame, tip_step)
+    fit, held = split_held_out(list(tour.measurements), HOLD_OUT_EVERY)
+    base_guess = tour.platform_pose() @ FLIP
+    cal = identify(fit_urdf, frame, fit, base_guess, options or CalibrationOptions())
+    validation = cal.validate(fit_urdf, frame, held)
+    check_validated(cal, validation)
+    calibrated = _usarsim_axes(cal.apply(fit_urdf), mount, FLIP)
+    if tip_joint is not None:
+        calibrated = _tip_onto_sensor(calibrated, urdf, tip_joint, mount)
+    calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
+    return WireCalibration(cal, validation, calibrated, tour.poses, len(tour.measurements),
+                           tour.seconds, tool_point, tip_joint, tour)
+
+
 def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
                   seed: int = 0, progress: Progress | None = None,
                   options: CalibrationOptions | None = None) -> WireCalibration:
-    """Calibrate ``arm`` on its server (see the module). Raises
+    """Calibrate ``arm`` on its server: tour it, then :func:`fit_tour`. Raises
     :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
     does not hold on the held-out readings; nothing is changed then."""
     sensor = arm.tip_sensor()
@@ -133,50 +163,53 @@ def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
     if poses < 3:
         raise InvalidInputError(f"calibration needs at least 3 poses (got {poses})")
     start = time.monotonic()
-    frame = str(arm.robot.tip_sensor)
-    mount = _mount_joint(arm.urdf, frame)
-    fit_urdf = _usarsim_axes(arm.urdf, mount, FLIP)
-    tip_joint, tool_point = _tip_joint(arm, arm.urdf, frame, arm.tip_step())
+    chain = arm.robot.chain
+    _mount_joint(arm.urdf, str(arm.robot.tip_sensor))  # a sensor the fit can use, first
     configurations = choose_configurations(arm, poses, scene, seed)
     sensor.read()  # the platform's pose, for the base guess
     readings = collect(arm, configurations, scene, progress)
-    fit, held = split_held_out(readings, HOLD_OUT_EVERY)
-    base_guess = sensor.platform_pose() @ FLIP
-    cal = identify(fit_urdf, frame, fit, base_guess, options or CalibrationOptions())
-    validation = cal.validate(fit_urdf, frame, held)
-    calibrated = _usarsim_axes(cal.apply(fit_urdf), mount, FLIP)
-    if tip_joint is not None:
-        calibrated = _tip_onto_sensor(calibrated, arm.urdf, tip_joint, mount)
-    calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
-    return WireCalibration(cal, validation, calibrated, len(configurations), len(readings),
-                           time.monotonic() - start, tool_point, tip_joint)
+    tour = TourReadings(tuple(readings), str(arm.robot.tip_sensor), chain.joint_names,
+                        TourReadings.platform_numbers(sensor.platform_pose()),
+                        len(configurations), round(time.monotonic() - start, 1),
+                        tuple(j.type is JointType.PRISMATIC for j in chain.actuated_joints))
+    return fit_tour(arm.urdf, tour, arm.tip_step(), options)
 
 
 def calibrate_description(desc: Description, options: DescribeOptions, poses: int = 14,
                           scene: str | None = None, seed: int = 0,
-                          progress: Progress | None = None
+                          progress: Progress | None = None, readings: str | Path | None = None
                           ) -> tuple[Description, WireCalibration]:
     """Spawn the arm ``desc`` describes again (same server and options), calibrate it, and
     return the calibrated description (its URDF, and discovery.json with a ``calibration``
     section; on the embedded simulator also the calibrated description's accuracy against the
     simulator's own model) and the calibration. The calibrated description is cached beside
-    the as-learnt one, so that the next plan or demo of this arm uses it."""
+    the as-learnt one, so that the next plan or demo of this arm uses it. With ``readings``
+    (a tour's readings file) nothing is spawned: the fit uses those readings."""
     if options.frame != "z-up":
         raise InvalidInputError("calibration works on REP-103 (z-up) descriptions; describe "
                                 f"with --frame z-up (got {options.frame})")
-    with Arm.connect(robot=options.robot, host=options.host, port=options.port,
-                     start=options.start, timeout=options.timeout, naming=options.naming,
-                     wire_precision=options.wire_precision,
-                     velocity_limits=options.velocity_limits, calibrated=False) as arm:
-        if arm.urdf != desc.urdf:
-            raise CalibrationError("the arm spawned for calibration is described differently "
-                                   "from the description to calibrate (did the server "
-                                   "change?)")
-        result = calibrate_arm(arm, poses, scene, seed, progress)
-        entry = arm.cache_entry
+    entry = None
+    if readings is not None:
+        chain = desc.chain
+        tour = read_tour(readings, chain.joint_names,
+                         [j.type is JointType.PRISMATIC for j in chain.actuated_joints],
+                         chain.lower(), chain.upper())
+        tip_step = float(desc.discovery.get("precision", {}).get("tip_resolution_m") or 0.0)
+        result = fit_tour(desc.urdf, tour, tip_step)
+    else:
+        with Arm.connect(robot=options.robot, host=options.host, port=options.port,
+                         start=options.start, timeout=options.timeout, naming=options.naming,
+                         wire_precision=options.wire_precision,
+                         velocity_limits=options.velocity_limits, calibrated=False) as arm:
+            if arm.urdf != desc.urdf:
+                raise CalibrationError("the arm spawned for calibration is described "
+                                       "differently from the description to calibrate (did "
+                                       "the server change?)")
+            result = calibrate_arm(arm, poses, scene, seed, progress)
+            entry = arm.cache_entry
     notes = (f"{result.readings} tip-sensor readings on a tour through {result.poses} poses "
-             f"({result.seconds:.0f} s); every {HOLD_OUT_EVERY}th reading held out",
-             result.tool_point)
+             f"({result.seconds:.0f} s; {desc.chain.name}.readings.csv); every "
+             f"{HOLD_OUT_EVERY}th reading held out", result.tool_point)
     discovery = {**desc.discovery,
                  "calibration": calibration_dict(result.calibration, result.validation, notes)}
     if "accuracy_vs_simulator" in desc.discovery and options.host is None:
