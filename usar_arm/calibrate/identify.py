@@ -151,14 +151,14 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
             p, more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
                                           options.max_iterations)
             its += more
-        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t)
+        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t, kind)
         sc[~keep] = 0.0
         worst = int(np.argmax(sc))
         if sc[worst] <= options.outlier_sigma or (~keep).sum() >= limit:
             break
         keep[worst] = False
     e = qm.errors(model.poses(p, q, base_guess), t)
-    sc = qm.scores(e, t)
+    sc = qm.scores(e, t, kind)
     consistent = bool(sc[keep].max() <= options.outlier_sigma) if keep.any() else False
     std = _std(model, p, cols, q[keep], base_guess, _subset(t, keep))
     before = distances(model.poses(p0, q, base_guess), t)

@@ -140,8 +140,16 @@ def residuals(e: Array, t: Targets, model: str) -> tuple[Array, Array]:
     return np.where(t.used, r, 0.0), np.where(t.used, d, 0.0)
 
 
-def scores(e: Array, t: Targets) -> Array:
-    """(N,) how far each reading is outside its intervals, in its own 1-sigma (0: inside)."""
+def scores(e: Array, t: Targets, model: str = "midpoint") -> Array:
+    """(N,) how far each reading is outside its intervals, in its own 1-sigma (0: inside).
+
+    For the likelihood model, the largest |residual| of its numbers: how improbable the
+    printed number is, in sigmas of the Gaussian that blurs its interval's edges (noise and the
+    joints' printed steps); for the others, the excess over the (worst-case widened) interval
+    in units of the interval's own 1-sigma."""
+    if model == "likelihood":
+        r, _ = residuals(e, t, model)
+        return np.abs(r).max(axis=1)
     excess = np.maximum(np.abs(e) - t.half, 0.0) / t.scale
     return np.where(t.used, excess, 0.0).max(axis=1)
 
