@@ -32,7 +32,12 @@ from usar_arm.control.drive import DriveModel
 from usar_arm.control.executor import ExecutionOptions
 from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import CalibrationError, ExecutionAbortedError, InvalidInputError
+from usar_arm.errors import (
+    CalibrationError,
+    ExecutionAbortedError,
+    InvalidInputError,
+    ResponseTimeoutError,
+)
 from usar_arm.spatial import Array
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
@@ -69,11 +74,12 @@ def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) ->
 
 def at_rest(arm: Arm, tolerance: float = 1e-3, timeout: float = 10.0) -> Array:
     """The arm's joints once two ASTA readings 0.3 s of simulated time apart differ by less
-    than ``tolerance`` (rad or m) in every joint (an aborted tour leaves it moving)."""
+    than ``tolerance`` (rad or m) in every joint (an aborted tour leaves it moving). Each
+    wait for a reading is bounded by ``timeout`` / 2 s (a busy machine slows the simulator)."""
     deadline = time.monotonic() + timeout
     q, t = arm.joints(), arm.asta_time()
     while True:
-        later = arm.joints(newer_than=t + 0.3)
+        later = arm.joints(newer_than=t + 0.3, timeout=timeout / 2)
         if float(np.max(np.abs(later - q))) < tolerance:
             return later
         if time.monotonic() > deadline:
@@ -198,7 +204,7 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
                 tour = plan_tour(arm, configurations, scene, tour_limits(arm, scale))
                 arm.execute(tour, options=options)
                 break
-            except ExecutionAbortedError as exc:
+            except (ExecutionAbortedError, ResponseTimeoutError) as exc:
                 if scale == SPEED_SCALES[-1]:
                     raise
                 log.warning("the calibration tour at %.0f %% of the limits was aborted (%s); "
