@@ -44,7 +44,7 @@ MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected 
 class CalibrationOptions:
     """How to fit (see the module)."""
 
-    quantisation: str = "auto"        # "midpoint" | "set-membership" | "auto"
+    quantisation: str = "auto"        # "midpoint" | "set-membership" | "likelihood" | "auto"
     max_iterations: int = 20
     outlier_sigma: float = 4.0
     base: bool = True
