@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -29,7 +30,6 @@ from usar_arm.arm import Arm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.observability import select_poses
 from usar_arm.control.drive import DriveModel
-from usar_arm.control.executor import ExecutionOptions
 from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.errors import (
@@ -196,7 +196,8 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
         raise InvalidInputError("calibration needs an arm connected to a server")
     recorder = Recorder(str(arm.robot.actuator), str(arm.robot.tip_sensor),
                         arm.robot.wire_links)
-    options = ExecutionOptions(settle_timeout=SETTLE_S)
+    previous = arm.executor().options  # the tour's short settle is for the tour only
+    options = replace(previous, settle_timeout=SETTLE_S)
     unsubscribe = client.subscribe(recorder)
     try:
         for scale in SPEED_SCALES:
@@ -211,6 +212,7 @@ def collect(arm: Arm, configurations: Array, scene: str | None,
                             "touring again slower", 100 * scale, exc)
     finally:
         unsubscribe()
+        arm.executor(previous)
     if progress is not None:
         progress(len(configurations), len(configurations))
     return recorder.measurements()
