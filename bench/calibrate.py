@@ -20,6 +20,8 @@ from __future__ import annotations
 import sys
 import tempfile
 import time
+import traceback
+from pathlib import Path
 from typing import Any
 
 import common
@@ -34,10 +36,13 @@ from usar_arm.embedded import describe
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.truth import tool0_by_spec
 
-POSES = {"quick": (14,), "full": (6, 10, 14, 20)}
-"""The tour lengths tried (KR60); 14 is the default of usar-arm urdf."""
+POSES = {"quick": (14,), "full": (6, 8, 10, 12, 14, 18)}
+"""The tour lengths tried (KR60), one run each: the accuracy against the number of poses."""
 DEFAULT_POSES = 14
-ROBOTS = {"quick": ("KR60",), "full": ("KR60", "Fanuc_M16iB20")}
+"""The default of usar-arm urdf."""
+RUNS = {"quick": {"KR60": 1}, "full": {"KR60": 5, "Fanuc_M16iB20": 3}}
+"""Runs of the default tour per robot: the targets are judged on the worst of them (the
+readings, and so the fit, differ from run to run with the simulator's timing)."""
 CONFIGURATIONS = 1000
 
 
@@ -74,10 +79,14 @@ def solver_main(argv: list[str] | None = None) -> int:
             calibrated, result = calibrate_description(desc, options, p["poses"])
         except Exception as exc:  # a failed calibration is a result: the as-learnt figures
             learnt = tool0_errors(desc.urdf, p["robot"])
+            where = traceback.extract_tb(exc.__traceback__)[-4:]
             return {"success": False, "error": f"{type(exc).__name__}: {exc}",
+                    "where": [f"{Path(f.filename).name}:{f.lineno} {f.name}" for f in where],
                     "learnt_m": learnt[0], "learnt_rad": learnt[1]}
         with tempfile.TemporaryDirectory() as folder:
             write_description(calibrated, folder)
+            if result.tour is not None:  # as usar-arm urdf: the readings beside the files
+                (Path(folder) / f"{desc.chain.name}.readings.csv").write_text(result.tour.csv())
         seconds = time.perf_counter() - begin
         learnt = tool0_errors(desc.urdf, p["robot"])
         after = tool0_errors(calibrated.urdf, p["robot"])
@@ -94,12 +103,27 @@ def solver_main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _plan(mode: str) -> list[tuple[str, int, int]]:
+    """(robot, poses, run) of every calibration: the KR60 curve, then the repeated default
+    tours (the curve's default tour is run 1)."""
+    out = [("KR60", n, 1) for n in POSES[mode]]
+    for robot, runs in RUNS[mode].items():
+        first = 2 if robot == "KR60" and DEFAULT_POSES in POSES[mode] else 1
+        out += [(robot, DEFAULT_POSES, k) for k in range(first, runs + 1)]
+    return out
+
+
+def _case(robot: str, poses: int, run: int) -> str:
+    return f"{robot} ({poses} poses)" + (f", run {run}" if run > 1 else "")
+
+
 def run(ctx: Context) -> dict[str, Any]:
-    """Calibrate each robot at each tour length once; judge each description."""
+    """Calibrate each robot at each tour length, the default tour several times; judge each
+    description."""
     started = time.perf_counter()
-    problems = [{"id": i, "robot": r, "poses": n} for i, (r, n) in enumerate(
-        [("KR60", n) for n in POSES[ctx.mode]]
-        + [(r, DEFAULT_POSES) for r in ROBOTS[ctx.mode] if r != "KR60"])]
+    plan = _plan(ctx.mode)
+    problems = [{"id": i, "robot": r, "poses": n, "run": k}
+                for i, (r, n, k) in enumerate(plan)]
     spec = {"stage": "calibrate", "problems": problems}
     path = ctx.work / "calibrate_problems.json"
     common.write_json(path, spec)
@@ -114,8 +138,8 @@ def run(ctx: Context) -> dict[str, Any]:
             "consistent", "learnt_m", "learnt_rad", "calibrated_m", "calibrated_rad",
             "validation", "error")})
         raw = {k: [r.get(k)] for k in ("id", "success", "seconds")}
-        cases[f"{p['robot']} ({p['poses']} poses)"] = {
-            "robot": p["robot"], "poses": p["poses"],
+        cases[_case(p["robot"], p["poses"], p["run"])] = {
+            "robot": p["robot"], "poses": p["poses"], "run": p["run"],
             "problems": {"file": None, "count": 1,
                          "settings": {"configurations": CONFIGURATIONS, "wire": "udk",
                                       "speed": 1.0}},
@@ -123,28 +147,44 @@ def run(ctx: Context) -> dict[str, Any]:
             "ratios": {}}
     return common.stage_document("calibrate", ctx.mode,
                                  {"poses": list(POSES[ctx.mode]),
+                                  "default_poses": DEFAULT_POSES, "runs": RUNS[ctx.mode],
                                   "configurations": CONFIGURATIONS}, cases, _targets(cases),
                                  started)
 
 
+def _worst(values: list[Any]) -> float | None:
+    """The largest of the runs' figures; None when a run has none (it failed)."""
+    return None if not values or any(v is None for v in values) else max(values)
+
+
 def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
+    """The issue's targets, each judged on the worst of the default tour's runs."""
     out = []
     for robot in ("KR60", "Fanuc_M16iB20"):
-        case = cases.get(f"{robot} ({DEFAULT_POSES} poses)")
-        if case is None:
+        runs = [c["solvers"]["usar-arm"]["summary"] for c in cases.values()
+                if c["robot"] == robot and c["poses"] == DEFAULT_POSES]
+        if not runs:
             continue
-        s = case["solvers"]["usar-arm"]["summary"]
-        note = "tool0 against the simulator's spec, 1,000 configurations"
-        if s.get("error"):
-            note = f"calibration failed: {s['error'][:120]}"
+        errors = [s["error"] for s in runs if s.get("error")]
+        figures = {k: [s.get(k) for s in runs] for k in ("calibrated_m", "calibrated_rad",
+                                                         "seconds")}
+        listed = {k: ", ".join("-" if v is None else f"{v * (1e3 if k != 'seconds' else 1):.3g}"
+                               for v in vals) for k, vals in figures.items()}
+        note = (f"tool0 against the simulator's spec, 1,000 configurations; worst of "
+                f"{len(runs)} runs")
+        if errors:
+            note = f"calibration failed in {len(errors)} of {len(runs)} runs: {errors[0][:100]}"
         out.append(common.target(f"{robot} calibrated over the UDK wire: max tool0 position "
-                                 "error", s.get("calibrated_m"), 0.0002, "<=", "m", note))
+                                 "error", _worst(figures["calibrated_m"]), 0.0002, "<=", "m",
+                                 f"{note} (mm: {listed['calibrated_m']})"))
         out.append(common.target(f"{robot} calibrated over the UDK wire: max tool0 rotation "
-                                 "error", s.get("calibrated_rad"), 0.0002, "<=", "rad", note))
+                                 "error", _worst(figures["calibrated_rad"]), 0.0002, "<=",
+                                 "rad", f"{note} (mrad: {listed['calibrated_rad']})"))
         if robot == "KR60":
             out.append(common.target("usar-arm urdf --robot KR60 with calibration, --speed 1",
-                                     s.get("seconds"), 45.0, "<=", "s",
-                                     f"{DEFAULT_POSES} poses, {s.get('readings')} readings"))
+                                     _worst(figures["seconds"]), 45.0, "<=", "s",
+                                     f"{DEFAULT_POSES} poses, worst of {len(runs)} runs "
+                                     f"(s: {listed['seconds']})"))
     return out
 
 

@@ -1,6 +1,8 @@
-"""Calibrating a live arm: poses chosen for observability, readings of the arm's tip
-GroundTruth sensor (dithered so that truncation falls at different places in its steps), the
-fit, validation on held-out readings, and the calibrated description.
+"""Calibrating a live arm: a tour reading the arm's tip GroundTruth sensor
+(:mod:`usar_arm.calibration_tour`), the fit, validation on held-out readings, and the calibrated
+description. The fit depends on the as-learnt description and the tour's readings alone
+(:class:`~usar_arm.calibrate.tour_readings.TourReadings`), so a description calibrated from a
+readings file is the same byte for byte as the one calibrated on the tour that recorded them.
 
 The readings are the sensor's world pose as the server prints it (USARSim world, z down), so the
 fit runs in that frame: the measured frame is the sensor's frame with USARSim's axes (the URDF's
@@ -16,48 +18,38 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
 from usar_arm.arm import Arm
 from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
-from usar_arm.calibrate.measurements import Measurement
-from usar_arm.calibrate.observability import select_poses
 from usar_arm.calibrate.parameters import replace_origin
-from usar_arm.calibrate.report import calibration_dict
+from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.residuals import Residuals
+from usar_arm.calibrate.tour_readings import TourReadings, read_tour
 from usar_arm.calibrate.validation import split_held_out
-from usar_arm.control.splice import join_trajectories
-from usar_arm.control.trajectory import MotionLimits, Trajectory
+from usar_arm.calibration_tour import Progress, choose_configurations, collect
 from usar_arm.description import DescribeOptions, Description, write_description
-from usar_arm.errors import CalibrationError, ExecutionAbortedError, InvalidInputError
+from usar_arm.errors import CalibrationError, InvalidInputError
+from usar_arm.model import JointType
 from usar_arm.robot import CALIBRATED
 from usar_arm.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
-from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.inbox import Received
 
 log = logging.getLogger(__name__)
 FLIP = transform(FLIP_X)
-SPEED_SCALES = (1.0, 0.5, 0.25)
-"""The tour runs at the arm's full limits: readings pair a sensor pose with the joint values of
-the same instant, so how closely the arm follows the plan matters only for safety (the
-executor's tracking bound), and a fast tour gives more different readings a second. An arm
-whose drives cannot follow its full limits within that bound (the Fanuc's rail) tours again at
-half of them."""
 HOLD_OUT_EVERY = 5
 """Every fifth reading is held out for validation and never fitted."""
 
-Progress = Callable[[int, int], None]
-"""Called with (poses reached, poses planned)."""
 
 
 @dataclass(frozen=True)
 class WireCalibration:
     """A calibration made on the wire: the fit, its validation on held-out readings, the
-    calibrated URDF text and what fixes the tool point."""
+    calibrated URDF text, what fixes the tool point, and the tour's readings (``seconds``:
+    how long the tour took)."""
 
     calibration: Calibration
     validation: Residuals
@@ -67,6 +59,7 @@ class WireCalibration:
     seconds: float
     tool_point: str
     tip_joint: str | None
+    tour: TourReadings | None = None
 
 
 def _usarsim_axes(urdf: str, joint: str, turn: Array) -> str:
@@ -111,7 +104,7 @@ def _mount_joint(urdf: str, frame: str) -> str:
     raise CalibrationError(f"the measured frame '{frame}' hangs from no fixed joint in the URDF")
 
 
-def _tip_joint(arm: Arm, urdf: str, frame: str, tip_step: float) -> tuple[str | None, str]:
+def _tip_joint(urdf: str, frame: str, tip_step: float) -> tuple[str | None, str]:
     """The fixed joint that carries the flange when the sensor sits at the Tip, and a sentence
     saying what fixes the tool point."""
     chain, _ = parse_urdf(urdf)
@@ -132,132 +125,33 @@ def _tip_joint(arm: Arm, urdf: str, frame: str, tip_step: float) -> tuple[str | 
         f"{tip_step * 1e3:.0f} mm) stays the only source of the tool point")
 
 
-def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) -> Array:
-    """``count`` collision-free configurations (in ``scene``, 5 cm clear) maximising the
-    identification Jacobian's smallest singular value, the arm's home first."""
-    world = arm.robot.collision_world(arm.world(scene).scene, padding=0.05)
-    frame = str(arm.robot.tip_sensor)
-    chosen = select_poses(arm.urdf, frame, count, lambda q: not world.in_collision(q), seed)
-    return np.asarray(chosen, float)
-
-
-def _at_rest(arm: Arm, tolerance: float = 1e-3, timeout: float = 10.0) -> Array:
-    """The arm's joints once two ASTA readings 0.3 s of simulated time apart differ by less
-    than ``tolerance`` (rad or m) in every joint (an aborted tour leaves it moving)."""
-    deadline = time.monotonic() + timeout
-    q, t = arm.joints(), arm.asta_time()
-    while True:
-        later = arm.joints(newer_than=t + 0.3)
-        if float(np.max(np.abs(later - q))) < tolerance:
-            return later
-        if time.monotonic() > deadline:
-            raise CalibrationError(f"the arm did not come to rest within {timeout:.0f} s "
-                                   f"(still moving by {np.max(np.abs(later - q)):.4f})")
-        q, t = later, arm.asta_time()
-
-
-def _tour(arm: Arm, configurations: Array, scene: str | None, scale: float) -> Trajectory:
-    """One trajectory from the arm's joints through ``configurations`` (nearest first), each
-    leg planned collision-free from rest to rest at ``scale`` of the limits."""
-    pieces: list[tuple[float, Trajectory]] = []
-    start, clock = _at_rest(arm), 0.0
-    limits = MotionLimits.from_chain(arm.robot.chain)
-    for q in tour_order(start, configurations, limits.velocity):
-        traj = arm.plan(joints=q, scene=scene, start=start, speed_scale=scale).trajectory
-        pieces.append((clock, traj))
-        start, clock = traj.q[-1], clock + traj.duration
-    return join_trajectories(pieces)
-
-
-def tour_order(start: Array, configurations: Array, velocity: Array) -> Array:
-    """``configurations`` in nearest-neighbour order from ``start``, distance being the time
-    the slowest joint needs at its velocity limit (s): a short tour gives the same readings'
-    spread in less time (measured: 14 poses, 56 s of motion in the chosen order)."""
-    left = list(range(len(configurations)))
-    order: list[int] = []
-    here = np.asarray(start, float)
-    while left:
-        times = [float(np.max(np.abs(configurations[k] - here) / velocity)) for k in left]
-        k = left.pop(int(np.argmin(times)))
-        order.append(k)
-        here = configurations[k]
-    return np.asarray(configurations, float)[order]
-
-
-class _Recorder:
-    """Every tip-sensor reading the server streams, paired with the ASTA line of the same
-    simulated time (the server prints both from one state, ten times a second)."""
-
-    def __init__(self, actuator: str, tip_sensor: str, wire_links: tuple[int, ...]):
-        self.actuator, self.tip_sensor, self.links = actuator, tip_sensor.lower(), wire_links
-        self.joints: dict[float, tuple[Array, float]] = {}
-        self.poses: dict[float, tuple[Array, Array, float, float]] = {}
-
-    def __call__(self, rec: Received) -> None:
-        msg = rec.message
-        if isinstance(msg, m.Asta) and msg.name == self.actuator and msg.time is not None:
-            values = dict(msg.values)
-            if all(k in values for k in self.links):
-                self.joints[msg.time] = (np.array([values[k] for k in self.links], float),
-                                         rec.step("Value"))
-        elif (isinstance(msg, m.Sen) and (msg.name or "").lower() == self.tip_sensor
-              and msg.time is not None and msg.location is not None
-              and msg.orientation is not None):
-            self.poses[msg.time] = (np.array(msg.location, float),
-                                    np.array(msg.orientation, float), rec.step("Location"),
-                                    rec.step("Orientation"))
-
-    def measurements(self) -> list[Measurement]:
-        """One measurement per distinct printed reading, in time order (a reading repeated
-        while the arm rests carries no new information and would weigh that pose more)."""
-        out: list[Measurement] = []
-        seen: set[tuple[float, ...]] = set()
-        for t in sorted(set(self.joints) & set(self.poses)):
-            q, step_q = self.joints[t]
-            loc, rpy, step_m, step_rad = self.poses[t]
-            key = tuple(np.concatenate([q, loc, rpy]).tolist())
-            if key in seen:
-                continue
-            seen.add(key)
-            out.append(Measurement(q=q, position=loc, rpy=rpy, step_m=step_m,
-                                   step_rad=step_rad, step_q=step_q, label=f"t={t:.4f} s"))
-        return out
-
-
-def collect(arm: Arm, configurations: Array, scene: str | None,
-            progress: Progress | None = None) -> list[Measurement]:
-    """Move through ``configurations`` in one motion (each leg planned collision-free in
-    ``scene`` from rest to rest, the legs joined, no settling between them) and keep every
-    tip-sensor reading taken on the way, in motion and at rest, with the joint values the
-    server reported at the same simulated time. The arm's motion moves each printed number
-    through its step, so the truncation dithers by itself."""
-    client = arm.client
-    if client is None:
-        raise InvalidInputError("calibration needs an arm connected to a server")
-    recorder = _Recorder(str(arm.robot.actuator), str(arm.robot.tip_sensor),
-                         arm.robot.wire_links)
-    unsubscribe = client.subscribe(recorder)
-    try:
-        for scale in SPEED_SCALES:
-            try:
-                arm.execute(_tour(arm, configurations, scene, scale))
-                break
-            except ExecutionAbortedError as exc:
-                if scale == SPEED_SCALES[-1]:
-                    raise
-                log.warning("the calibration tour at %.0f %% of the limits was aborted (%s); "
-                            "touring again slower", 100 * scale, exc)
-    finally:
-        unsubscribe()
-    if progress is not None:
-        progress(len(configurations), len(configurations))
-    return recorder.measurements()
+def fit_tour(urdf: str, tour: TourReadings, tip_step: float,
+             options: CalibrationOptions | None = None) -> WireCalibration:
+    """Fit ``urdf`` (as learnt) to a tour's readings, validate on the held-out ones and build
+    the calibrated URDF (see the module; ``tip_step``: the Tip's printed step, m). Raises
+    :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
+    does not hold on the held-out readings."""
+    frame = tour.sensor
+    mount = _mount_joint(urdf, frame)
+    fit_urdf = _usarsim_axes(urdf, mount, FLIP)
+    tip_joint, tool_point = _tip_joint(urdf, frame, tip_step)
+    fit, held = split_held_out(list(tour.measurements), HOLD_OUT_EVERY)
+    base_guess = tour.platform_pose() @ FLIP
+    cal = identify(fit_urdf, frame, fit, base_guess, options or CalibrationOptions())
+    validation = cal.validate(fit_urdf, frame, held)
+    check_validated(cal, validation)
+    calibrated = _usarsim_axes(cal.apply(fit_urdf), mount, FLIP)
+    if tip_joint is not None:
+        calibrated = _tip_onto_sensor(calibrated, urdf, tip_joint, mount)
+    calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
+    return WireCalibration(cal, validation, calibrated, tour.poses, len(tour.measurements),
+                           tour.seconds, tool_point, tip_joint, tour)
 
 
 def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
                   seed: int = 0, progress: Progress | None = None,
                   options: CalibrationOptions | None = None) -> WireCalibration:
-    """Calibrate ``arm`` on its server (see the module). Raises
+    """Calibrate ``arm`` on its server: tour it, then :func:`fit_tour`. Raises
     :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
     does not hold on the held-out readings; nothing is changed then."""
     sensor = arm.tip_sensor()
@@ -269,50 +163,53 @@ def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
     if poses < 3:
         raise InvalidInputError(f"calibration needs at least 3 poses (got {poses})")
     start = time.monotonic()
-    frame = str(arm.robot.tip_sensor)
-    mount = _mount_joint(arm.urdf, frame)
-    fit_urdf = _usarsim_axes(arm.urdf, mount, FLIP)
-    tip_joint, tool_point = _tip_joint(arm, arm.urdf, frame, arm.tip_step())
+    chain = arm.robot.chain
+    _mount_joint(arm.urdf, str(arm.robot.tip_sensor))  # a sensor the fit can use, first
     configurations = choose_configurations(arm, poses, scene, seed)
     sensor.read()  # the platform's pose, for the base guess
     readings = collect(arm, configurations, scene, progress)
-    fit, held = split_held_out(readings, HOLD_OUT_EVERY)
-    base_guess = sensor.platform_pose() @ FLIP
-    cal = identify(fit_urdf, frame, fit, base_guess, options or CalibrationOptions())
-    validation = cal.validate(fit_urdf, frame, held)
-    calibrated = _usarsim_axes(cal.apply(fit_urdf), mount, FLIP)
-    if tip_joint is not None:
-        calibrated = _tip_onto_sensor(calibrated, arm.urdf, tip_joint, mount)
-    calibrated = _fold_base(calibrated, np.linalg.inv(base_guess) @ cal.base)
-    return WireCalibration(cal, validation, calibrated, len(configurations), len(readings),
-                           time.monotonic() - start, tool_point, tip_joint)
+    tour = TourReadings(tuple(readings), str(arm.robot.tip_sensor), chain.joint_names,
+                        TourReadings.platform_numbers(sensor.platform_pose()),
+                        len(configurations), round(time.monotonic() - start, 1),
+                        tuple(j.type is JointType.PRISMATIC for j in chain.actuated_joints))
+    return fit_tour(arm.urdf, tour, arm.tip_step(), options)
 
 
 def calibrate_description(desc: Description, options: DescribeOptions, poses: int = 14,
                           scene: str | None = None, seed: int = 0,
-                          progress: Progress | None = None
+                          progress: Progress | None = None, readings: str | Path | None = None
                           ) -> tuple[Description, WireCalibration]:
     """Spawn the arm ``desc`` describes again (same server and options), calibrate it, and
     return the calibrated description (its URDF, and discovery.json with a ``calibration``
     section; on the embedded simulator also the calibrated description's accuracy against the
     simulator's own model) and the calibration. The calibrated description is cached beside
-    the as-learnt one, so that the next plan or demo of this arm uses it."""
+    the as-learnt one, so that the next plan or demo of this arm uses it. With ``readings``
+    (a tour's readings file) nothing is spawned: the fit uses those readings."""
     if options.frame != "z-up":
         raise InvalidInputError("calibration works on REP-103 (z-up) descriptions; describe "
                                 f"with --frame z-up (got {options.frame})")
-    with Arm.connect(robot=options.robot, host=options.host, port=options.port,
-                     start=options.start, timeout=options.timeout, naming=options.naming,
-                     wire_precision=options.wire_precision,
-                     velocity_limits=options.velocity_limits, calibrated=False) as arm:
-        if arm.urdf != desc.urdf:
-            raise CalibrationError("the arm spawned for calibration is described differently "
-                                   "from the description to calibrate (did the server "
-                                   "change?)")
-        result = calibrate_arm(arm, poses, scene, seed, progress)
-        entry = arm.cache_entry
+    entry = None
+    if readings is not None:
+        chain = desc.chain
+        tour = read_tour(readings, chain.joint_names,
+                         [j.type is JointType.PRISMATIC for j in chain.actuated_joints],
+                         chain.lower(), chain.upper())
+        tip_step = float(desc.discovery.get("precision", {}).get("tip_resolution_m") or 0.0)
+        result = fit_tour(desc.urdf, tour, tip_step)
+    else:
+        with Arm.connect(robot=options.robot, host=options.host, port=options.port,
+                         start=options.start, timeout=options.timeout, naming=options.naming,
+                         wire_precision=options.wire_precision,
+                         velocity_limits=options.velocity_limits, calibrated=False) as arm:
+            if arm.urdf != desc.urdf:
+                raise CalibrationError("the arm spawned for calibration is described "
+                                       "differently from the description to calibrate (did "
+                                       "the server change?)")
+            result = calibrate_arm(arm, poses, scene, seed, progress)
+            entry = arm.cache_entry
     notes = (f"{result.readings} tip-sensor readings on a tour through {result.poses} poses "
-             f"({result.seconds:.0f} s); every {HOLD_OUT_EVERY}th reading held out",
-             result.tool_point)
+             f"({result.seconds:.0f} s; {desc.chain.name}.readings.csv); every "
+             f"{HOLD_OUT_EVERY}th reading held out", result.tool_point)
     discovery = {**desc.discovery,
                  "calibration": calibration_dict(result.calibration, result.validation, notes)}
     if "accuracy_vs_simulator" in desc.discovery and options.host is None:

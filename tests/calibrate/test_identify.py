@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
-from usar_arm.calibrate.identify import CalibrationOptions, identify
+from usar_arm.calibrate.identify import AUTO_MODEL, CalibrationOptions, identify
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.errors import CalibrationError
 from usar_arm.planning.kinematics import KinematicModel
@@ -73,7 +73,7 @@ def test_quantised_wire_readings_1mm_1mrad_reach_02mm_02mrad() -> None:
     data = readings(truth, "KR60ArmTipTruth", base, random_q(NOMINAL, 200, 11), 3,
                     step_m=1e-3, step_rad=1e-3)
     cal = identify(KR60, "KR60ArmTipTruth", data, guess)
-    assert cal.quantisation == "set-membership" and cal.consistent
+    assert cal.quantisation == AUTO_MODEL and cal.consistent
     after = tool_errors(truth, base, cal.apply(KR60), cal.base, "KR60ArmTipTruth",
                         random_q(NOMINAL, 300, 5))
     assert after[0] <= 2e-4 and after[1] <= 2e-4, after

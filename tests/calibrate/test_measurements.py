@@ -100,3 +100,24 @@ def test_yaml_without_units_is_refused(tmp_path: Path) -> None:
     path.write_text("frame: tool0\nmeasurements: []\n")
     with pytest.raises(FileFormatError, match="missing key 'units'"):
         read_measurements(path, JOINTS)
+
+
+def test_joint_values_printed_to_a_step_say_so_in_the_header(tmp_path: Path) -> None:
+    """A wire's joint values (ASTA: rounded to 1e-4) keep their step and rounding through a
+    CSV file, and other header lines are kept in order."""
+    rows = tuple(Measurement(np.array([0.1234, -0.5, 0.25]), np.array([1.0, 2.0, 3.0]),
+                             np.array([0.1, 0.2, 0.3]), 0.001, 0.001, label=f"t={k}",
+                             step_q=1e-4, q_rounded=True) for k in range(2))
+    data = MeasurementSet(rows, "sensor", joint_names=JOINTS,
+                          header=(("platform", "0 0 0 0 0 0"), ("tour", "3 poses")))
+    path = tmp_path / "m.csv"
+    write_measurements(path, data, prismatic=PRISMATIC)
+    text = path.read_text()
+    assert "# joint step: 0.0001\n# joint values: rounded\n" in text
+    back = read_measurements(path, JOINTS, prismatic=PRISMATIC)
+    assert back.header == data.header
+    assert all(m.step_q == 1e-4 and m.q_rounded for m in back.measurements)
+    path.write_text(text.replace("values: rounded", "values: sometimes"))
+    with pytest.raises(FileFormatError, match="expected rounded or truncated") as info:
+        read_measurements(path, JOINTS, prismatic=PRISMATIC)
+    assert info.value.line == 5

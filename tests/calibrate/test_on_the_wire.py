@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 from usar_arm.arm import Arm
-from usar_arm.calibration import FLIP, _fold_base, _Recorder, _usarsim_axes, tour_order
+from usar_arm.calibration import FLIP, _fold_base, _usarsim_axes
+from usar_arm.calibration_tour import Recorder, drive_caps, tour_order
 from usar_arm.cli import main
+from usar_arm.control.drive import DriveModel
 from usar_arm.embedded import accuracy_report
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.sim.robot_spec import builtin_robots
@@ -31,7 +33,7 @@ def _received(line: str) -> Received:
 
 
 def test_readings_pair_the_sensor_with_the_joints_of_the_same_instant() -> None:
-    rec = _Recorder("KR60Arm", "KR60ArmTipTruth", (1, 2))
+    rec = Recorder("KR60Arm", "KR60ArmTipTruth", (1, 2))
     lines = [
         "ASTA {Time 1.1000} {Name KR60Arm} {Link 1} {Value 0.1234} {Link 2} {Value -0.5000}",
         "SEN {Time 1.1000} {Type GroundTruth} {Name KR60ArmTipTruth} {Location 1.234,0.500,"
@@ -67,6 +69,16 @@ def test_the_tour_visits_every_pose_once_nearest_first() -> None:
         times = np.max(np.abs(rest - here) / speed, axis=1)
         assert float(np.max(np.abs(q - here) / speed)) == pytest.approx(float(times.min()))
         here = q
+
+
+def test_the_tour_caps_only_the_joints_whose_drives_cannot_follow() -> None:
+    """A drive's stiffness is its force limit, so its feedforward lead (lag v + inertia a)
+    saturates at 1 rad or m; an under-damped drive (the Fanuc's carriage) gets half of that."""
+    drive = DriveModel(np.array([0.35, 0.2, 0.5, 0.165]), np.zeros(4), np.zeros(4),
+                       inertia=np.array([0.35, 0.0, 0.0, 0.001]))
+    caps = drive_caps(drive, np.array([1.0, 6.1, 9.08, 2.234]),
+                      np.array([2.0, 12.0, 18.0, 6.11]))
+    np.testing.assert_allclose(caps, [0.5 / 1.05, 1 / 1.22, 1 / 4.54, 1.0], rtol=1e-3)
 
 
 def test_turning_the_sensor_frame_twice_gives_the_urdf_back() -> None:
@@ -106,33 +118,36 @@ def test_too_few_poses_is_refused_before_the_arm_moves() -> None:
 
 
 @pytest.mark.slow
-def test_calibrate_robot_kr60_over_the_udk_wire(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                                capsys: pytest.CaptureFixture[str]) -> None:
-    """The default UDK wire (1 mm / 10 mrad GEO, 1 mm / 1 mrad sensor, 1e-4 rad joints):
-    the calibrated description against the simulator's own model at 1,000 configurations.
-    Measured (14 poses, ~330 readings): flange 0.15-0.24 mm from 3.3 mm as learnt (tool0 by the
-    bench's judge 0.20-0.31 mm); joint axes 0.08-0.14 mrad from 1.3 mrad. Bounds: 2x the worst
-    flange and axis figures measured by this report."""
+@pytest.mark.parametrize(("robot", "rank", "sensor"), [("KR60", 30, "KR60ArmTipTruth"),
+                                                       ("Fanuc_M16iB20", 32,
+                                                        "Fanuc_M16iB20ArmTipTruth")])
+def test_calibrate_robot_over_the_udk_wire_reaches_the_target(
+        robot: str, rank: int, sensor: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The issue's target on the default UDK wire (1 mm / 10 mrad GEO, 1 mm / 1 mrad sensor,
+    0.1 mrad joints): the calibrated description's flange (where tool0 is) within 0.2 mm and
+    its joint axes within 0.2 mrad of the simulator's own model at 1,000 configurations, for
+    the KR60 and for the Fanuc on its rail (7 joints, one prismatic). Measured (bench, tool0):
+    KR60 0.07-0.16 mm in ten runs, Fanuc 0.08-0.15 mm in six."""
     monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "out"
-    assert main(["calibrate", "--robot", "KR60", "--out", str(out), "--json"]) == EXIT_OK
+    assert main(["calibrate", "--robot", robot, "--out", str(out), "--json"]) == EXIT_OK
     doc = json.loads(capsys.readouterr().out)
-    urdf = (out / "KR60.urdf").read_text()
-    act = builtin_robots()["USARBot.KR60"].actuators[0]
+    urdf = (out / f"{robot}.urdf").read_text()
+    act = builtin_robots()[f"USARBot.{robot}"].actuators[0]
     calibrated = accuracy_report(parse_urdf(urdf)[0], act, "z-up", samples=1000, seed=5)
-    learnt = accuracy_report(parse_urdf(KR60_URDF)[0], act, "z-up", samples=1000, seed=5)
-    assert calibrated["max_flange_error_m"] < 0.00048
-    assert calibrated["max_joint_axis_error_rad"] < 0.00028
-    assert calibrated["max_flange_error_m"] < learnt["max_flange_error_m"] / 6
-    section = json.loads((out / "KR60.discovery.json").read_text())["calibration"]
+    assert calibrated["max_flange_error_m"] <= 2e-4
+    assert calibrated["max_joint_axis_error_rad"] <= 2e-4
+    section = json.loads((out / f"{robot}.discovery.json").read_text())["calibration"]
     assert section == doc["calibration"]
-    assert section["consistent"] is True and section["rank"] == 30
-    assert len(section["unidentifiable"]) == 18
+    assert section["consistent"] is True and section["rank"] == rank
+    assert section["measured_frame"] == sensor
     assert all(p["std"] > 0 for p in section["parameters"])
     assert section["validation"]["summary"]["max_after_m"] < \
         section["validation"]["summary"]["max_before_m"]
     assert any("identified through the sensor" in n for n in section["notes"])
-    assert (out / "KR60.calibration.png").stat().st_size > 10_000
+    assert (out / f"{robot}.calibration.png").stat().st_size > 10_000
+    assert (out / f"{robot}.readings.csv").read_text().startswith(f"# frame: {sensor}\n")
     # The next arm of the same CONF/GEO comes calibrated from the cache.
-    with Arm.connect("KR60") as arm:
+    with Arm.connect(robot) as arm:
         assert arm.urdf == urdf

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from usar_arm.control import drive_inertia
 from usar_arm.control.drive import DriveModel, excitation, fit, fit_joint, simulate
 
 
@@ -66,3 +67,82 @@ def test_excitation_stays_inside_the_limits_and_starts_and_ends_at_rest() -> Non
 def test_no_model_commands_the_trajectory_itself() -> None:
     none = DriveModel.none(3)
     assert np.array_equal(none.command(np.ones(3), np.ones(3)), np.ones(3))
+
+
+# ------------------------------------------------------------------ second order (inertia)
+def _rk4(times: np.ndarray, commands: np.ndarray, q0: float, lag: float, inertia: float,
+         at: np.ndarray, dt: float = 1e-4) -> np.ndarray:
+    """b q'' + a q' + q = u by fixed-step RK4 (a reference independent of the closed form)."""
+    q, v, t, out, j = q0, 0.0, 0.0, [], 0
+    for target in at:
+        while t < target - 1e-12:
+            while j + 1 < len(times) and times[j + 1] <= t + 1e-12:
+                j += 1
+            h = min(dt, target - t)
+            u = commands[j]
+
+            def f(q: float, v: float, u: float = u) -> tuple[float, float]:
+                return v, (u - q - lag * v) / inertia
+
+            k1 = f(q, v)
+            k2 = f(q + h / 2 * k1[0], v + h / 2 * k1[1])
+            k3 = f(q + h / 2 * k2[0], v + h / 2 * k2[1])
+            k4 = f(q + h * k3[0], v + h * k3[1])
+            q += h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            v += h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+            t += h
+        out.append(q)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("lag, inertia", [(0.33, 0.3), (0.2, 0.005), (0.1, 0.0025)])
+def test_the_second_order_response_is_exact(lag: float, inertia: float) -> None:
+    """Under- and over-damped drives, against an independent integration."""
+    times, commands = excitation(np.zeros(1), np.array([-3.0]), np.array([3.0]),
+                                 np.array([0.03]), 2.0)
+    at = np.arange(0.013, 2.5, 0.1)
+    got = drive_inertia.simulate(times, commands[:, 0], 0.0, np.array([lag]),
+                                 np.array([inertia]), at)[:, 0]
+    np.testing.assert_allclose(got, _rk4(times, commands[:, 0], 0.0, lag, inertia, at),
+                               atol=1e-8)
+
+
+def test_a_carriage_on_a_soft_rail_is_identified_second_order() -> None:
+    """The Fanuc's rail (K 30 N/m, D 10 N s/m, ~9 kg): a first-order lag fits it at ~1.4 s,
+    four times its D/K; the second-order model recovers lag and inertia, and the fit takes it."""
+    lag, inertia, offset = 10 / 30, 8.86 / 30, 0.002
+    times, commands = excitation(np.zeros(1), np.array([-1.5]), np.array([1.5]),
+                                 np.array([0.01]), 2.0)
+    at = np.arange(0.013, 2.5, 0.1)
+    samples = np.round(drive_inertia.simulate(times, commands[:, 0] + offset, 0.0,
+                                              np.array([lag]), np.array([inertia]), at), 4)
+    first = fit_joint(times, commands[:, 0], at, samples[:, 0])
+    assert first[0] > 1.0  # the lag a first-order model needs: wrong by 4x
+    model = fit(times, commands, at, samples)
+    assert model.lag[0] == pytest.approx(lag, rel=0.05)
+    assert model.inertia is not None and model.inertia[0] == pytest.approx(inertia, rel=0.05)
+    assert model.offset[0] == pytest.approx(offset, abs=2e-4)
+    # feeding forward lag q' + inertia q'' follows a sine the first-order model cannot
+    # (after the start's transient, which rings down at lag / (2 inertia) = 0.56 / s)
+    t = np.arange(0.0, 16.0, 0.001)
+    wave = 0.2 * np.sin(2 * t)
+    u = model.command(wave[:, None], (0.4 * np.cos(2 * t))[:, None],
+                      (-0.8 * np.sin(2 * t))[:, None])[:, 0] + offset
+    follow = drive_inertia.simulate(t, u, 0.0, np.array([lag]), np.array([inertia]),
+                                    t[13000:])[:, 0]
+    assert np.max(np.abs(follow - wave[13000:])) < 5e-3
+    plain = DriveModel(np.array([first[0]]), np.array([first[1]]), np.zeros(1))
+    u = plain.command(wave[:, None], (0.4 * np.cos(2 * t))[:, None])[:, 0] + offset
+    follow = drive_inertia.simulate(t, u, 0.0, np.array([lag]), np.array([inertia]),
+                                    t[13000:])[:, 0]
+    assert np.max(np.abs(follow - wave[13000:])) > 0.05
+
+
+def test_a_first_order_joint_stays_first_order() -> None:
+    times, commands = excitation(np.zeros(1), np.array([-3.0]), np.array([3.0]),
+                                 np.array([0.03]), 2.0)
+    at = np.arange(0.013, 2.5, 0.1)
+    samples = np.round(simulate(times, commands[:, 0], 0.0, 0.15, at), 4)
+    model = fit(times, commands, at, samples[:, None])
+    assert model.inertia is not None and model.inertia[0] == 0.0
+    assert model.lag[0] == pytest.approx(0.15, rel=0.05)

@@ -9,16 +9,21 @@ from pathlib import Path
 import pytest
 import yaml
 
+from usar_arm.cli import main
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
+from usar_arm.errors import EXIT_OK
 from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
 from usar_arm.planning.acm import adjacent_pairs
 from usar_arm.urdf.moveit import moveit_files
 from usar_arm.urdf.validate import find_check_urdf, semantic_problems
 
 GOLDEN = Path(__file__).resolve().parents[2] / "robots" / "generated" / "as-learnt"
-"""The as-learnt KR60 (usar-arm urdf --no-calibrate): byte-identical on every run. The calibrated
-files in robots/generated are not golden: their readings depend on the simulator's timing."""
+"""The as-learnt KR60 (usar-arm urdf --no-calibrate): byte-identical on every run."""
+CALIBRATED = GOLDEN.parent
+"""The calibrated KR60 and the readings of the tour it was calibrated from: a new tour gives new
+readings (the simulator's state at each reading depends on when each streamed command
+arrived), the same readings give the same files byte for byte."""
 
 
 @pytest.fixture(scope="module")
@@ -34,6 +39,22 @@ def test_regenerating_the_kr60_gives_byte_identical_files(kr60: Description,
         golden = GOLDEN / path.name
         assert golden.exists(), f"{golden} is not checked in"
         assert path.read_bytes() == golden.read_bytes(), f"{path.name} differs from the golden"
+
+
+def test_the_calibrated_kr60_is_regenerated_byte_identically_from_its_readings(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The README's command: usar-arm urdf --robot KR60 --readings
+    robots/generated/KR60.readings.csv --out-dir robots/generated."""
+    monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    assert main(["urdf", "--robot", "KR60", "--readings",
+                 str(CALIBRATED / "KR60.readings.csv"), "--out-dir", str(out)]) == EXIT_OK
+    written = sorted(p.name for p in out.iterdir())
+    assert written == ["KR60.discovery.json", "KR60.joint_limits.yaml", "KR60.readings.csv",
+                       "KR60.srdf", "KR60.urdf"]
+    for name in written:
+        assert (out / name).read_bytes() == (CALIBRATED / name).read_bytes(), \
+            f"{name} differs from robots/generated/{name}"
 
 
 def test_check_urdf_accepts_the_urdf(kr60: Description, tmp_path: Path) -> None:

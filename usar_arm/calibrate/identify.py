@@ -36,7 +36,7 @@ from usar_arm.spatial import Array
 
 # The quantisation model "auto" stands for: measured best on synthetic quantised readings
 # (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
-AUTO_MODEL = "set-membership"
+AUTO_MODEL = "likelihood"
 MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
 
 
@@ -44,7 +44,7 @@ MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected 
 class CalibrationOptions:
     """How to fit (see the module)."""
 
-    quantisation: str = "auto"        # "midpoint" | "set-membership" | "auto"
+    quantisation: str = "auto"        # "midpoint" | "set-membership" | "likelihood" | "auto"
     max_iterations: int = 20
     outlier_sigma: float = 4.0
     base: bool = True
@@ -151,14 +151,14 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
             p, more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
                                           options.max_iterations)
             its += more
-        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t)
+        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t, kind)
         sc[~keep] = 0.0
         worst = int(np.argmax(sc))
         if sc[worst] <= options.outlier_sigma or (~keep).sum() >= limit:
             break
         keep[worst] = False
     e = qm.errors(model.poses(p, q, base_guess), t)
-    sc = qm.scores(e, t)
+    sc = qm.scores(e, t, kind)
     consistent = bool(sc[keep].max() <= options.outlier_sigma) if keep.any() else False
     std = _std(model, p, cols, q[keep], base_guess, _subset(t, keep))
     before = distances(model.poses(p0, q, base_guess), t)
@@ -201,7 +201,9 @@ def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t
 def _subset(t: qm.Targets, keep: Array) -> qm.Targets:
     return qm.Targets(t.mid[keep], t.half[keep], t.sigma[keep], t.used[keep],
                       t.quantised_rot[keep], t.rotations[keep],
-                      tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k))
+                      tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k),
+                      None if t.joint_sigma is None else t.joint_sigma[keep],
+                      None if t.joint_extra is None else t.joint_extra[keep])
 
 
 def _std(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,

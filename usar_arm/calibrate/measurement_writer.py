@@ -33,6 +33,16 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
                f"sigma_{angle_unit}", "label"]
     buf = io.StringIO()
     buf.write(f"# frame: {data.frame}\n")
+    for key, value in data.header:
+        buf.write(f"# {key}: {value}\n")
+    steps = {(m.step_q, m.q_rounded) for m in data.measurements}
+    if len(steps) > 1:
+        raise ValueError("the measurements' joint values were printed with different steps "
+                         f"({sorted(steps)}); a CSV file states one")
+    if data.measurements and data.measurements[0].step_q > 0:
+        first = data.measurements[0]
+        buf.write(f"# joint step: {first.step_q!r}\n")
+        buf.write(f"# joint values: {'rounded' if first.q_rounded else 'truncated'}\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(header)
     qs = [ls if k else ang for k in kinds]

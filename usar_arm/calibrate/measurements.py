@@ -10,7 +10,10 @@ CSV::
     joint_a1_deg,...,joint_a6_deg,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg,sigma_mm,sigma_deg,label
 
 (``roll/pitch/yaw``, ``sigma_*``, ``step_*`` and ``label`` are optional; joint columns of a
-prismatic joint take a length unit.) YAML::
+prismatic joint take a length unit. Joint values printed to a step state it in SI whatever the
+columns' units, and how they were printed: ``# joint step: 0.0001`` (rad, or m for prismatic
+joints) and ``# joint values: rounded`` or ``truncated``. Other ``# key: value`` lines before
+the header row are kept in :attr:`MeasurementSet.header`.) YAML::
 
     frame: tool0
     units: {length: mm, angle: deg}
@@ -50,8 +53,9 @@ class Measurement:
     each printed number truncated toward zero to this step (0: not quantised). ``sigma_m`` /
     ``sigma_rad``: 1-sigma noise of each number. ``label``: where it came from. ``step_q``: the
     joint values as printed, each truncated toward zero to this step (rad, or m for prismatic
-    joints; 0: exact); the fit uses their intervals' middles and widens the pose intervals by
-    what the joint intervals allow.
+    joints; 0: exact), or rounded to it with ``q_rounded`` (ASTA prints raw engine floats,
+    rounded); the fit uses their intervals' middles and widens the pose intervals by what the
+    joint intervals allow.
     """
 
     q: Array
@@ -63,6 +67,7 @@ class Measurement:
     sigma_rad: float = 0.0
     label: str = ""
     step_q: float = 0.0      # each joint value printed truncated toward zero to this step
+    q_rounded: bool = False  # the joint values were printed rounded to step_q, not truncated
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,8 @@ class MeasurementSet:
     length_unit: str = "m"
     angle_unit: str = "rad"
     joint_names: tuple[str, ...] = field(default_factory=tuple)
+    header: tuple[tuple[str, str], ...] = ()
+    """Other ``# key: value`` lines of a CSV file, in order."""
 
 
 def _unit(name: str, table: dict[str, float], path: str, line: int | None, col: str,
@@ -113,15 +120,26 @@ def _split(col: str) -> tuple[str, str]:
 def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Sequence[bool],
               lower: Array | None, upper: Array | None) -> MeasurementSet:
     frame, header_line, rows = "", 0, []
+    comments: list[tuple[str, str]] = []
+    step_q, rounded = 0.0, False
     lines = text.splitlines()
     for i, raw in enumerate(lines, start=1):
         s = raw.strip()
         if not s:
             continue
         if s.startswith("#"):
-            key, _, value = s[1:].partition(":")
-            if key.strip() == "frame":
-                frame = value.strip()
+            key, _, value = (part.strip() for part in s[1:].partition(":"))
+            if key == "frame":
+                frame = value
+            elif key == "joint step":
+                step_q = _number(value, path, i, "# joint step")
+            elif key == "joint values":
+                if value not in ("rounded", "truncated"):
+                    raise FileFormatError(path, f"'# joint values: {value}': expected rounded "
+                                          "or truncated", line=i)
+                rounded = value == "rounded"
+            elif key:
+                comments.append((key, value))
             continue
         header_line = i
         break
@@ -182,8 +200,9 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
             q, np.array([get(n) for n in POSITION]),
             np.array([get(n) for n in ANGLES]) if all(has_rpy) else None,
             vals.get("step_m", 0.0), vals.get("step_rad", 0.0),
-            vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0), label))
-    return MeasurementSet(tuple(rows), frame, units["length"], units["angle"], tuple(joint_names))
+            vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0), label, step_q, rounded))
+    return MeasurementSet(tuple(rows), frame, units["length"], units["angle"], tuple(joint_names),
+                          tuple(comments))
 
 
 def _vector(item: Any, key: str, n: int, s: float, path: str, line: int | None) -> Array:

@@ -1,13 +1,21 @@
 """The measurement model: each printed number stands for an interval, plus noise.
 
 A number printed truncated toward zero to a step says the truth lies in a step-wide interval
-(:func:`usar_arm.control.tip_bias.interval`). Two ways to fit a model to such intervals:
+(:func:`usar_arm.control.tip_bias.interval`). Three ways to fit a model to such intervals:
 
 * ``midpoint``: the interval's middle is the measurement, its error uniform over the interval
   (variance step^2 / 12), added to the noise variance; an ordinary weighted least squares.
 * ``set-membership``: only leaving the interval costs (a hinge, scaled like the midpoint's
   residual), plus a weak pull (:data:`PULL`) toward the middle that makes the minimum unique:
   the fit lands inside the set every reading allows, near its centre.
+* ``likelihood``: each number's exact probability, its interval blurred by the Gaussian errors
+  of noise and of quantised joint values (:mod:`.likelihood`): sharp edges where nothing blurs
+  them, soft ones where the joints' printed steps do.
+
+Joint values printed to a step (``Measurement.step_q``) stand for intervals too: the fit uses
+their middles, widens every number's interval by what they allow at worst
+(sum_j |d number / d q_j| step_q / 2) and, for the likelihood, blurs it by their 1-sigma
+(sqrt(sum_j (d number / d q_j)^2) step_q / sqrt(12)).
 
 Position numbers are compared per axis in M; quantised angles per printed roll, pitch, yaw
 (wrapped); unquantised orientations by the rotation vector of R_model R_measured^T.
@@ -20,11 +28,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from usar_arm.calibrate import likelihood
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.control.tip_bias import interval, wrap
 from usar_arm.spatial import Array, log_so3, rpy_to_matrix
 
-MODELS = ("midpoint", "set-membership")
+MODELS = ("midpoint", "set-membership", "likelihood")
 GIMBAL = 0.05  # |cos pitch| below this: printed roll and yaw are not smooth in the rotation
 PULL = 0.05  # weight of the pull toward the middle in the set-membership residual
 
@@ -41,6 +50,8 @@ class Targets:
     quantised_rot: Array      # (N,) bool: the rotation is compared as printed rpy
     rotations: Array          # (N, 3, 3) measured rotations (identity when position only)
     labels: tuple[str, ...]
+    joint_sigma: Array | None = None  # (N, 6) 1-sigma of each number from quantised joints
+    joint_extra: Array | None = None  # (N, 6) what the joints added to ``half``
 
     @property
     def scale(self) -> Array:
@@ -120,25 +131,42 @@ def residuals(e: Array, t: Targets, model: str) -> tuple[Array, Array]:
         excess = np.sign(e) * np.maximum(np.abs(e) - t.half, 0.0)
         r = (excess + PULL * e) / s
         d = (np.where(np.abs(e) > t.half, 1.0, 0.0) + PULL) / s
+    elif model == "likelihood":
+        joints = t.joint_sigma if t.joint_sigma is not None else np.zeros_like(e)
+        own = t.half - (t.joint_extra if t.joint_extra is not None else 0.0)
+        r, d = likelihood.residuals(e, own, likelihood.blur(t.sigma, joints, own))
     else:
         raise ValueError(f"unknown quantisation model '{model}' (expected {', '.join(MODELS)})")
     return np.where(t.used, r, 0.0), np.where(t.used, d, 0.0)
 
 
-def scores(e: Array, t: Targets) -> Array:
-    """(N,) how far each reading is outside its intervals, in its own 1-sigma (0: inside)."""
+def scores(e: Array, t: Targets, model: str = "midpoint") -> Array:
+    """(N,) how far each reading is outside its intervals, in its own 1-sigma (0: inside).
+
+    For the likelihood model, the largest |residual| of its numbers: how improbable the
+    printed number is, in sigmas of the Gaussian that blurs its interval's edges (noise and the
+    joints' printed steps); for the others, the excess over the (worst-case widened) interval
+    in units of the interval's own 1-sigma."""
+    if model == "likelihood":
+        r, _ = residuals(e, t, model)
+        return np.abs(r).max(axis=1)
     excess = np.maximum(np.abs(e) - t.half, 0.0) / t.scale
     return np.where(t.used, excess, 0.0).max(axis=1)
 
 
 def joint_midpoints(measurements: Sequence[Measurement]) -> Array:
     """(N, n) joint values: the middles of the printed values' intervals when truncated."""
-    return np.array([[sum(interval(float(v), m.step_q)) / 2 for v in m.q] if m.step_q > 0
+    return np.array([[sum(interval(float(v), m.step_q)) / 2 for v in m.q]
+                     if m.step_q > 0 and not m.q_rounded
                      else np.asarray(m.q, float) for m in measurements], float)
 
 
 def widen_for_joints(t: Targets, joint_jacobian: Array, step_q: Array) -> Targets:
-    """Targets whose intervals also hold what truncated joint values allow: each number's
-    half-width grows by sum_j |d number / d q_j| step_q / 2 (``joint_jacobian`` (N, 6, n))."""
+    """Targets whose intervals also hold what printed joint values allow: each number's
+    half-width grows by sum_j |d number / d q_j| step_q / 2 (``joint_jacobian`` (N, 6, n)),
+    and its blur (``joint_sigma``) is the 1-sigma of the uniform joint errors it sums."""
     extra = np.abs(joint_jacobian).sum(axis=2) * step_q[:, None] / 2
-    return replace(t, half=t.half + np.where(t.used, extra, 0.0))
+    sig = np.sqrt((joint_jacobian ** 2).sum(axis=2) / 12) * step_q[:, None]
+    extra = np.where(t.used, extra, 0.0)
+    return replace(t, half=t.half + extra, joint_extra=extra,
+                   joint_sigma=np.where(t.used, sig, 0.0))

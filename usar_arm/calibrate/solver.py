@@ -8,39 +8,27 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from usar_arm.calibrate import derivatives
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.spatial import Array
 
 RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
-STEP = 1e-6             # numeric Jacobian step (m, rad)
 
 
 def jacobian(model: ErrorModel, p: Array, cols: Sequence[int], q: Array, base: Array,
-              t: qm.Targets) -> Array:
-    """d errors / d p[cols] (N*6, len(cols)), central differences."""
-    out = np.empty((q.shape[0] * 6, len(cols)))
-    for k, c in enumerate(cols):
-        hi, lo = p.copy(), p.copy()
-        hi[c] += STEP
-        lo[c] -= STEP
-        d = qm.errors(model.poses(hi, q, base), t) - qm.errors(model.poses(lo, q, base), t)
-        out[:, k] = (d / (2 * STEP)).ravel()
-    return out
+             t: qm.Targets) -> Array:
+    """d errors / d p[cols] (N*6, len(cols)), analytic (:mod:`.derivatives`)."""
+    poses, jac = derivatives.pose_jacobian(model, p, q, base)
+    return derivatives.number_jacobian(poses, jac[:, :, list(cols)], t).reshape(
+        q.shape[0] * 6, len(cols))
 
 
 def joint_jacobian(model: ErrorModel, q: Array, base: Array, t: qm.Targets) -> Array:
-    """(N, 6, n) d errors / d q at the nominal parameters (central differences)."""
-    p = np.zeros(model.size)
-    out = np.empty((q.shape[0], 6, q.shape[1]))
-    for j in range(q.shape[1]):
-        hi, lo = q.copy(), q.copy()
-        hi[:, j] += STEP
-        lo[:, j] -= STEP
-        out[:, :, j] = (qm.errors(model.poses(p, hi, base), t)
-                        - qm.errors(model.poses(p, lo, base), t)) / (2 * STEP)
-    return out
+    """(N, 6, n) d errors / d q at the nominal parameters (analytic)."""
+    poses, jac = derivatives.joint_pose_jacobian(model, np.zeros(model.size), q, base)
+    return derivatives.number_jacobian(poses, jac, t)
 
 
 def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], int]:

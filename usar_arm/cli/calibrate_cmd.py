@@ -42,8 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--out", default="calibrated", metavar="DIR",
                    help="where to write (default ./calibrated)")
     p.add_argument("--quantisation", default="auto",
-                   choices=["auto", "midpoint", "set-membership"],
-                   help="model of truncated readings (default auto = set-membership)")
+                   choices=["auto", "midpoint", "set-membership", "likelihood"],
+                   help="model of truncated readings (default auto = likelihood)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_robot_mode(p)
     add_verbosity(p)
@@ -68,6 +68,10 @@ def add_robot_mode(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scene", default=None,
                    help="scene the tour must avoid (a shipped name or a YAML file)")
     p.add_argument("--seed", type=int, default=0, help="seed of the pose choice (default 0)")
+    p.add_argument("--readings", default=None, metavar="FILE",
+                   help="calibrate from the readings of an earlier tour (the "
+                        "<Robot>.readings.csv every calibration writes) instead of touring: "
+                        "the same calibrated description, byte for byte")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ from usar_arm.cli.common import err, out, print_json
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.fileio import write_atomic
 
 
 def _mm(x: float) -> str:
@@ -31,16 +32,21 @@ def has_tip_sensor(desc: Description) -> bool:
 
 
 def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: str | None,
-              seed: int, say: Callable[[str], None] = out
+              seed: int, say: Callable[[str], None] = out, readings: str | None = None
               ) -> tuple[Description, WireCalibration]:
-    """Calibrate with a progress line on stderr, then ``say`` the before/after figures."""
-    err(f"calibrating {desc.chain.name}: a tour through {poses} poses, reading its tip "
-        "sensor...")
+    """Calibrate with a progress line on stderr, then ``say`` the before/after figures
+    (``readings``: a recorded tour's readings file instead of a tour)."""
+    if readings is None:
+        err(f"calibrating {desc.chain.name}: a tour through {poses} poses, reading its tip "
+            "sensor...")
+    else:
+        err(f"calibrating {desc.chain.name} from the tour readings in {readings}...")
 
     def tick(done: int, total: int) -> None:
         err(f"  poses {done}/{total}")
 
-    calibrated, result = calibrate_description(desc, options, poses, scene, seed, tick)
+    calibrated, result = calibrate_description(desc, options, poses, scene, seed, tick,
+                                               readings)
     fit, val = result.calibration.fit.summary(), result.validation.summary()
     cal = result.calibration
     say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
@@ -60,6 +66,14 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
             f"{_mm(truth['max_joint_axis_error_rad'])} mrad")
     say(f"  tool point: {result.tool_point}")
     return calibrated, result
+
+
+def write_readings(result: WireCalibration, out_dir: str | Path, name: str) -> Path | None:
+    """The tour's readings beside the description (``<name>.readings.csv``): what
+    ``--readings`` takes to calibrate again without a tour, byte for byte the same."""
+    if result.tour is None:
+        return None
+    return write_atomic(Path(out_dir) / f"{name}.readings.csv", result.tour.csv())
 
 
 def residual_picture(result: WireCalibration, path: Path) -> Path:
@@ -83,8 +97,11 @@ def calibrate_robot(args: argparse.Namespace) -> int:
     err(f"discovering {options.robot_class}...")
     desc = describe(options)
     calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed,
-                                   err if args.json else out)
+                                   err if args.json else out, args.readings)
     paths = write_description(calibrated, args.out)
+    recorded = write_readings(result, args.out, desc.chain.name)
+    if recorded is not None:
+        paths["readings"] = recorded
     picture = residual_picture(result, Path(args.out) / f"{desc.chain.name}.calibration.png")
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},

@@ -6,12 +6,12 @@ import argparse
 from pathlib import Path
 
 from usar_arm.cli.calibrate_cmd import POSES
-from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor
+from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor, write_readings
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
 from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError
+from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
 
@@ -35,6 +35,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                         "sensor is first calibrated through it (a tour of --poses poses)")
     p.add_argument("--poses", type=int, default=POSES, metavar="N",
                    help=f"poses of the calibration tour (default {POSES})")
+    p.add_argument("--readings", default=None, metavar="FILE",
+                   help="calibrate from the readings of an earlier tour (the "
+                        "<Robot>.readings.csv a calibration writes beside the description) "
+                        "instead of touring: the same calibrated description, byte for byte")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(p)
     p.set_defaults(handler=run_urdf)
@@ -79,11 +83,14 @@ def _print_table(desc: Description) -> None:
 def run_urdf(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     options = options_from(args)
+    if args.readings is not None and args.no_calibrate:
+        raise InvalidInputError("--readings calibrates; it cannot go with --no-calibrate")
     if not args.no_calibrate:
         check_poses(args.poses)
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
     desc = describe(options)
+    result = None
     if args.no_calibrate:
         err("not calibrating (--no-calibrate): the description is as learnt")
     elif not has_tip_sensor(desc):
@@ -94,10 +101,17 @@ def run_urdf(args: argparse.Namespace) -> int:
         err("not calibrating: calibration works on z-up descriptions (--frame z-up)")
     else:
         try:
-            desc, _ = calibrate(desc, options, args.poses, None, 0, err if args.json else out)
+            desc, result = calibrate(desc, options, args.poses, None, 0,
+                                     err if args.json else out, args.readings)
         except (CalibrationError, ExecutionAbortedError) as exc:
+            if args.readings is not None:
+                raise
             err(f"calibration failed, so the description is as learnt: {exc}")
     paths = write_description(desc, args.out_dir)
+    if result is not None:
+        recorded = write_readings(result, args.out_dir, desc.chain.name)
+        if recorded is not None:
+            paths["readings"] = recorded
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
                     "joints": _joint_rows(desc), "warnings": list(desc.warnings),

@@ -9,7 +9,9 @@ commanding ``u = q_d + a q_d' - c`` cancels that.
 The wire reports neither D nor masses, so ``a`` and ``c`` are identified from a short
 excitation: the commands sent are known exactly, the first-order response to them is simulated
 exactly between the 10 Hz ASTA samples, and ``a`` (golden-section search) and ``c`` (least
-squares) are fitted per joint.
+squares) are fitted per joint. A joint whose inertia matters (``b q'' + a q' + q = u + c``,
+:mod:`.drive_inertia`: a carriage on a soft rail) is recognised by that model fitting its
+samples far better (:data:`INERTIA_GAIN`); its feedforward then adds ``b q_d''``.
 """
 
 from __future__ import annotations
@@ -23,26 +25,37 @@ from usar_arm.spatial import Array
 
 LAG_RANGE = (1e-3, 3.0)
 """Lags (s) the identification searches."""
+INERTIA_GAIN = 0.5
+"""The second-order model is taken for a joint when its RMS residual is below this fraction of
+the first-order model's."""
+RESOLUTION = 1e-4
+"""Residuals below this (rad or m; the ASTA print step) cannot tell the models apart."""
 
 
 @dataclass(frozen=True)
 class DriveModel:
-    """Per-joint lag (s) and steady offset (rad or m), and how they were obtained."""
+    """Per-joint lag (s), inertia (s^2; 0 for a first-order joint) and steady offset (rad or
+    m), and how they were obtained."""
 
     lag: Array
     offset: Array
     residual: Array
     """RMS fit residual per joint (rad or m)."""
     source: str = "identified"
+    inertia: Array | None = None
 
     @classmethod
     def none(cls, n: int) -> DriveModel:
         """No feedforward."""
         return cls(np.zeros(n), np.zeros(n), np.zeros(n), "none")
 
-    def command(self, q: Array, qd: Array) -> Array:
-        """The target that makes the joints follow position ``q`` moving at ``qd``."""
-        return q + self.lag * qd - self.offset
+    def command(self, q: Array, qd: Array, qdd: Array | None = None) -> Array:
+        """The target that makes the joints follow position ``q`` moving at ``qd`` and
+        accelerating at ``qdd``."""
+        out = q + self.lag * qd - self.offset
+        if self.inertia is not None and qdd is not None:
+            out = out + self.inertia * qdd
+        return out
 
 
 def simulate(times: Array, commands: Array, q0: float, lag: float, at: Array) -> Array:
@@ -106,11 +119,22 @@ def fit_joint(times: Array, commands: Array, sample_times: Array, samples: Array
 
 
 def fit(times: Array, commands: Array, sample_times: Array, samples: Array) -> DriveModel:
-    """Fit every joint (commands (m, n), samples (k, n))."""
+    """Fit every joint (commands (m, n), samples (k, n)): first order, or second order where
+    that fits far better (see the module)."""
+    from usar_arm.control import drive_inertia
+
     n = commands.shape[1]
-    fits = [fit_joint(times, commands[:, j], sample_times, samples[:, j]) for j in range(n)]
-    return DriveModel(np.array([f[0] for f in fits]), np.array([f[1] for f in fits]),
-                      np.array([f[2] for f in fits]))
+    lag, inertia, offset, residual = (np.zeros(n) for _ in range(4))
+    for j in range(n):
+        lag[j], offset[j], residual[j] = fit_joint(times, commands[:, j], sample_times,
+                                                   samples[:, j])
+        if residual[j] <= RESOLUTION:
+            continue
+        a, b, c, rms = drive_inertia.fit_joint(times, commands[:, j], sample_times,
+                                               samples[:, j])
+        if rms < INERTIA_GAIN * residual[j]:
+            lag[j], inertia[j], offset[j], residual[j] = a, b, c, rms
+    return DriveModel(lag, offset, residual, inertia=inertia)
 
 
 def excitation(start: Array, lower: Array, upper: Array, amplitude: Array, duration: float

@@ -257,7 +257,8 @@ class Executor:
         samples = np.array(feedback.values)
         usable = sample_times >= 0
         self.drive = fit(sent - sent[0], commands, sample_times[usable], samples[usable])
-        log.info("drive lags %s s (fit rms %s)", np.round(self.drive.lag, 3),
+        log.info("drive lags %s s, inertias %s s^2 (fit rms %s)", np.round(self.drive.lag, 3),
+                 np.round(self.drive.inertia if self.drive.inertia is not None else 0.0, 4),
                  np.round(self.drive.residual, 5))
         return self.drive
 
@@ -341,7 +342,7 @@ class Executor:
                 # Each target holds for dt (a zero-order hold): aim at the middle of its period.
                 q, v = trajectory.at(k * dt + dt / 2)
                 sends[k] = time.perf_counter()
-                self.send(drive.command(q, v))
+                self.send(drive.command(q, v, trajectory.acceleration(k * dt + dt / 2)))
                 self._holding = drive.command(q, np.zeros_like(v))
                 checked = self._watch(trajectory, feedback, t0, checked, worst)
         finally:

@@ -103,6 +103,17 @@ class Trajectory:
              + (3 * h2 - 2 * h) * v1) / dt
         return q, v
 
+    def acceleration(self, time: float) -> Array:
+        """Acceleration at ``time`` (s): the samples interpolated linearly; zero outside
+        [0, duration]."""
+        if time <= 0 or time >= self.duration:
+            return np.zeros(self.qdd.shape[1])
+        dt = self.t[1] - self.t[0]
+        k = min(int(time / dt), len(self.t) - 2)
+        h = (time - self.t[k]) / dt
+        out: Array = (1 - h) * self.qdd[k] + h * self.qdd[k + 1]
+        return out
+
     # ------------------------------------------------------------------ files
     def to_json(self) -> dict[str, Any]:
         """The JSON document ``usar-arm plan --out`` writes."""

@@ -129,6 +129,11 @@ class NumberStyle:
         return float(self.scalar(value))
 
 
+ROUNDED_SCALARS = True
+"""Raw engine floats (ASTA Value, Time, CONF limits) are printed rounded to their step (the
+engine's float formatting); FloatString numbers (GroundTruth poses, actuator GEO locations) are
+truncated toward zero. A printed raw scalar v with step s stands for [v - s/2, v + s/2]."""
+
 UDK = NumberStyle("udk", scalar_decimals=4, fixed_precision=3, vector_decimals=2)
 FULL = NumberStyle("full", scalar_decimals=None, fixed_precision=None, vector_decimals=None)
 
