@@ -7,8 +7,9 @@ goal) run through the folder's task_composer_plugins.yaml pipeline (one Taskflow
 an empty ProfileDictionary, i.e. Tesseract's default profiles:
 
 * OMPLPipeline: min length -> OMPL (default profile: parallel RRTConnect, 5 s planning time;
-  the profile's fields are not bound in Python 0.5.1, so the benchmark's 2 s budget cannot be
-  given: answers after 2 s are not verified) -> discrete contact check -> iterative spline;
+  the profile's solver settings are not bound in Python 0.5.1, so the benchmark's 2 s budget
+  cannot be given: answers after 2 s are not verified) -> discrete contact check -> iterative
+  spline;
 * TrajOptPipeline: the same with TrajOpt (a local optimiser seeded with the straight joint
   line: it applies where a path near that line exists) instead of OMPL.
 
