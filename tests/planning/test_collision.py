@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -126,3 +127,46 @@ def test_unknown_links_in_allow_are_rejected(kr60: Robot, tmp_path: Path) -> Non
     with pytest.raises(FileFormatError) as info:
         kr60.collision_world(load_scene(path))
     assert "link_9" in str(info.value) and "link_6" in str(info.value)
+
+
+@pytest.mark.parametrize("robot_name", ["kr60", "fanuc"])
+def test_a_thin_plate_through_any_joint_touches_the_arm(robot_name: str,
+                                                        request: pytest.FixtureRequest) -> None:
+    """The links' cylinders meet at every joint: a 5 mm plate (0.4 m square, any orientation)
+    centred on a joint's origin, or on the tip, collides with the arm, at random configurations.
+    (Cylinders trimmed short of the joints once let a 5 cm floor slab pass through the elbow.)
+    The one exception is a rail carriage's joint on the mount (the Fanuc's joint_a1 at the base
+    origin): the carriage stands on the mount, and nothing passes between them. The joints are
+    placed by yourdfpy's forward kinematics of the URDF text, not usar-arm's."""
+    import yourdfpy
+
+    from usar_arm.planning.scene import Scene, SceneObject
+
+    robot: Robot = request.getfixturevalue(robot_name)
+    urdf = yourdfpy.URDF.load(io.StringIO(robot.urdf))
+    moving = [j for j in robot.chain.joints if j.type.value != "fixed"]
+    on_mount = moving[0].type.value == "prismatic" and not any(moving[0].origin.xyz)
+    rng = np.random.default_rng(7)
+    hits = 0
+    for q in rng.uniform(robot.chain.lower(), robot.chain.upper(), size=(12, len(moving))):
+        urdf.update_cfg(dict(zip([j.name for j in moving], q, strict=True)))
+        points = [urdf.get_transform(j.child)[:3, 3] for j in moving]
+        points.append(urdf.get_transform(robot.chain.frames["flange"])[:3, 3])
+        for k, p in enumerate(points):
+            if k == 0 and on_mount:
+                continue
+            axis = rng.normal(size=3)
+            axis /= np.linalg.norm(axis)
+            angle = rng.uniform(0, np.pi)
+            kx = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]],
+                           [-axis[1], axis[0], 0]])
+            pose = np.eye(4)
+            pose[:3, :3] = np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * kx @ kx
+            pose[:3, 3] = p
+            plate = SceneObject("plate", Box((0.4, 0.4, 0.005)), pose)
+            world = robot.collision_world(Scene("plate", (plate,)))
+            assert world.contacts_brute_force(q), (
+                f"a plate through point {k} ({p.round(3).tolist()}) at q={q.round(3).tolist()} "
+                "touches no link: the arm has a gap there")
+            hits += 1
+    assert hits == 12 * (len(moving) + 1 - on_mount)

@@ -166,7 +166,15 @@ def test_plans_are_reproducible_with_a_seed(tmp_path: Path) -> None:
 def test_a_pose_no_ik_solution_can_be_reached_for_is_a_no_path_error(kr60: Robot) -> None:
     # (raised AttributeError: NoPathError has time_limit_s, not time_limit)
     world = kr60.collision_world(load_scene("cage"))
-    a, b = _problems(kr60, "cage", 1, seed=3)[0]
+    ik = kr60.ik_solver()
+    for a, b in _problems(kr60, "cage", 20, seed=3):  # the first whose every solution needs OMPL
+        pose = kr60.kinematics.frame_pose(b, "tool0")
+        solutions = [s.q for s in ik.solve(pose, all_solutions=True).solutions]
+        if all(world.in_collision_many(edge_configurations(a, q, 0.01)).any()
+               for q in solutions):
+            break
+    else:
+        raise AssertionError("no problem whose every IK solution is blocked on the straight line")
     with pytest.raises(NoPathError) as info:
         plan_motion(kr60, world, a, pose=kr60.kinematics.frame_pose(b, "tool0"),
                     options=MotionOptions(ompl=OmplOptions(time_limit=1e-7)))
