@@ -9,6 +9,7 @@ run can be resumed.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from usar_arm.robot import Robot, robot_from_texts
 from usar_arm.spatial import Array
 from usar_arm.version import __version__
 from usar_arm.workspace.arm_model import ArmBuilder
+from usar_arm.workspace.edges import EdgeResult
 from usar_arm.workspace.engine import (
     Backend,
     ChunkStore,
@@ -44,8 +46,10 @@ from usar_arm.workspace.pool import ProcessBackend
 from usar_arm.workspace.reach import (
     ReachPlan,
     ReachSettings,
+    add_edges,
     assemble,
     collision_checks,
+    edge_search,
     plan_reach,
     reach_job,
 )
@@ -106,25 +110,35 @@ def plan_map(robot: Robot, settings: ReachSettings) -> ReachPlan:
 
 @dataclass(frozen=True)
 class ReachRun:
-    """A computed map, how the run went, its plan and the collision checks it cost."""
+    """A computed map, how the run went, its plan, the collision checks its centres cost and
+    what the edge search found (None when the settings turn it off)."""
 
     map: ReachMap
     stats: RunStats
     plan: ReachPlan
     collision_checks: int
+    edges: EdgeResult | None = None
 
 
 def reach_map(robot: Robot, scene: Scene, settings: ReachSettings, backend: Backend,
               out_dir: str | Path | None = None, resume: bool = False,
-              progress: Progress | None = None, plan: ReachPlan | None = None) -> ReachRun:
-    """The reachability map of ``robot`` in ``scene``. With ``out_dir``, finished chunks are
-    kept in ``out_dir/.chunks`` (and, with ``resume``, taken from there) until the caller has
-    written the map and calls :func:`finish`."""
+              progress: Progress | None = None, plan: ReachPlan | None = None,
+              before_edges: Callable[[], None] | None = None) -> ReachRun:
+    """The reachability map of ``robot`` in ``scene``: every voxel centre on ``backend``,
+    then (unless the settings turn it off) the edge search in this process, announced by
+    ``before_edges``. With ``out_dir``, finished chunks are kept in ``out_dir/.chunks`` (and,
+    with ``resume``, taken from there) until the caller has written the map and calls
+    :func:`finish`."""
     plan = plan or plan_map(robot, settings)
     job = reach_job(plan, arm_builder(robot), scene, description_text(robot), __version__)
     results, stats, _ = _run(job, backend, out_dir, resume, progress)
-    return ReachRun(assemble(plan, results, robot.chain.joint_names), stats, plan,
-                    collision_checks(results))
+    m = assemble(plan, results, robot.chain.joint_names)
+    if not settings.edges:
+        return ReachRun(m, stats, plan, collision_checks(results))
+    if before_edges is not None:
+        before_edges()
+    found = edge_search(plan, robot, scene).run(m.index > 0, m.best_q.reshape(-1, robot.chain.dof))
+    return ReachRun(add_edges(m, found), stats, plan, collision_checks(results), found)
 
 
 def finish(out_dir: str | Path) -> None:

@@ -14,8 +14,9 @@ from usar_arm.robot import Robot, robot_from_description, robot_from_files
 from usar_arm.workspace.reach import ReachSettings
 
 ROOT = Path(__file__).resolve().parents[2]
-SMALL = ReachSettings(resolution=0.25, orientations=24)
-"""A map that takes about a second: 25 cm voxels, 24 orientations."""
+SMALL = ReachSettings(resolution=0.25, orientations=24, edge_draws=200_000)
+"""A map that takes a few seconds: 25 cm voxels, 24 orientations, the edge search with
+200,000 draws."""
 
 
 @pytest.fixture(scope="session")

@@ -195,3 +195,6 @@ def warm_up() -> None:
             numeric_solutions(*args)
     z = np.zeros((1, 6))
     manipulabilities(z, np.zeros((6, 3)), np.zeros((6, 3)), np.ones(6), np.eye(4))
+    from usar_arm.workspace import edge_kernel
+
+    edge_kernel.warm_up()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +21,8 @@ from usar_arm.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.scene import Scene
 from usar_arm.spatial import Array
-from usar_arm.workspace.arm_model import ArmBuilder, scene_fingerprint
+from usar_arm.workspace.arm_model import ArmBuilder, ArmModel, scene_fingerprint
+from usar_arm.workspace.edges import EdgeResult, EdgeSearch, EdgeSettings
 from usar_arm.workspace.engine import Job, Result, digest
 from usar_arm.workspace.grid import (
     ReachBound,
@@ -49,6 +50,10 @@ class ReachSettings:
         cone_deg: restrict the tool z axis to this half-angle (deg) about ``cone_axis``
             (base_link; default straight down), or None for all of SO(3).
         chunk_queries: about this many queries per chunk.
+        edges: search the cells whose centre is out of reach but which the arm reaches
+            somewhere (:mod:`.edges`); off, a reachable pose near the edge of the reach may
+            land in a voxel of index 0. edge_draws: random configurations of that search
+            (:mod:`.cell_sampling`).
     """
 
     resolution: float = 0.05
@@ -56,6 +61,8 @@ class ReachSettings:
     cone_deg: float | None = None
     cone_axis: tuple[float, float, float] = (0.0, 0.0, -1.0)
     chunk_queries: int = 32768
+    edges: bool = True
+    edge_draws: int = 4_000_000
 
 
 @dataclass(frozen=True)
@@ -178,7 +185,34 @@ def assemble(plan: ReachPlan, results: list[Result], joint_names: tuple[str, ...
     return ReachMap(index.reshape(shape), manip.reshape(shape), room.reshape(shape),
                     best_q.reshape(*shape, len(joint_names)), best_o.reshape(shape),
                     bits.reshape(*shape, bits.shape[1]), plan.grid.origin.copy(),
-                    plan.grid.resolution, plan.orientations.quaternions.copy(), joint_names)
+                    plan.grid.resolution, plan.orientations.quaternions.copy(), joint_names,
+                    np.zeros(shape, bool))
+
+
+def add_edges(m: ReachMap, edges: EdgeResult) -> ReachMap:
+    """``m`` with the edge voxels the search found (:mod:`.edges`) marked."""
+    n_o = len(m.orientations)
+    index, manip, room = m.index.copy(), m.manipulability.copy(), m.margin.copy()
+    best_q, best_o = m.best_q.copy(), m.best_orientation.copy()
+    bits, edge = m.reachable.copy(), m.edge.copy()
+    ijk = np.unravel_index(edges.voxels, m.shape)
+    index[ijk] = 1.0 / n_o
+    manip[ijk], room[ijk] = edges.manipulability, edges.margin
+    best_q[ijk], best_o[ijk], edge[ijk] = edges.q, edges.orientation, True
+    reached = np.zeros((len(edges.voxels), n_o), bool)
+    reached[np.arange(len(edges.voxels)), edges.orientation] = True
+    bits[ijk] = np.packbits(reached, axis=1)
+    return replace(m, index=index, manipulability=manip, margin=room, best_q=best_q,
+                   best_orientation=best_o, reachable=bits, edge=edge)
+
+
+def edge_search(plan: ReachPlan, arm: ArmModel, scene: Scene) -> EdgeSearch:
+    """The edge search of a map of ``arm`` in ``scene`` planned by ``plan``."""
+    allowed = np.zeros(plan.grid.size, bool)
+    allowed[plan.voxels] = True
+    return EdgeSearch(AllSolutions(arm.chain, arm.ik_solver()), arm.collision_world(scene),
+                      plan.orientations.matrices(), plan.grid, allowed.reshape(plan.grid.shape),
+                      EdgeSettings(draws=plan.settings.edge_draws))
 
 
 def collision_checks(results: list[Result]) -> int:

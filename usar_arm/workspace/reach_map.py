@@ -1,4 +1,4 @@
-"""A reachability map: per voxel of a grid in base_link, how well tool0 reaches its centre.
+"""A reachability map: per voxel of a grid in base_link, how well tool0 reaches its cell.
 
 Written as ``reach.npz`` (the arrays, no pickled objects) and read back by :meth:`ReachMap.load`.
 Voxel (i, j, k) is centred at ``origin + (i, j, k) * resolution``.
@@ -18,7 +18,7 @@ from usar_arm.fileio import write_atomic
 from usar_arm.spatial import Array
 
 ARRAYS = ("index", "manipulability", "margin", "best_q", "best_orientation", "reachable",
-          "origin", "resolution", "orientations", "joint_names")
+          "origin", "resolution", "orientations", "joint_names", "edge")
 
 
 @dataclass(frozen=True)
@@ -26,20 +26,26 @@ class ReachMap:
     """The map's arrays.
 
     Attributes:
-        index: (nx, ny, nz) float32 in [0, 1]: the fraction of the orientations reached
-            collision-free at the voxel centre (the reachability index).
+        index: (nx, ny, nz) float32 in [0, 1]: the reachability index, the fraction of the
+            orientations reached collision-free at the voxel's centre; for an edge voxel
+            (``edge``), whose centre the arm reaches in none of them though it reaches some
+            point of the cell, the fraction of the orientations nearest its witnesses' (a lower
+            bound, 1 / m for one witness).
         manipulability: (nx, ny, nz) float32: the best Yoshikawa manipulability of those
             solutions (0 where the index is 0).
         margin: (nx, ny, nz) float32: the largest distance to the nearest joint limit among
             them (rad, or m for a prismatic joint; 0 where the index is 0).
         best_q: (nx, ny, nz, n) float64: the solution with the best manipulability (NaN where
-            the index is 0): a witness anyone can check by FK and a collision judge.
+            the index is 0): a witness anyone can check by FK and a collision judge (tool0 at
+            the centre in orientation ``best_orientation``; for an edge voxel, tool0 inside
+            the cell in an orientation nearer ``best_orientation`` than any other of the set).
         best_orientation: (nx, ny, nz) int32: its orientation's row (-1 where none).
         reachable: (nx, ny, nz, ceil(m / 8)) uint8: which orientations were reached, as bits
             (``numpy.unpackbits(..., axis=-1, count=m)``).
         origin: (3,) m, the centre of voxel (0, 0, 0). resolution: m.
         orientations: (m, 4) unit quaternions (w, x, y, z) of tool0 in base_link.
         joint_names: the joints of ``best_q``.
+        edge: (nx, ny, nz) bool: the voxels marked by the edge search (:mod:`.edges`).
     """
 
     index: NDArray[np.float32]
@@ -52,6 +58,7 @@ class ReachMap:
     resolution: float
     orientations: Array
     joint_names: tuple[str, ...]
+    edge: NDArray[np.bool_]
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -90,7 +97,8 @@ class ReachMap:
             best_q=self.best_q, best_orientation=self.best_orientation,
             reachable=self.reachable, origin=self.origin,
             resolution=np.float64(self.resolution), orientations=self.orientations,
-            joint_names=np.array(self.joint_names), frame=np.array("base_link"))
+            joint_names=np.array(self.joint_names), edge=self.edge,
+            frame=np.array("base_link"))
         return buffer.getvalue()
 
     def save(self, path: str | Path) -> Path:
@@ -113,6 +121,7 @@ class ReachMap:
                 return cls(data["index"], data["manipulability"], data["margin"],
                            data["best_q"], data["best_orientation"], data["reachable"],
                            data["origin"], float(data["resolution"]), data["orientations"],
-                           tuple(str(n) for n in data["joint_names"]))
+                           tuple(str(n) for n in data["joint_names"]),
+                           data["edge"].astype(bool))
         except (OSError, ValueError) as exc:
             raise FileFormatError(str(path), f"cannot read a reachability map: {exc}") from None
