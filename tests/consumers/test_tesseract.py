@@ -1,8 +1,9 @@
 """Tesseract, an independent planning stack, consumes what ``usar-arm tesseract-config`` writes.
 
-For each description (the calibrated and the as-learnt KR60, the Fanuc on its rail, and a KR60
-whose wrist is made exactly spherical so that OPW applies) Tesseract, driven in its own venv by
-a script that imports nothing from usar-arm, loads the folder and answers; usar-arm checks:
+For each description (the checked-in KR60 and Fanuc on its rail, each calibrated and as
+learnt, and a KR60 whose wrist is made exactly spherical so that OPW applies) Tesseract, driven
+in its own venv by a script that imports nothing from usar-arm, loads the folder and answers;
+usar-arm checks:
 
 * names and limits of every link and joint;
 * FK of tool0 at 1,000 random configurations, equal to usar-arm's to 1e-9 m and 1e-9 rad;
@@ -34,6 +35,7 @@ import numpy as np
 import pytest
 
 from tests.consumers.conftest import (
+    DESCRIPTIONS,
     SCENES,
     SPHERICAL_WRIST,
     configure,
@@ -49,7 +51,7 @@ from usar_arm.urdf.tesseract import KDL_SOLVER, OPW_SOLVER, TesseractConfig
 SCENE_FILES = Path(__file__).resolve().parents[2] / "usar_arm" / "data" / "scenes"
 """The shipped scene files: the driver reads them itself (its own YAML reading, pose formula
 and Tesseract's mesh loader), usar-arm's judge through usar-arm's scene reader."""
-NAMES = ("KR60", "KR60-as-learnt", "Fanuc_M16iB20", SPHERICAL_WRIST)
+NAMES = (*DESCRIPTIONS, SPHERICAL_WRIST)
 FK_SAMPLES, CONTACT_SAMPLES, IK_POSES, PLANS = 1000, 1000, 100, 5
 KDL_TOLERANCE = (1e-5, 1e-4)
 """m, rad: Tesseract's KDL Levenberg-Marquardt solver stops when its weighted error (weights 1

@@ -19,11 +19,12 @@ from usar_arm.urdf.moveit import moveit_files
 from usar_arm.urdf.validate import find_check_urdf, semantic_problems
 
 GOLDEN = Path(__file__).resolve().parents[2] / "robots" / "generated" / "as-learnt"
-"""The as-learnt KR60 (usar-arm urdf --no-calibrate): byte-identical on every run."""
+"""The as-learnt KR60 and Fanuc_M16iB20 (usar-arm urdf --no-calibrate): byte-identical on every
+run."""
 CALIBRATED = GOLDEN.parent
-"""The calibrated KR60 and the readings of the tour it was calibrated from: a new tour gives new
-readings (the simulator's state at each reading depends on when each streamed command
-arrived), the same readings give the same files byte for byte."""
+"""The calibrated KR60 and Fanuc_M16iB20 and the readings of the tours they were calibrated
+from: a new tour gives new readings (the simulator's state at each reading depends on when each
+streamed command arrived), the same readings give the same files byte for byte."""
 
 
 @pytest.fixture(scope="module")
@@ -41,20 +42,39 @@ def test_regenerating_the_kr60_gives_byte_identical_files(kr60: Description,
         assert path.read_bytes() == golden.read_bytes(), f"{path.name} differs from the golden"
 
 
-def test_the_calibrated_kr60_is_regenerated_byte_identically_from_its_readings(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The README's command: usar-arm urdf --robot KR60 --readings
-    robots/generated/KR60.readings.csv --out-dir robots/generated."""
+FILES = ("discovery.json", "joint_limits.yaml", "readings.csv", "srdf", "urdf")
+
+
+@pytest.mark.parametrize("robot", ["KR60", "Fanuc_M16iB20"])
+def test_the_calibrated_descriptions_are_regenerated_byte_identically_from_their_readings(
+        robot: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The README's command: usar-arm urdf --robot ROBOT --readings
+    robots/generated/ROBOT.readings.csv --out-dir robots/generated (the Fanuc's tour read a
+    joint 1.2 mrad past its limit: the readings file must still be read back)."""
     monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "out"
-    assert main(["urdf", "--robot", "KR60", "--readings",
-                 str(CALIBRATED / "KR60.readings.csv"), "--out-dir", str(out)]) == EXIT_OK
+    assert main(["urdf", "--robot", robot, "--readings",
+                 str(CALIBRATED / f"{robot}.readings.csv"), "--out-dir", str(out)]) == EXIT_OK
     written = sorted(p.name for p in out.iterdir())
-    assert written == ["KR60.discovery.json", "KR60.joint_limits.yaml", "KR60.readings.csv",
-                       "KR60.srdf", "KR60.urdf"]
+    assert written == [f"{robot}.{suffix}" for suffix in FILES]
     for name in written:
         assert (out / name).read_bytes() == (CALIBRATED / name).read_bytes(), \
             f"{name} differs from robots/generated/{name}"
+
+
+def test_the_as_learnt_fanuc_is_regenerated_byte_identically(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """usar-arm urdf --robot Fanuc_M16iB20 --no-calibrate --out-dir robots/generated/as-learnt
+    (the Fanuc on its rail, 7 joints)."""
+    monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    assert main(["urdf", "--robot", "Fanuc_M16iB20", "--no-calibrate", "--out-dir", str(out),
+                 "-q"]) == EXIT_OK
+    written = sorted(p.name for p in out.iterdir())
+    assert written == [f"Fanuc_M16iB20.{suffix}" for suffix in FILES if suffix != "readings.csv"]
+    for name in written:
+        assert (out / name).read_bytes() == (GOLDEN / name).read_bytes(), \
+            f"{name} differs from robots/generated/as-learnt/{name}"
 
 
 def test_check_urdf_accepts_the_urdf(kr60: Description, tmp_path: Path) -> None:
