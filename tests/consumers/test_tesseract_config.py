@@ -63,7 +63,7 @@ def test_discovering_the_robot_writes_the_same_folder(tmp_path: Path) -> None:
 def test_bad_input_is_refused_and_nothing_is_written(tmp_path: Path) -> None:
     bad = tmp_path / "no room"
     done = _cli("--urdf", str(AS_LEARNT), "--out", str(bad))
-    assert done.returncode == 65 and "cannot be a package name" in done.stderr
+    assert done.returncode == 65 and "cannot be a ROS package name" in done.stderr
     assert not bad.exists()
     lonely = tmp_path / "in" / "KR60.urdf"
     lonely.parent.mkdir()

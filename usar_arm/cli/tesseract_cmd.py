@@ -6,11 +6,13 @@ import argparse
 from pathlib import Path
 
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.errors import EXIT_OK, FileFormatError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.robot import robot_from_files
 from usar_arm.urdf.tesseract import TesseractConfig, TesseractOptions, tesseract_config
+from usar_arm.urdf.tesseract_package import check_package_name
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -23,21 +25,25 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                     "--opw-tolerance, measured against its own forward kinematics; KDL "
                     "otherwise), the contact managers, task composer pipelines, package.xml, "
                     "plan_example.py and a README. DIR's name is the package name its "
-                    "package:// URLs use.")
+                    "package:// URLs use (REP-144: lowercase letters, digits and '_', "
+                    "starting with a letter). DIR must be new, empty or a folder this command "
+                    "wrote: its files are replaced, any other file is kept and listed.")
     add_server_args(p)
     add_description_args(p)
     p.add_argument("--urdf", default=None, metavar="FILE",
                    help="describe this URDF instead of discovering the robot (its SRDF is read "
                         "from beside it unless --srdf is given)")
-    p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
-    p.add_argument("--out", required=True, metavar="DIR", help="folder to write")
+    p.add_argument("--srdf", default=None, metavar="FILE",
+                   help="SRDF for --urdf (only with --urdf)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="folder to write; its name is the package name")
     p.add_argument("--opw-tolerance", type=float, nargs=2, default=(1e-6, 1e-6),
                    metavar=("M", "RAD"),
                    help="largest deviation of OPW forward kinematics from the arm's (position "
                         "in m, rotation in rad) for OPW to be chosen (default 1e-6 1e-6)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=run, usage_error=p.error)
 
 
 def _from_files(args: argparse.Namespace, folder: Path, options: TesseractOptions
@@ -55,7 +61,11 @@ def _from_files(args: argparse.Namespace, folder: Path, options: TesseractOption
 
 def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
-    folder = Path(args.out).resolve()
+    if args.srdf and not args.urdf:
+        args.usage_error("--srdf goes with --urdf (the SRDF of that URDF); a discovered robot "
+                         "brings its own SRDF: give --urdf FILE too, or drop --srdf")
+    folder = check_out_folder(args.out)
+    check_package_name(folder.name, args.robot)
     options = TesseractOptions(*args.opw_tolerance)
     if args.urdf:
         config = _from_files(args, folder, options)
@@ -67,9 +77,13 @@ def run(args: argparse.Namespace) -> int:
                                   options)
     paths = write_tree_atomic(folder, dict(sorted(config.files.items(),
                                                   key=lambda kv: kv[0] == "README.md")))
+    others = other_files(folder, paths)
+    if others:
+        err(report_other_files(folder, others))
     if args.json:
         print_json({"package": config.package, "folder": str(folder),
-                    "files": sorted(str(p) for p in paths), "ik_solver": config.solver,
+                    "files": sorted(str(p) for p in paths), "other_files": others,
+                    "ik_solver": config.solver,
                     "reason": config.reason,
                     "opw": None if config.opw is None else {
                         **{k: getattr(config.opw.parameters, k) for k in (

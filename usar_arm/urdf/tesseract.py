@@ -21,7 +21,6 @@ that holds a ``package.xml``, found through ``TESSERACT_RESOURCE_PATH``):
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +32,7 @@ from usar_arm.urdf.opw_fit import NotOpwError, OpwFit, fit_opw
 from usar_arm.urdf.srdf import GROUP
 from usar_arm.urdf.tesseract_composer import PIPELINES, task_composer_yaml
 from usar_arm.urdf.tesseract_example import example_script
+from usar_arm.urdf.tesseract_package import check_package_name
 from usar_arm.urdf.tesseract_readme import readme
 from usar_arm.urdf.writer import num, nums
 from usar_arm.version import __version__
@@ -42,7 +42,6 @@ KDL_SOLVER = "KDLInvKinChainLMA"
 KDL_NR_SOLVER = "KDLInvKinChainNR"
 OPW_BASE = "opw_base"
 DISCRETE_MANAGER = "BulletDiscreteBVHManager"
-_PACKAGE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 
 
 @dataclass(frozen=True)
@@ -207,14 +206,11 @@ def tesseract_config(chain: KinematicChain, urdf: str, srdf: str, package: str,
     example's motion.
 
     Raises:
-        InvalidInputError: the folder name cannot be a package name.
+        InvalidInputError: the folder name cannot be a ROS package name (REP-144).
         ValidationError: listing every problem of the SRDF and the chain.
     """
     options = options or TesseractOptions()
-    if not _PACKAGE.fullmatch(package):
-        raise InvalidInputError(f"the folder name '{package}' cannot be a package name: "
-                                "Tesseract finds package://NAME/ by the folder's name (use "
-                                "letters, digits, '_', '.', '-')")
+    check_package_name(package, chain.name)
     problems = _check(chain, srdf, package)
     if problems:
         raise ValidationError(f"Tesseract config of {chain.name}", problems)

@@ -1,0 +1,103 @@
+"""``usar-arm tesseract-config``'s checks of its input, before any work: where it may write
+(a folder, never into or under a file, never into a folder usar-arm did not write), the
+folder's name (a ROS package name, REP-144), and --srdf only with --urdf. Writing again into a
+folder replaces its files and keeps, and lists, any other file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from usar_arm.cli import main
+from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
+from usar_arm.urdf.tesseract_package import package_problem, suggest_package_name
+
+GENERATED = Path(__file__).resolve().parents[2] / "robots" / "generated"
+KR60 = str(GENERATED / "as-learnt" / "KR60.urdf")
+FANUC = str(GENERATED / "as-learnt" / "Fanuc_M16iB20.urdf")
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("out", ["a_file", "a_file/kr60_tesseract"])
+def test_a_file_in_the_way_is_refused_and_nothing_is_written(
+        out: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "a_file").write_text("mine\n")
+    code = main(["tesseract-config", "--urdf", KR60, "--out", str(tmp_path / out)])
+    assert code == EXIT_INVALID_INPUT
+    assert f"{tmp_path / 'a_file'} is a file" in capsys.readouterr().err
+    assert _tree(tmp_path) == {"a_file": b"mine\n"}
+
+
+@pytest.mark.parametrize(("name", "rule"), [
+    ("KR60_tesseract", "lowercase"), ("kr60-tesseract", "'-'"), ("no room", "' '"),
+    ("60kr", "start with a letter"), ("kr60__t", "two in a row"), ("kr60_", "at the end"),
+    ("k", "two characters"), ("kr60.tesseract", "'.'")])
+def test_a_folder_name_ros_would_refuse_is_refused_with_a_valid_name(
+        name: str, rule: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["tesseract-config", "--urdf", KR60, "--out", str(tmp_path / name)])
+    message = capsys.readouterr().err
+    assert code == EXIT_INVALID_INPUT and "cannot be a ROS package name" in message
+    assert rule in message and "REP-144" in message
+    suggested = message.rsplit("Use e.g. '", 1)[1].split("'")[0]
+    assert package_problem(suggested) is None, suggested
+    assert not (tmp_path / name).exists()
+
+
+def test_suggested_names_keep_what_they_can() -> None:
+    assert suggest_package_name("KR60-Tesseract") == "kr60_tesseract"
+    assert suggest_package_name("no room") == "no_room"
+    assert suggest_package_name("9", "Fanuc_M16iB20") == "fanuc_m16ib20_tesseract"
+    for good in ("kr60_tesseract", "cell2", "ab"):
+        assert package_problem(good) is None
+
+
+def test_srdf_without_urdf_is_a_usage_error(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(["tesseract-config", "--srdf", KR60.replace(".urdf", ".srdf"), "--out",
+              str(tmp_path / "kr60_tesseract")])
+    assert exit_.value.code == EXIT_USAGE
+    assert "--srdf goes with --urdf" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_folder_usar_arm_did_not_write_is_refused(tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "my_package"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine\n")
+    code = main(["tesseract-config", "--urdf", KR60, "--out", str(folder)])
+    assert code == EXIT_INVALID_INPUT
+    assert "already holds notes.txt and is not a package usar-arm wrote" in \
+        capsys.readouterr().err
+    assert _tree(folder) == {"notes.txt": b"mine\n"}
+
+
+def test_writing_again_replaces_its_files_and_keeps_and_lists_the_others(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "cell_tesseract"
+    assert main(["tesseract-config", "--urdf", FANUC, "--out", str(folder), "-q"]) == EXIT_OK
+    fanuc = _tree(folder)
+    (folder / "my_notes.txt").write_text("mine\n")
+    capsys.readouterr()
+    assert main(["tesseract-config", "--urdf", KR60, "--out", str(folder), "--json"]) == EXIT_OK
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    kr60 = _tree(folder)
+    written = {Path(p).name for p in doc["files"]}
+    stale = sorted(n for n in fanuc if n.startswith("Fanuc_M16iB20."))
+    assert doc["other_files"] == sorted([*stale, "my_notes.txt"])
+    assert set(kr60) == written | set(doc["other_files"])
+    for name in stale:  # kept as they were: usar-arm deletes nothing
+        assert kr60[name] == fanuc[name]
+    for shared in ("README.md", "package.xml", "plan_example.py"):
+        assert kr60[shared] != fanuc[shared] and b"KR60" in kr60[shared]
+    assert "did not write, kept as they were: Fanuc_M16iB20." in captured.err
+    leftovers = [p.name for p in folder.iterdir() if p.name.startswith(".")]
+    assert leftovers == []  # no temporary file left behind
