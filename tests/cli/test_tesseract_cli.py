@@ -1,17 +1,23 @@
 """``usar-arm tesseract-config``'s checks of its input, before any work: where it may write
 (a folder, never into or under a file, never into a folder usar-arm did not write), the
 folder's name (a ROS package name, REP-144), and --srdf only with --urdf. Writing again into a
-folder replaces its files and keeps, and lists, any other file."""
+folder replaces its files and keeps, and lists, any other file. A discovered arm is written as
+``usar-arm urdf`` writes it by default, calibrated through its tip sensor (the calibration the
+description cache holds, else a tour), and so is moveit-config's; --no-calibrate: as learnt."""
 
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
 
 from usar_arm.cli import main
+from usar_arm.description import DescribeOptions
+from usar_arm.embedded import run_discovery
 from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
+from usar_arm.robot import CALIBRATED, cache_folder
 from usar_arm.urdf.tesseract_package import package_problem, suggest_package_name
 
 GENERATED = Path(__file__).resolve().parents[2] / "robots" / "generated"
@@ -101,3 +107,75 @@ def test_writing_again_replaces_its_files_and_keeps_and_lists_the_others(
     assert "did not write, kept as they were: Fanuc_M16iB20." in captured.err
     leftovers = [p.name for p in folder.iterdir() if p.name.startswith(".")]
     assert leftovers == []  # no temporary file left behind
+
+
+# ---------------------------------------------------------------- which description is written
+def _seed_calibrated(cache: Path, robot: str) -> None:
+    """Put the checked-in calibrated description of ``robot`` in the description cache, where
+    a calibration of the arm would have put it."""
+    options = DescribeOptions(robot=robot)
+    folder = cache_folder(run_discovery(options), options, cache) / CALIBRATED
+    folder.mkdir(parents=True)
+    for suffix in ("urdf", "srdf", "joint_limits.yaml", "discovery.json"):
+        shutil.copy(GENERATED / f"{robot}.{suffix}", folder)
+
+
+def test_a_discovered_arm_is_written_calibrated_from_the_cache_as_urdf_writes_it(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
+    _seed_calibrated(tmp_path / "cache", "KR60")
+    found, given = tmp_path / "a" / "kr60_tesseract", tmp_path / "b" / "kr60_tesseract"
+    assert main(["tesseract-config", "--robot", "KR60", "--out", str(found), "--json"]) == EXIT_OK
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["description"].startswith("calibrated")
+    assert "the description cache holds" in captured.err and "poses" not in captured.err
+    assert main(["tesseract-config", "--urdf", str(GENERATED / "KR60.urdf"), "--out",
+                 str(given), "-q"]) == EXIT_OK
+    assert _tree(found) == _tree(given)
+    package = tmp_path / "kr60_moveit_config"
+    assert main(["moveit-config", "--robot", "KR60", "--out", str(package), "-q"]) == EXIT_OK
+    assert (package / "config" / "KR60.urdf").read_bytes() == \
+        (GENERATED / "KR60.urdf").read_bytes()
+
+
+def test_no_calibrate_writes_the_arm_as_learnt(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
+    _seed_calibrated(tmp_path / "cache", "KR60")
+    out = tmp_path / "kr60_tesseract"
+    assert main(["tesseract-config", "--robot", "KR60", "--no-calibrate", "--out", str(out),
+                 "-q"]) == EXIT_OK
+    assert (out / "KR60.urdf").read_bytes() == (GENERATED / "as-learnt" / "KR60.urdf").read_bytes()
+    package = tmp_path / "kr60_moveit_config"
+    assert main(["moveit-config", "--robot", "KR60", "--no-calibrate", "--out", str(package),
+                 "-q"]) == EXIT_OK
+    assert (package / "config" / "KR60.urdf").read_bytes() == \
+        (GENERATED / "as-learnt" / "KR60.urdf").read_bytes()
+
+
+def test_no_calibrate_with_urdf_is_a_usage_error(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(["tesseract-config", "--urdf", KR60, "--no-calibrate", "--out",
+              str(tmp_path / "kr60_tesseract")])
+    assert exit_.value.code == EXIT_USAGE
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_without_a_cached_calibration_the_arm_is_toured_once(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A tour (about 35 s) calibrates the KR60, and the next config command takes that
+    calibration from the cache instead of touring again."""
+    monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "kr60_tesseract"
+    assert main(["tesseract-config", "--robot", "KR60", "--out", str(out), "-q"]) == EXIT_OK
+    assert "a tour through 14 poses" in capsys.readouterr().err
+    package = tmp_path / "kr60_moveit_config"
+    assert main(["moveit-config", "--robot", "KR60", "--out", str(package), "--json"]) == EXIT_OK
+    captured = capsys.readouterr()
+    assert "poses" not in captured.err and json.loads(captured.out)["calibrated"] is True
+    toured = (out / "KR60.urdf").read_bytes()
+    assert (package / "config" / "KR60.urdf").read_bytes() == toured
+    assert toured != (GENERATED / "as-learnt" / "KR60.urdf").read_bytes()

@@ -5,6 +5,7 @@ refused with a clear message before anything is written."""
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -21,9 +22,9 @@ FILES = {"KR60.urdf", "KR60.srdf", "KR60.kinematics_plugins.yaml",
          "plan_example.py", "README.md"}
 
 
-def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+def _cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run([USAR_ARM, "tesseract-config", *args], capture_output=True, text=True,
-                          timeout=300, check=False)
+                          timeout=300, check=False, env={**os.environ, **(env or {})})
 
 
 def test_the_folder_is_complete_and_its_example_plans(tmp_path: Path) -> None:
@@ -51,13 +52,23 @@ def test_the_folder_is_complete_and_its_example_plans(tmp_path: Path) -> None:
     assert float(rows[-1][0]) > 0.0
 
 
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
 def test_discovering_the_robot_writes_the_same_folder(tmp_path: Path) -> None:
-    out = tmp_path / "kr60_t"
-    done = _cli("--robot", "KR60", "--out", str(out), "-q")
+    """The as-learnt KR60 discovered (--no-calibrate; a fresh description cache) gives, byte
+    for byte, the folder its checked-in description gives (tests/cli checks the calibrated
+    default the same way)."""
+    found, given = tmp_path / "a" / "kr60_t", tmp_path / "b" / "kr60_t"
+    done = _cli("--robot", "KR60", "--no-calibrate", "--out", str(found), "-q",
+                env={"USAR_ARM_CACHE": str(tmp_path / "cache")})
     assert done.returncode == 0, done.stderr
-    assert {p.name for p in out.iterdir()} == FILES
-    assert "wrote Tesseract config kr60_t (8 files, inverse kinematics KDLInvKinChainLMA)" \
-        in done.stdout
+    assert "wrote Tesseract config kr60_t (8 files, inverse kinematics KDLInvKinChainLMA; " \
+           "description as learnt)" in done.stdout
+    assert _cli("--urdf", str(AS_LEARNT), "--out", str(given), "-q").returncode == 0
+    assert set(_tree(found)) == FILES
+    assert _tree(found) == _tree(given)
 
 
 def test_bad_input_is_refused_and_nothing_is_written(tmp_path: Path) -> None:

@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from usar_arm.cli.calibrate_cmd import POSES
-from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor, write_readings
+from usar_arm.cli.calibrate_robot import check_poses, write_readings
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
+from usar_arm.cli.default_calibration import add_calibration_args, by_default, config_description
+from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
 from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError, InvalidInputError
+from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
 
@@ -30,11 +30,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_description_args(p)
     p.add_argument("--out-dir", default="robots/generated", metavar="DIR",
                    help="where to write (default robots/generated)")
-    p.add_argument("--no-calibrate", action="store_true",
-                   help="write the description as learnt; by default an arm with a tip pose "
-                        "sensor is first calibrated through it (a tour of --poses poses)")
-    p.add_argument("--poses", type=int, default=POSES, metavar="N",
-                   help=f"poses of the calibration tour (default {POSES})")
+    add_calibration_args(p)
     p.add_argument("--readings", default=None, metavar="FILE",
                    help="calibrate from the readings of an earlier tour (the "
                         "<Robot>.readings.csv a calibration writes beside the description) "
@@ -50,9 +46,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                     "pilz_cartesian_limits.yaml, ros2_controllers.yaml, moveit_controllers.yaml, "
                     "ros2_control xacro, initial_positions.yaml, .setup_assistant, package.xml, "
                     "CMakeLists.txt, launch wrappers) into DIR. Build it with colcon and run "
-                    "`ros2 launch <robot>_moveit_config demo.launch.py`.")
+                    "`ros2 launch <robot>_moveit_config demo.launch.py`. The description is "
+                    "the one `usar-arm urdf` writes: calibrated through the arm's tip sensor "
+                    "(the description cache's calibration when it holds one; --no-calibrate: "
+                    "as learnt).")
     add_server_args(m)
     add_description_args(m)
+    add_calibration_args(m)
     m.add_argument("--out", required=True, metavar="DIR", help="package folder to write")
     m.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(m)
@@ -89,24 +89,8 @@ def run_urdf(args: argparse.Namespace) -> int:
         check_poses(args.poses)
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
-    desc = describe(options)
-    result = None
-    if args.no_calibrate:
-        err("not calibrating (--no-calibrate): the description is as learnt")
-    elif not has_tip_sensor(desc):
-        err(f"not calibrating: the server reports no tip pose sensor on {desc.chain.name}'s "
-            "arm, so the description is as learnt (calibrate --measurements FILE fits one to "
-            "a tracker's readings)")
-    elif options.frame != "z-up":
-        err("not calibrating: calibration works on z-up descriptions (--frame z-up)")
-    else:
-        try:
-            desc, result = calibrate(desc, options, args.poses, None, 0,
-                                     err if args.json else out, args.readings)
-        except (CalibrationError, ExecutionAbortedError) as exc:
-            if args.readings is not None:
-                raise
-            err(f"calibration failed, so the description is as learnt: {exc}")
+    desc, result = by_default(describe(options), options, args.no_calibrate, args.poses,
+                              err if args.json else out, args.readings)
     paths = write_description(desc, args.out_dir)
     if result is not None:
         recorded = write_readings(result, args.out_dir, desc.chain.name)
@@ -125,18 +109,24 @@ def run_urdf(args: argparse.Namespace) -> int:
 
 def run_moveit(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
-    desc = describe(options_from(args))
+    root = check_out_folder(args.out)
+    chosen = config_description(args)
+    desc, chain = chosen.description, chosen.robot.chain
     arm_name = desc.discovery["robot"]["actuator"]
-    files = moveit_files(desc.chain, desc.urdf, desc.srdf, desc.joint_limits,
+    files = moveit_files(chain, desc.urdf, desc.srdf, desc.joint_limits,
                          f"{arm_name}_controller", desc.home)
-    root = Path(args.out)
     paths = write_tree_atomic(root, files)
+    others = other_files(root, paths)
+    if others:
+        err(report_other_files(root, others))
     if args.json:
-        print_json({"robot": desc.chain.name, "package": package_name(desc.chain.name),
+        print_json({"robot": chain.name, "package": package_name(chain.name),
                     "folder": str(root), "files": sorted(str(p) for p in paths),
-                    "warnings": list(desc.warnings)})
+                    "other_files": others, "calibrated": chosen.calibrated,
+                    "description": chosen.note, "warnings": list(desc.warnings)})
         return EXIT_OK
-    out(f"wrote MoveIt 2 package {package_name(desc.chain.name)} ({len(paths)} files) in {root}")
+    out(f"wrote MoveIt 2 package {package_name(chain.name)} ({len(paths)} files; description "
+        f"{chosen.note}) in {root}")
     for p in sorted(paths):
         out(f"  {p}")
     return EXIT_OK
