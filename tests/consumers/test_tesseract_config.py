@@ -1,5 +1,6 @@
 """``usar-arm tesseract-config`` end to end: the folder it writes is complete, its
-``plan_example.py`` (quoted whole in its README) plans in the Tesseract venv, and bad input is
+``plan_example.py`` (quoted whole in its README) plans with every pipeline the folder defines
+(OMPLPipeline, TrajOptPipeline, FreespacePipeline) in the Tesseract venv, and bad input is
 refused with a clear message before anything is written."""
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from tests.consumers.conftest import ROOT, tesseract_python
+from usar_arm.urdf.tesseract_composer import PIPELINES
 
 USAR_ARM = str(Path(sys.executable).parent / "usar-arm")
 AS_LEARNT = ROOT / "robots" / "generated" / "as-learnt" / "KR60.urdf"
@@ -41,15 +43,23 @@ def test_the_folder_is_complete_and_its_example_plans(tmp_path: Path) -> None:
     assert "contact_managers_plugin_config" in srdf
     script = (out / "plan_example.py").read_text()
     assert script.rstrip() in (out / "README.md").read_text()
-    run = subprocess.run([str(tesseract_python()), str(out / "plan_example.py")], cwd=tmp_path,
-                         capture_output=True, text=True, timeout=300, check=False)
-    assert run.returncode == 0, run.stderr[-3000:]
-    rows = re.findall(r"t = +([0-9.]+) s +q = \[([^\]]+)\]", run.stdout)
-    assert len(rows) >= 2
-    first = [float(x) for x in rows[0][1].split()]
-    last = [float(x) for x in rows[-1][1].split()]
-    assert first == pytest.approx([0.0] * 6) and last == pytest.approx([0.5] + [0.0] * 5)
-    assert float(rows[-1][0]) > 0.0
+    for pipeline in PIPELINES:
+        run = subprocess.run([str(tesseract_python()), str(out / "plan_example.py"), pipeline],
+                             cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                             check=False)
+        assert run.returncode == 0, f"{pipeline}: {run.stderr[-3000:]}"
+        rows = re.findall(r"t = +([0-9.]+) s +q = \[([^\]]+)\]", run.stdout)
+        assert len(rows) >= 2, f"{pipeline}: {run.stdout[-2000:]}"
+        first = [float(x) for x in rows[0][1].split()]
+        last = [float(x) for x in rows[-1][1].split()]
+        assert first == pytest.approx([0.0] * 6) and last == pytest.approx([0.5] + [0.0] * 5)
+        times = [float(t) for t, _ in rows]
+        assert times == sorted(times) and times[-1] > 0.0, f"{pipeline}: {times}"
+
+
+def test_the_readme_shows_only_pipelines_the_folder_defines() -> None:
+    shown = re.findall(r"plan_example\.py (\w+)", (ROOT / "README.md").read_text())
+    assert shown and set(shown) <= set(PIPELINES), shown
 
 
 def _tree(folder: Path) -> dict[str, bytes]:
