@@ -41,6 +41,12 @@ def _worlds(spec: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
                    for name, items in spec["scenes"].items()}
 
 
+def _rotation_angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle (rad) of the rotation between the 3x3 rotations ``a`` and ``b``:
+    ||a - b||_F = 2 sqrt(2) sin(angle / 2), accurate near 0 (where acos of the trace is not)."""
+    return 2.0 * float(np.arcsin(min(1.0, float(np.linalg.norm(a - b)) / np.sqrt(8.0))))
+
+
 def _by_scene(problems: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
     groups: dict[str, list[dict[str, Any]]] = {}
     for p in problems:
@@ -96,7 +102,8 @@ def run(ctx: Context) -> dict[str, Any]:
                ctx.peer("mplib", "collision", "robot.set_qpos + is_state_colliding (FCL)"),
                ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)"),
                ctx.peer("tesseract", "collision", "setState + contactTest (Bullet, the "
-                        "config's default manager); tool0 FK compared with the judge's")]
+                        "config's default manager); tool0 FK (position and rotation) "
+                        "compared with the judge's")]
     outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "collision_KR60")
     cases: dict[str, Any] = {}
     for name, group in _by_scene(spec["problems"]).items():
@@ -112,17 +119,20 @@ def run(ctx: Context) -> dict[str, Any]:
                    "truth": t}
             if r.get("tool0") is not None:  # a peer's FK of tool0, against the judge's
                 judge.kin.update(np.array(p["q"], float))
-                row["fk_error_m"] = float(np.linalg.norm(
-                    judge.kin.frame("tool0")[:3, 3] - np.array(r["tool0"])[:3, 3]))
+                ours, theirs = judge.kin.frame("tool0"), np.array(r["tool0"])
+                row["fk_error_m"] = float(np.linalg.norm(ours[:3, 3] - theirs[:3, 3]))
+                row["fk_error_rad"] = _rotation_angle(ours[:3, :3], theirs[:3, :3])
             return row
 
         def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
             pairs = list(zip(raw["collision"], raw["truth"], strict=True))
             fk = [e for e in raw.get("fk_error_m", []) if e is not None]
+            fk_rad = [e for e in raw.get("fk_error_rad", []) if e is not None]
             return {"false_negatives": sum(1 for a, t in pairs if a is False and t),
                     "false_positives": sum(1 for a, t in pairs if a is True and not t),
                     "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None,
-                    **({"fk_max_error_m": max(fk)} if fk else {})}
+                    **({"fk_max_error_m": max(fk)} if fk else {}),
+                    **({"fk_max_error_rad": max(fk_rad)} if fk_rad else {})}
 
         sub = {**spec, "problems": group}
         ids = set(truth_of)

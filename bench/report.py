@@ -169,16 +169,20 @@ def collision_section(doc: dict[str, Any]) -> list[str]:
                 f"({fmt_pct(frac)} in collision)", "",
                 *table([*HEAD, "missed / invented contacts", NOTES],
                        solver_rows("collision", case, fn))]
-    fk = [(n, c["solvers"][n]["summary"]["fk_max_error_m"]) for c in doc["cases"].values()
-          for n in c["solvers"] if (c["solvers"][n].get("summary") or {}).get("fk_max_error_m")
-          is not None]
-    if fk:
-        worst: dict[str, float] = {}
-        for n, e in fk:
-            worst[n] = max(worst.get(n, 0.0), e)
+    worst: dict[str, dict[str, float]] = {}
+    for c in doc["cases"].values():
+        for n, s in c["solvers"].items():
+            sm = s.get("summary") or {}
+            for key in ("fk_max_error_m", "fk_max_error_rad"):
+                if sm.get(key) is not None:
+                    worst.setdefault(n, {})[key] = max(worst.get(n, {}).get(key, 0.0), sm[key])
+    if worst:
         out += ["FK of tool0 at the same configurations against the judge's (Pinocchio on the "
-                "same URDF), largest position difference over every scene: " + ", ".join(
-                    f"{n} {e:.2g} m" for n, e in worst.items()) + ".", ""]
+                "same URDF), largest difference over every scene: " + ", ".join(
+                    f"{n} {e['fk_max_error_m']:.2g} m" + (
+                        f" and {e['fk_max_error_rad']:.2g} rad" if "fk_max_error_rad" in e
+                        else " (rotation not measured in this run)")
+                    for n, e in worst.items() if "fk_max_error_m" in e) + ".", ""]
     out += ["### Cost against the number of obstacles (KR60, boxes of 0.1 m), mean per "
             "configuration", ""]
     names = list(next(iter(doc["cases"].values()))["solvers"])

@@ -10,13 +10,15 @@ from typing import Any
 
 import pytest
 
+from usar_arm.planning.scene_file import BUILTIN
 from usar_arm.robot import Robot, robot_from_files
 from usar_arm.urdf.tesseract import TesseractConfig, tesseract_config
 
 ROOT = Path(__file__).resolve().parents[2]
 DRIVER = Path(__file__).with_name("tesseract_driver.py")
 TESSERACT_PYTHON = ROOT / "bench" / ".venvs" / "tesseract" / "bin" / "python"
-SCENES = ("empty", "table", "shelf", "cage")
+SCENES = BUILTIN
+"""Every shipped scene (test_tesseract.py checks that the list names every scene file)."""
 SPHERICAL_WRIST = "KR60-spherical-wrist"
 """The as-learnt KR60 with joint 6's axis moved 2 mm onto joint 4's: an exact OPW arm, for the
 OPW solver (the USARSim KR60's wrist axes miss each other by 2 mm, so it gets KDL)."""

@@ -7,7 +7,7 @@ usar-arm checks:
 
 * names and limits of every link and joint;
 * FK of tool0 at 1,000 random configurations, equal to usar-arm's to 1e-9 m and 1e-9 rad;
-* contacts at 1,000 random configurations in each shipped scene (the driver reads the scene
+* contacts at 1,000 random configurations in every shipped scene (the driver reads the scene
   file itself), the same pairs as usar-arm's brute-force python-fcl judge (Tesseract never
   checks two bodies that are both fixed: the base against a fixed obstacle; the judge's such
   pairs are counted apart and must be none);
@@ -119,6 +119,11 @@ def consumed(request: pytest.FixtureRequest, descriptions: dict[str, tuple[Path,
         req["plans"] = {"scene_file": str(SCENE_FILES / "table.yaml"), "pipeline": "OMPLPipeline",
                         "problems": [_solvable_pair(robot, world, rng) for _ in range(PLANS)]}
     return Consumed(name, robot, config, req, run_driver(req, work))
+
+
+def test_the_contact_check_covers_every_shipped_scene() -> None:
+    assert set(SCENES) == {p.stem for p in SCENE_FILES.glob("*.yaml")}, \
+        "usar_arm.planning.scene_file.BUILTIN and usar_arm/data/scenes disagree"
 
 
 def test_tesseract_loads_every_link_and_joint_with_usar_arm_s_limits(consumed: Consumed) -> None:
