@@ -21,7 +21,7 @@ SCENES = BUILTIN
 """Every shipped scene (test_tesseract.py checks that the list names every scene file)."""
 SPHERICAL_WRIST = "KR60-spherical-wrist"
 """The as-learnt KR60 with joint 6's axis moved 2 mm onto joint 4's: an exact OPW arm, for the
-OPW solver (the USARSim KR60's wrist axes miss each other by 2 mm, so it gets KDL)."""
+OPW solver (the axes of the USARSim KR60's joints a4 and a6 pass 2 mm apart, so it gets KDL)."""
 
 
 def tesseract_python() -> Path:

@@ -157,7 +157,7 @@ def test_opw_is_chosen_exactly_when_opw_reproduces_the_arm(consumed: Consumed) -
         assert config.solver == OPW_SOLVER and config.opw is not None
         assert config.opw.position_error_m < 1e-9 and config.opw.rotation_error_rad < 1e-9
     elif consumed.name.startswith("KR60"):
-        # The USARSim KR60's wrist axes miss by 2 mm: OPW would be millimetres off.
+        # The USARSim KR60's wrist axes a4 and a6 pass 2 mm apart: OPW would be millimetres off.
         assert config.solver == KDL_SOLVER and config.opw is not None
         assert 1e-3 < config.opw.position_error_m < 5e-3
     else:

@@ -4,6 +4,7 @@ and the measured deviation that decides OPW or KDL for Tesseract."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -12,8 +13,10 @@ import pytest
 from usar_arm.robot import robot_from_files
 from usar_arm.urdf.opw_fit import NotOpwError, fit_opw, opw_forward
 from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.tesseract import TesseractOptions, choose_solver
 
-AS_LEARNT = Path(__file__).resolve().parents[2] / "robots" / "generated" / "as-learnt"
+ROOT = Path(__file__).resolve().parents[2]
+AS_LEARNT = ROOT / "robots" / "generated" / "as-learnt"
 
 
 def _spherical_wrist_chain():  # type: ignore[no-untyped-def]
@@ -39,16 +42,35 @@ def test_the_spherical_wrist_kr60_has_the_parameters_its_urdf_gives_by_hand() ->
     assert p.c4 == pytest.approx(0.152 + 0.05, abs=1e-12)
     assert p.sign_corrections == (1, -1, -1, 1, 1, -1)  # joints a2, a3, a6 turn about -y, -x
     assert p.offsets[2] == pytest.approx(-math.pi / 2 - math.atan2(0.004, 1.004), abs=1e-12)
-    assert fit.wrist_miss_m < 1e-12
+    assert fit.wrist_gap_m < 1e-12
     # tool0 is turned by 1.570796327 (the URDF's 10 digits), not pi/2: a 2e-10 rad tilt.
     assert fit.position_error_m < 1e-12 and fit.rotation_error_rad < 1e-9
 
 
-def test_the_usarsim_kr60_is_3_mm_from_opw_because_its_wrist_axes_miss_by_2_mm() -> None:
+def test_the_usarsim_kr60_is_3_mm_from_opw_because_its_wrist_axes_pass_2_mm_apart() -> None:
     fit = fit_opw(robot_from_files(AS_LEARNT / "KR60.urdf").chain)
-    assert fit.wrist_miss_m == pytest.approx(0.001, abs=1e-9)  # 2 mm apart, 1 mm from the middle
+    # joint_a6's origin is 0.07 m across the forearm where joint_a4's axis runs at 0.068 m
+    assert fit.wrist_gap_m == pytest.approx(0.002, abs=1e-9)
+    assert fit.wrist_gap_joints == ("joint_a4", "joint_a6")
     assert 2.5e-3 < fit.position_error_m < 3.5e-3
     assert not fit.within(1e-6, 1e-6) and fit.within(5e-3, 1e-6)
+
+
+def test_the_readme_gives_the_figures_the_tool_measures() -> None:
+    """README's Tesseract section quotes the wrist gap and OPW's deviation of the as-learnt and
+    the calibrated KR60 to two digits, as tesseract-config reports them."""
+    text = " ".join((ROOT / "README.md").read_text().split())
+    quoted = re.search(r"the axes of its joints a4 and a6 pass ([0-9.]+) mm apart \(([0-9.]+) mm "
+                       r"in the calibrated description\), so OPW would put tool0 up to ([0-9.]+) "
+                       r"mm off \(([0-9.]+) mm calibrated\)", text)
+    assert quoted, "README's sentence on the KR60 and OPW changed: update this test"
+    chains = [robot_from_files(d / "KR60.urdf").chain for d in (AS_LEARNT, AS_LEARNT.parent)]
+    fits = [fit_opw(chain) for chain in chains]
+    measured = [*(f.wrist_gap_m for f in fits), *(f.position_error_m for f in fits)]
+    assert list(quoted.groups()) == [f"{m * 1e3:.1f}" for m in measured]
+    for chain, gap in zip(chains, quoted.groups()[:2], strict=True):
+        reason = choose_solver(chain, TesseractOptions())[1]
+        assert f"joint_a4 and joint_a6 pass {gap} mm apart" in reason, reason
 
 
 def test_opw_forward_at_zero_is_the_arm_standing_up() -> None:

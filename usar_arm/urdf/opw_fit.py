@@ -58,7 +58,10 @@ class OpwFit:
         base: 4x4 pose of the OPW base frame in the chain's root frame (on joint 1's axis).
         tip: link whose frame is the OPW tool frame.
         joints: the six joints, base to tip.
-        wrist_miss_m: how far the three wrist axes miss their common point (m).
+        wrist_gap_m: the largest distance between two of the three wrist axes (m; the
+            length of their common perpendicular, or their spacing when parallel): 0 for a
+            spherical wrist.
+        wrist_gap_joints: the two joints whose axes are that far apart.
         position_error_m: largest tip position difference OPW vs chain over the samples (m).
         rotation_error_rad: largest tip rotation difference over the samples (rad).
         samples: configurations compared (uniform inside the joint limits).
@@ -68,7 +71,8 @@ class OpwFit:
     base: Array
     tip: str
     joints: tuple[str, ...]
-    wrist_miss_m: float
+    wrist_gap_m: float
+    wrist_gap_joints: tuple[str, str]
     position_error_m: float
     rotation_error_rad: float
     samples: int
@@ -115,17 +119,33 @@ def _unit(v: Array) -> Array:
     return np.asarray(v / n, dtype=np.float64)
 
 
-def _wrist_centre(axes: Array, points: Array) -> tuple[Array, float]:
-    """The point nearest (least squares) to three lines, and the largest distance to one (m)."""
+def _wrist_centre(axes: Array, points: Array) -> Array:
+    """The point nearest (least squares) to three lines."""
     a, rhs = np.zeros((3, 3)), np.zeros(3)
     for w, p in zip(axes, points, strict=True):
         proj = np.eye(3) - np.outer(w, w)
         a += proj
         rhs += proj @ p
-    x = np.asarray(np.linalg.lstsq(a, rhs, rcond=None)[0], dtype=np.float64)
-    miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - p)))
-               for w, p in zip(axes, points, strict=True))
-    return x, miss
+    return np.asarray(np.linalg.lstsq(a, rhs, rcond=None)[0], dtype=np.float64)
+
+
+def _line_distance(w1: Array, p1: Array, w2: Array, p2: Array) -> float:
+    """Distance (m) between the line through ``p1`` along the unit ``w1`` and the line through
+    ``p2`` along the unit ``w2``."""
+    d = p2 - p1
+    normal = np.cross(w1, w2)
+    size = float(np.linalg.norm(normal))
+    if size < 1e-9:  # parallel: the spacing
+        return float(np.linalg.norm(d - float(d @ w1) * w1))
+    return abs(float(d @ normal)) / size
+
+
+def _wrist_gap(names: tuple[str, ...], axes: Array, points: Array
+               ) -> tuple[float, tuple[str, str]]:
+    """The largest distance (m) between two wrist axes (joints 4 to 6) and their joints."""
+    gaps = [(_line_distance(axes[i], points[i], axes[j], points[j]), (names[i], names[j]))
+            for i, j in ((3, 4), (3, 5), (4, 5))]
+    return max(gaps, key=lambda g: g[0])
 
 
 def _axes_at_zero(chain: KinematicChain, tip: str) -> tuple[tuple[str, ...], Array, Array]:
@@ -143,8 +163,8 @@ def _axes_at_zero(chain: KinematicChain, tip: str) -> tuple[tuple[str, ...], Arr
 
 
 def _parameters(chain: KinematicChain, tip: str, axes: Array, points: Array
-                ) -> tuple[OpwParameters, Array, float]:
-    """Parameters read at zero, the OPW base frame in the root frame, the wrist miss (m)."""
+                ) -> tuple[OpwParameters, Array]:
+    """Parameters read at zero and the OPW base frame in the root frame."""
     w1, w2, w3, w4, w5, w6 = axes
     if abs(float(w1 @ w2)) > 0.1:
         raise NotOpwError(f"joint 2 is not perpendicular to joint 1 (cos {float(w1 @ w2):.3f})")
@@ -152,7 +172,7 @@ def _parameters(chain: KinematicChain, tip: str, axes: Array, points: Array
     y = _unit(w2 - float(w2 @ z) * z)
     x = np.cross(y, z)
     origin = points[0] - float(points[0] @ z) * z  # the foot of joint 1's axis
-    centre, miss = _wrist_centre(axes[3:], points[3:])
+    centre = _wrist_centre(axes[3:], points[3:])
     if (points[1] - origin) @ x < 0 or (abs((points[1] - origin) @ x) < 1e-9
                                         and (centre - origin) @ x < 0):
         x, y = -x, -y
@@ -188,7 +208,7 @@ def _parameters(chain: KinematicChain, tip: str, axes: Array, points: Array
         c4=float((tool[:3, 3] - centre) @ forward),
         offsets=tuple(_wrap(-t) + 0.0 for t in thetas),  # type: ignore[arg-type]
         sign_corrections=signs)  # type: ignore[arg-type]
-    return params, base, miss
+    return params, base
 
 
 def _rotation_angle(a: Array, b: Array) -> float:
@@ -209,7 +229,8 @@ def fit_opw(chain: KinematicChain, tip: str = "tool0", samples: int = 1000,
     """
     link = chain.frames.get(tip, tip)
     names, axes, points = _axes_at_zero(chain, link)
-    params, base, miss = _parameters(chain, link, axes, points)
+    params, base = _parameters(chain, link, axes, points)
+    gap, gap_joints = _wrist_gap(names, axes, points)
     rng = np.random.default_rng(seed)
     lo, hi = chain.lower(), chain.upper()
     inv_base = invert(base)
@@ -220,4 +241,4 @@ def fit_opw(chain: KinematicChain, tip: str = "tool0", samples: int = 1000,
         got = opw_forward(params, q)
         worst_p = max(worst_p, float(np.linalg.norm(want[:3, 3] - got[:3, 3])))
         worst_r = max(worst_r, _rotation_angle(want[:3, :3], got[:3, :3]))
-    return OpwFit(params, base, link, names, miss, worst_p, worst_r, samples)
+    return OpwFit(params, base, link, names, gap, gap_joints, worst_p, worst_r, samples)

@@ -99,8 +99,9 @@ def choose_solver(chain: KinematicChain, options: TesseractOptions
         return KDL_SOLVER, f"KDL: {exc}", None
     measured = (f"OPW forward kinematics deviates from the arm's by up to "
                 f"{fit.position_error_m * 1e3:.3g} mm and {fit.rotation_error_rad * 1e3:.3g} "
-                f"mrad at {fit.samples} random configurations (wrist axes miss by "
-                f"{fit.wrist_miss_m * 1e3:.3g} mm)")
+                f"mrad at {fit.samples} random configurations (the wrist axes of "
+                f"{' and '.join(fit.wrist_gap_joints)} pass {fit.wrist_gap_m * 1e3:.1f} mm "
+                "apart)")
     tolerance = (f"{options.opw_position_tolerance * 1e3:g} mm and "
                  f"{options.opw_rotation_tolerance * 1e3:g} mrad")
     if fit.within(options.opw_position_tolerance, options.opw_rotation_tolerance):
