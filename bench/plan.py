@@ -26,6 +26,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -41,20 +42,22 @@ from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits
 from usar_arm.errors import UsarArmError
 from usar_arm.planning.ompl_adapter import OmplOptions
-from usar_arm.planning.ptp import plan_to_joints
+from usar_arm.planning.ptp import PtpPlan, plan_to_joints
 from usar_arm.robot import robot_from_files
 
 CASES = (("KR60", "plan_KR60"), ("Fanuc_M16iB20", "plan_Fanuc_M16iB20"),
          ("boxes", "plan_KR60_boxes"))
 
 
-def solver_main(argv: list[str] | None = None) -> int:
-    spec, out = peerio.args()
+def scene_solver(spec: dict[str, Any], options: OmplOptions,
+                 extra: Callable[[PtpPlan], dict[str, Any]]
+                 ) -> tuple[Callable[[str], None], Callable[[dict[str, Any]], dict[str, Any]]]:
+    """``enter(scene)`` (untimed: builds the scene's collision world once) and
+    ``solve(problem)`` (``plan_to_joints`` with ``options``, timed; ``extra(plan)`` adds fields
+    to an answer, untimed) for the robot and scenes of a problem file."""
     robot = robot_from_files(spec["urdf"], spec["srdf"])
     chain = robot.chain
     lo, hi = chain.lower(), chain.upper()
-    limits = MotionLimits.from_chain(chain, 1.0)
-    options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
     worlds: dict[str, Any] = {}
 
     def enter(name: str) -> None:
@@ -71,12 +74,24 @@ def solver_main(argv: list[str] | None = None) -> int:
             return {"success": False, "seconds": time.perf_counter() - begin, "path": None,
                     "status": f"{type(exc).__name__}: {exc}"}
         sec = time.perf_counter() - begin
+        return {"success": True, "seconds": sec, "path": plan.waypoints, **extra(plan)}
+
+    return enter, solve
+
+
+def solver_main(argv: list[str] | None = None) -> int:
+    spec, out = peerio.args()
+    chain = robot_from_files(spec["urdf"], spec["srdf"]).chain
+    limits = MotionLimits.from_chain(chain, 1.0)
+    options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
+
+    def timing(plan: PtpPlan) -> dict[str, Any]:
         timed, topp = peerio.timed(stop_at_waypoints, chain.joint_names, plan.waypoints, limits)
-        return {"success": True, "seconds": sec, "path": plan.waypoints,
-                "duration_s": timed.duration, "topp_seconds": topp,
+        return {"duration_s": timed.duration, "topp_seconds": topp,
                 "planner": "direct" if plan.ompl is None else plan.ompl.planner,
                 "simplify_seconds": None if plan.ompl is None else plan.ompl.simplify_seconds}
 
+    enter, solve = scene_solver(spec, options, timing)
     peerio.write(out, peer="usar-arm", dist="usar-arm", stage="plan",
                  results=peerio.solve_by_scene(spec["problems"], enter, solve),
                  settings={"call": "planning.ptp.plan_to_joints", "ompl": vars(options),

@@ -23,7 +23,8 @@ STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "plan": "Motion planning", "timing": "Time-parameterisation",
                 "discovery": "Discovery + URDF", "execution": "Execution (embedded simulator)",
                 "calibrate": "Calibration on the wire",
-                "workspace": "Workspace: reachability maps and base placement"}
+                "workspace": "Workspace: reachability maps and base placement",
+                "planners": "OMPL planners for the MoveIt package"}
 PUBLISHED = {
     ("ik", "pytracik"): "99.35 %, 0.92 ms mean (docs/peers.md, 2,000 poses); TRAC-IK README: "
                         "99.56-100 %, 0.18-0.46 ms",
@@ -452,10 +453,28 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
             *table(["move", "plan ms", "motion s", "true mm", "true mrad"], cycle), ""]
 
 
+def planners_section(doc: dict[str, Any]) -> list[str]:
+    """The planners of ompl_planning.yaml, ranked (bench/planners.py)."""
+    rows = [[str(k + 1), r["planner"], r["ompl"],
+             f"{fmt_pct(r['success_rate'])} ({r['verified']}/{r['problems']})",
+             fmt_s(r["median_s"]), fmt_s(r["p90_s"]), str(r["over_budget"]),
+             str(r["paths_in_collision"])] for k, r in enumerate(doc["ranking"])]
+    settings = doc["settings"]
+    return ["Every OMPL planner the MoveIt package's `ompl_planning.yaml` offers, each through "
+            "usar-arm's own OMPL adapter (`plan_to_joints`, "
+            f"{settings['time_limit_s']:g} s budget), on {settings['problems']} (KR60, "
+            "blocked straight lines, 4 scenes), judged as the plan stage judges; ranked by "
+            "verified success, then median time. The YAML lists them in this order, the first "
+            "as its default. The optimising planners (RRTstar, PRMstar) refine their path until "
+            "the budget ends, by design: over budget counts calls that ended after it.",
+            "", *table(["rank", "planner (MoveIt)", "OMPL class", "verified", "median", "p90",
+                        "over budget", "paths in collision"], rows)]
+
+
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
-            "workspace": workspace_section}
+            "workspace": workspace_section, "planners": planners_section}
 
 
 def _load(doc: dict[str, Any]) -> str:

@@ -14,6 +14,7 @@ from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
+from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -54,6 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_description_args(m)
     add_calibration_args(m)
     m.add_argument("--out", required=True, metavar="DIR", help="package folder to write")
+    m.add_argument("--ros-distro", choices=ROS_DISTROS, default=DEFAULT_DISTRO,
+                   help="ROS 2 distribution the package is for: ompl_planning.yaml's adapter "
+                        f"keys differ (default {DEFAULT_DISTRO}, the current LTS)")
     m.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(m)
     m.set_defaults(handler=run_moveit)
@@ -114,7 +118,7 @@ def run_moveit(args: argparse.Namespace) -> int:
     desc, chain = chosen.description, chosen.robot.chain
     arm_name = desc.discovery["robot"]["actuator"]
     files = moveit_files(chain, desc.urdf, desc.srdf, desc.joint_limits,
-                         f"{arm_name}_controller", desc.home)
+                         f"{arm_name}_controller", desc.home, args.ros_distro)
     paths = write_tree_atomic(root, files)
     others = other_files(root, paths)
     if others:
@@ -123,10 +127,11 @@ def run_moveit(args: argparse.Namespace) -> int:
         print_json({"robot": chain.name, "package": package_name(chain.name),
                     "folder": str(root), "files": sorted(str(p) for p in paths),
                     "other_files": others, "calibrated": chosen.calibrated,
+                    "ros_distro": args.ros_distro,
                     "description": chosen.note, "warnings": list(desc.warnings)})
         return EXIT_OK
-    out(f"wrote MoveIt 2 package {package_name(chain.name)} ({len(paths)} files; description "
-        f"{chosen.note}) in {root}")
+    out(f"wrote MoveIt 2 package {package_name(chain.name)} for ROS 2 {args.ros_distro} "
+        f"({len(paths)} files; description {chosen.note}) in {root}")
     for p in sorted(paths):
         out(f"  {p}")
     return EXIT_OK

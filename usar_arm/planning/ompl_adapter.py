@@ -30,6 +30,12 @@ log = logging.getLogger("usar_arm.planning")
 PLANNERS = ("RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "SORRTstar", "BITstar",
             "AORRTC", "PRM", "PRMstar", "KPIECE1", "BKPIECE1", "LBKPIECE1", "FMT", "BFMT")
 """Geometric planners of the ompl wheel usable by name."""
+PROJECTED = frozenset({"KPIECE1", "BKPIECE1", "LBKPIECE1"})
+"""Planners that grid a projection of the space: they get the projection the MoveIt package's
+``ompl_planning.yaml`` names (``joints(a1,a2)``: the first two joints' values, in cells of
+:data:`PROJECTION_CELL`, as MoveIt's joint projection), not OMPL's random one."""
+PROJECTION_CELL = 0.1
+"""rad (m for a prismatic joint): cell size of that projection (MoveIt's default)."""
 
 _seeded: list[int] = []
 ou.setLogLevel(ou.LogLevel.LOG_WARN)
@@ -142,6 +148,16 @@ def reseed(seed: int) -> None:
     _seeded[:] = [int(seed)]
 
 
+def _project_first_joints(space: ob.RealVectorStateSpace) -> None:
+    """Make the values of the first two joints, in :data:`PROJECTION_CELL` cells, the space's
+    default projection."""
+    projection = ob.RealVectorOrthogonalProjectionEvaluator(space, [0, 1])
+    projection.inferCellSizes()  # (the cells exist only then)
+    for k in range(2):
+        projection.setCellSizes(k, PROJECTION_CELL)
+    space.registerDefaultProjection(projection)
+
+
 def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
               state_valid: Callable[[Array], bool],
               segment_free: Callable[[Array, Array, int], bool], options: OmplOptions,
@@ -172,6 +188,8 @@ def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
         bounds.setLow(i, float(lower[i]))
         bounds.setHigh(i, float(upper[i]))
     space.setBounds(bounds)
+    if options.planner in PROJECTED and n >= 2:
+        _project_first_joints(space)
     ss = og.SimpleSetup(space)
     counts = {"states": 0, "edges": 0}
 

@@ -1,26 +1,55 @@
 """The planning-side files of the MoveIt 2 package that ``moveit.py`` does not write:
 ``ompl_planning.yaml``, ``sensors_3d.yaml`` and ``moveit.rviz`` (docs/conventions.md section 3).
 
-``ompl_planning.yaml`` names RRTConnect as the default (the planner usar-arm's benchmark uses)
-and sets ``longest_valid_segment_fraction`` so that MoveIt checks an edge at least every
-:data:`EDGE_RESOLUTION_RAD` per joint, as usar-arm does. MoveIt measures a segment as the sum of
+``ompl_planning.yaml`` offers the OMPL planners usar-arm's benchmark measured
+(``bench/planners.py``, results in ``bench/results/planners.json``), best first, the best as the
+default. It sets ``longest_valid_segment_fraction`` so that MoveIt checks an edge at least every
+:data:`EDGE_RESOLUTION_RAD` per joint, as usar-arm does: MoveIt measures a segment as the sum of
 the joints' changes and the space's extent as the sum of their ranges, so the fraction is the
 resolution over that sum. usar-arm also bounds the motion of any point of the robot between two
-checks (5 mm); MoveIt has no such setting, which the file says.
+checks (5 mm); MoveIt has no such setting, which the file says. The projection
+(``joints(a1,a2)``, 0.1 rad cells) is the one usar-arm's adapter gives the planners that use
+one (:data:`usar_arm.planning.ompl_adapter.PROJECTED`).
+
+The pipeline's keys differ between ROS 2 distributions and one file cannot serve both (the same
+key has another type): Humble reads ``planning_plugin`` and ``request_adapters`` as strings
+(time parameterisation is a request adapter), Jazzy and later read ``planning_plugins``,
+``request_adapters`` and ``response_adapters`` as lists (a string there stops move_group). The
+adapters are those of MoveIt's own defaults for each (``moveit_configs_utils``).
 """
 
 from __future__ import annotations
 
+from usar_arm.errors import InvalidInputError
 from usar_arm.model import KinematicChain
 from usar_arm.urdf.srdf import GROUP
 
 EDGE_RESOLUTION_RAD = 0.01
 """usar-arm's edge-check resolution per joint (rad or m; ``OmplOptions.resolution``)."""
 
-PLANNERS = ("RRTConnect", "RRT", "RRTstar", "PRM", "PRMstar", "KPIECE1", "BKPIECE1",
-            "LBKPIECE1")
-"""OMPL geometric planners offered, the default first: those the ``ompl`` Python wheels bind too,
-so that usar-arm can run each one it offers MoveIt."""
+CANDIDATES: dict[str, str] = {
+    "RRTConnect": "RRTConnect", "RRT": "RRT", "RRTstar": "RRTstar", "PRM": "PRM",
+    "PRMstar": "PRMstar", "KPIECE": "KPIECE1", "BKPIECE": "BKPIECE1", "LBKPIECE": "LBKPIECE1",
+    "FMT": "FMT", "BFMT": "BFMT"}
+"""The planners the package offers, by MoveIt's type name (``geometric::NAME``) -> OMPL's class:
+the geometric planners MoveIt 2 registers (``PlanningContextManager::registerDefaultPlanners``,
+which names the KPIECE family without OMPL's ``1``) that the ompl Python wheels bind too, so that
+usar-arm's benchmark runs each one it offers."""
+
+RANKING: tuple[tuple[str, float, float], ...] = (
+    ("RRTConnect", 1.0, 0.00255), ("RRT", 1.0, 0.00291), ("KPIECE", 1.0, 0.00299),
+    ("PRM", 1.0, 0.00662), ("LBKPIECE", 1.0, 0.00732), ("BKPIECE", 1.0, 0.00932),
+    ("BFMT", 1.0, 0.078), ("FMT", 1.0, 0.17), ("RRTstar", 1.0, 2.01), ("PRMstar", 1.0, 2.02))
+"""(planner, verified success (fraction), median time (s)) as ``bench/planners.py`` ranked
+them in ``bench/results/planners.json``, best first (tests/urdf checks the two agree)."""
+PLANNERS = tuple(name for name, _, _ in RANKING)
+"""The planners offered, in the measured order; the first is the default."""
+RANKED_ON = "40 KR60 start/goal pairs in 4 scenes"
+"""The problems of that ranking (``planners.json``'s ``settings.problems``)."""
+
+ROS_DISTROS = ("humble", "jazzy")
+DEFAULT_DISTRO = "jazzy"
+"""The current ROS 2 LTS (Ubuntu 24.04; Humble, on 22.04, is the previous one)."""
 
 
 def segment_fraction(chain: KinematicChain, resolution: float = EDGE_RESOLUTION_RAD) -> float:
@@ -29,21 +58,52 @@ def segment_fraction(chain: KinematicChain, resolution: float = EDGE_RESOLUTION_
     return resolution / extent
 
 
-def ompl_planning_yaml(chain: KinematicChain) -> str:
-    """The OMPL planning pipeline of the package, for Humble (``planning_plugin``) and Jazzy
-    and later (``planning_plugins``)."""
+def check_distro(distro: str) -> None:
+    """Raise :class:`~usar_arm.errors.InvalidInputError` for a distribution not in
+    :data:`ROS_DISTROS`."""
+    if distro not in ROS_DISTROS:
+        raise InvalidInputError(f"unknown ROS 2 distribution '{distro}': the package is written "
+                                f"for {' or '.join(ROS_DISTROS)}")
+
+
+def _pipeline(distro: str) -> list[str]:
+    """The planning pipeline's plugin and adapters in ``distro``'s format."""
+    if distro == "humble":
+        return ["planning_plugin: ompl_interface/OMPLPlanner",
+                "request_adapters: >-",
+                *(f"  default_planner_request_adapters/{a}" for a in (
+                    "AddTimeOptimalParameterization", "ResolveConstraintFrames",
+                    "FixWorkspaceBounds", "FixStartStateBounds", "FixStartStateCollision",
+                    "FixStartStatePathConstraints"))]
+    return ["planning_plugins:", "  - ompl_interface/OMPLPlanner",
+            "request_adapters:",
+            *(f"  - default_planning_request_adapters/{a}" for a in (
+                "ResolveConstraintFrames", "ValidateWorkspaceBounds", "CheckStartStateBounds",
+                "CheckStartStateCollision")),
+            "response_adapters:",
+            *(f"  - default_planning_response_adapters/{a}" for a in (
+                "AddTimeOptimalParameterization", "ValidateSolution", "DisplayMotionPath"))]
+
+
+def ompl_planning_yaml(chain: KinematicChain, distro: str = DEFAULT_DISTRO) -> str:
+    """The OMPL planning pipeline of the package for ROS 2 ``distro`` (:data:`ROS_DISTROS`)."""
+    check_distro(distro)
     joints = list(chain.joint_names)
     projection = f"joints({','.join(joints[:2])})"
     lines = [
-        "# OMPL planning pipeline, written by usar-arm.",
-        "planning_plugin: ompl_interface/OMPLPlanner  # ROS 2 Humble",
-        "planning_plugins:  # ROS 2 Jazzy and later",
-        "  - ompl_interface/OMPLPlanner",
+        f"# OMPL planning pipeline for ROS 2 {distro.capitalize()}, written by usar-arm.",
+        *_pipeline(distro),
         "start_state_max_bounds_error: 0.1",
+        "# Planners in the order usar-arm's benchmark ranked them (bench/results/planners.json:",
+        f"# {RANKED_ON}, through usar-arm's OMPL adapter, 2 s each):",
+        "# verified paths first, then median time (RRTstar and PRMstar refine until the time",
+        "# ends, by design).",
         "planner_configs:",
     ]
-    for name in PLANNERS:
-        lines += [f"  {name}kConfigDefault:", f"    type: geometric::{name}"]
+    for name, success, median in RANKING:
+        time = f"{median:.3g} s" if median >= 1.0 else f"{median * 1e3:.3g} ms"
+        lines += [f"  {name}kConfigDefault:  # {success * 100:.0f} % verified, median {time}",
+                  f"    type: geometric::{name}"]
     lines += [
         f"{GROUP}:",
         f"  default_planner_config: {PLANNERS[0]}kConfigDefault",
@@ -102,8 +162,8 @@ def moveit_rviz(chain: KinematicChain) -> str:
         f"# {chain.name}: written by usar-arm", ""])
 
 
-def planning_files(chain: KinematicChain) -> dict[str, str]:
-    """Relative path -> text of the three files."""
-    return {"config/ompl_planning.yaml": ompl_planning_yaml(chain),
+def planning_files(chain: KinematicChain, distro: str = DEFAULT_DISTRO) -> dict[str, str]:
+    """Relative path -> text of the three files (for ROS 2 ``distro``)."""
+    return {"config/ompl_planning.yaml": ompl_planning_yaml(chain, distro),
             "config/sensors_3d.yaml": SENSORS_3D,
             "config/moveit.rviz": moveit_rviz(chain)}
