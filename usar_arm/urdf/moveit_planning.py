@@ -37,9 +37,9 @@ which names the KPIECE family without OMPL's ``1``) that the ompl Python wheels 
 usar-arm's benchmark runs each one it offers."""
 
 RANKING: tuple[tuple[str, float, float], ...] = (
-    ("RRTConnect", 1.0, 0.00255), ("RRT", 1.0, 0.00291), ("KPIECE", 1.0, 0.00299),
-    ("PRM", 1.0, 0.00662), ("LBKPIECE", 1.0, 0.00732), ("BKPIECE", 1.0, 0.00932),
-    ("BFMT", 1.0, 0.078), ("FMT", 1.0, 0.17), ("RRTstar", 1.0, 2.01), ("PRMstar", 1.0, 2.02))
+    ("RRT", 1.0, 0.00301), ("RRTConnect", 1.0, 0.00312), ("KPIECE", 1.0, 0.00321),
+    ("PRM", 1.0, 0.00539), ("BKPIECE", 1.0, 0.00726), ("LBKPIECE", 1.0, 0.0097),
+    ("BFMT", 1.0, 0.0897), ("FMT", 1.0, 0.168), ("RRTstar", 1.0, 2.01), ("PRMstar", 1.0, 2.01))
 """(planner, verified success (fraction), median time (s)) as ``bench/planners.py`` ranked
 them in ``bench/results/planners.json``, best first (tests/urdf checks the two agree)."""
 PLANNERS = tuple(name for name, _, _ in RANKING)
