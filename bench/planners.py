@@ -98,8 +98,16 @@ def run(ctx: Context) -> dict[str, Any]:
     return doc
 
 
+TIE = 1.10
+"""Medians within this factor of the fastest of a group are a tie (three runs of the same
+problems on this 2-core machine put RRT, RRTConnect and KPIECE first in turn, 3.0-3.2 ms)."""
+
+
 def rank(solvers: dict[str, Any]) -> list[dict[str, Any]]:
-    """The planners, best first: verified success, then median time over every problem."""
+    """The planners, best first: verified success, then median time over every problem; planners
+    with the same success and medians within :data:`TIE` of the fastest of their group are tied,
+    and a tie is broken by MoveIt's order of preference (``CANDIDATES``: RRTConnect first), so
+    noise does not reorder them from run to run. Each row names the planners it is tied with."""
     rows = []
     for name, s in solvers.items():
         sm = s.get("summary") or {}
@@ -112,7 +120,22 @@ def rank(solvers: dict[str, Any]) -> list[dict[str, Any]]:
                      "paths_in_collision": sm.get("paths_in_collision", 0)})
     rows.sort(key=lambda r: (-r["success_rate"], r["median_s"] if r["median_s"] is not None
                              else float("inf")))
-    return rows
+    groups: list[list[dict[str, Any]]] = []
+    for r in rows:
+        lead = groups[-1][0] if groups else None
+        if (lead is not None and r["success_rate"] == lead["success_rate"]
+                and r["median_s"] is not None and lead["median_s"] is not None
+                and r["median_s"] <= TIE * lead["median_s"]):
+            groups[-1].append(r)
+        else:
+            groups.append([r])
+    preference = list(CANDIDATES)
+    out = []
+    for group in groups:
+        names = [r["planner"] for r in group]
+        for r in sorted(group, key=lambda r: preference.index(r["planner"])):
+            out.append({**r, "tied_with": [n for n in names if n != r["planner"]]})
+    return out
 
 
 def _extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
