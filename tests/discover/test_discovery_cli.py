@@ -170,6 +170,19 @@ def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert "ros-i" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", [["ik", "--pose", "1", "0", "1", "0", "0", "0"],
+                                     ["plan", "--pose", "1", "0", "1", "0", "0", "0"],
+                                     ["reach", "--out", "never-written"]])
+def test_an_srdf_without_its_urdf_is_a_usage_error(command: list[str], tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    # (was ignored: the robot was discovered and the SRDF never read)
+    with pytest.raises(SystemExit) as info:
+        main([*command, "--srdf", str(tmp_path / "KR60.srdf")])
+    assert info.value.code == errors.EXIT_USAGE
+    assert "--srdf goes with --urdf" in capsys.readouterr().err
+    assert not Path("never-written").exists()
+
+
 def test_no_inertial_on_the_root_and_effort_from_max_torque(tmp_path: Path) -> None:
     desc = describe(DescribeOptions(acm_samples=50, accuracy_samples=0))
     assert "<inertial" not in desc.urdf

@@ -80,7 +80,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_execution_args(p)
     add_server_args(p)
     add_verbosity(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=run, robot_usage_error=p.error)
 
 
 def joint_vector(values: list[float] | None, arm: Arm, what: str) -> np.ndarray | None:
@@ -103,7 +103,11 @@ def goal_pose(args: argparse.Namespace, arm: Arm) -> np.ndarray | None:
 
 
 def open_arm(args: argparse.Namespace) -> Arm:
-    """The arm: offline from --urdf, or live (embedded simulator or --host)."""
+    """The arm: offline from --urdf, or live (embedded simulator or --host); ``--srdf``
+    without ``--urdf`` is a usage error (exit 2), not ignored."""
+    if getattr(args, "srdf", None) and not getattr(args, "urdf", None):
+        args.robot_usage_error("--srdf goes with --urdf (the SRDF of that URDF); a discovered "
+                               "robot brings its own SRDF: give --urdf FILE too, or drop --srdf")
     if getattr(args, "urdf", None):
         return Arm.from_files(args.urdf, args.srdf)
     where = "the embedded simulator" if args.host is None else f"{args.host}:{args.port}"

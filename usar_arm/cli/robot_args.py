@@ -63,10 +63,15 @@ def add_robot_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
     p.add_argument("--naming", choices=SCHEMES, default="ros-i", help=argparse.SUPPRESS)
     p.add_argument("--frame", choices=FRAMES, default="z-up", help=argparse.SUPPRESS)
+    p.set_defaults(robot_usage_error=p.error)
 
 
 def robot_from_args(args: argparse.Namespace) -> Robot:
-    """The Robot the arguments name: from files, or discovered (embedded or --host) and cached."""
+    """The Robot the arguments name: from files, or discovered (embedded or --host) and cached.
+    ``--srdf`` without ``--urdf`` is a usage error (exit 2): it would be ignored."""
+    if args.srdf and not args.urdf:
+        args.robot_usage_error("--srdf goes with --urdf (the SRDF of that URDF); a discovered "
+                               "robot brings its own SRDF: give --urdf FILE too, or drop --srdf")
     if args.urdf:
         return robot_from_files(args.urdf, args.srdf)
     options = replace(options_from(args), accuracy_samples=0)
