@@ -1,19 +1,94 @@
-"""``usar-arm urdf`` and ``usar-arm moveit-config``: describe a robot learnt over the wire."""
+"""``usar-arm urdf`` and ``usar-arm moveit-config``: describe a robot learnt over the wire.
+
+:func:`describe_calibrated` is the calibrating description every describing command can share:
+discover, then calibrate through the tip sensor (from the description cache when the same arm
+was calibrated with the same settings before), falling back to the as-learnt description with
+the reason said.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+from usar_arm.calibration import CalibrationSettings, cached_calibration
 from usar_arm.cli.calibrate_cmd import POSES
-from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor, write_readings
+from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
-from usar_arm.description import Description, write_description
-from usar_arm.embedded import describe
+from usar_arm.description import DescribeOptions, Description, write_description
+from usar_arm.embedded import describe, describe_discovered, run_discovery
 from usar_arm.errors import EXIT_OK, CalibrationError, ExecutionAbortedError, InvalidInputError
-from usar_arm.fileio import write_tree_atomic
+from usar_arm.fileio import write_atomic, write_tree_atomic
+from usar_arm.robot import cache_folder
 from usar_arm.urdf.moveit import moveit_files, package_name
+
+
+@dataclass(frozen=True)
+class Described:
+    """What :func:`describe_calibrated` gives: the description to write (calibrated or as
+    learnt), the tour's readings file text to write beside it (None when not calibrated from
+    a tour), and where the calibration came from: ``tour``, ``cache``, ``readings`` or None
+    (as learnt; ``why`` says why)."""
+
+    description: Description
+    readings_csv: str | None
+    source: str | None
+    why: str = ""
+
+
+def describe_calibrated(options: DescribeOptions, *, calibrate_arm: bool = True,
+                        poses: int = POSES, readings: str | None = None,
+                        recalibrate: bool = False, say: Callable[[str], None] = out
+                        ) -> Described:
+    """Discover the arm ``options`` name and describe it calibrated through its tip sensor:
+    from the description cache when this arm (its CONF/GEO lines and the description options)
+    was calibrated with the same settings before, unless ``recalibrate``; else by a tour of
+    ``poses`` poses (cached for the next time), or from a tour's ``readings`` file. An arm
+    without a tip sensor, ``calibrate_arm`` False, or a failed tour (inconsistent readings, an
+    aborted motion) give the as-learnt description and the reason (on stderr and in ``why``).
+    Progress goes to stderr, the calibration's figures to ``say``."""
+    if calibrate_arm:
+        check_poses(poses)
+    record = run_discovery(options)
+    desc = describe_discovered(record, options)
+    why = ""
+    if not calibrate_arm:
+        why = "not calibrating (--no-calibrate): the description is as learnt"
+    elif not has_tip_sensor(desc):
+        why = (f"not calibrating: the server reports no tip pose sensor on {desc.chain.name}'s "
+               "arm, so the description is as learnt (calibrate --measurements FILE fits one "
+               "to a tracker's readings)")
+    elif options.frame != "z-up":
+        why = "not calibrating: calibration works on z-up descriptions (--frame z-up)"
+    if why:
+        err(why)
+        return Described(desc, None, None, why)
+    entry = cache_folder(record, options)
+    settings = CalibrationSettings(poses)
+    hit = None if readings is not None or recalibrate else \
+        cached_calibration(entry, desc.chain.name, settings)
+    if hit is not None:
+        name = desc.chain.name
+        say(f"calibrated description from the cache, made {hit.made} from {hit.readings} "
+            "readings; --recalibrate to tour again")
+        cached = replace(desc, urdf=hit.files[f"{name}.urdf"],
+                         discovery=json.loads(hit.files[f"{name}.discovery.json"]))
+        return Described(cached, hit.files.get(f"{name}.readings.csv"), "cache")
+    try:
+        calibrated, result = calibrate(desc, options, poses, None, 0, say, readings,
+                                       settings.options, entry)
+    except (CalibrationError, ExecutionAbortedError) as exc:
+        if readings is not None:
+            raise
+        why = f"calibration failed, so the description is as learnt: {exc}"
+        err(why)
+        return Described(desc, None, None, why)
+    csv = result.tour.csv() if result.tour is not None else None
+    return Described(calibrated, csv, "readings" if readings is not None else "tour")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -39,6 +114,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="calibrate from the readings of an earlier tour (the "
                         "<Robot>.readings.csv a calibration writes beside the description) "
                         "instead of touring: the same calibrated description, byte for byte")
+    p.add_argument("--recalibrate", action="store_true",
+                   help="tour again even when the description cache holds this arm's "
+                        "calibration with the same settings")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(p)
     p.set_defaults(handler=run_urdf)
@@ -85,37 +163,21 @@ def run_urdf(args: argparse.Namespace) -> int:
     options = options_from(args)
     if args.readings is not None and args.no_calibrate:
         raise InvalidInputError("--readings calibrates; it cannot go with --no-calibrate")
-    if not args.no_calibrate:
-        check_poses(args.poses)
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
-    desc = describe(options)
-    result = None
-    if args.no_calibrate:
-        err("not calibrating (--no-calibrate): the description is as learnt")
-    elif not has_tip_sensor(desc):
-        err(f"not calibrating: the server reports no tip pose sensor on {desc.chain.name}'s "
-            "arm, so the description is as learnt (calibrate --measurements FILE fits one to "
-            "a tracker's readings)")
-    elif options.frame != "z-up":
-        err("not calibrating: calibration works on z-up descriptions (--frame z-up)")
-    else:
-        try:
-            desc, result = calibrate(desc, options, args.poses, None, 0,
-                                     err if args.json else out, args.readings)
-        except (CalibrationError, ExecutionAbortedError) as exc:
-            if args.readings is not None:
-                raise
-            err(f"calibration failed, so the description is as learnt: {exc}")
+    got = describe_calibrated(options, calibrate_arm=not args.no_calibrate, poses=args.poses,
+                              readings=args.readings, recalibrate=args.recalibrate,
+                              say=err if args.json else out)
+    desc = got.description
     paths = write_description(desc, args.out_dir)
-    if result is not None:
-        recorded = write_readings(result, args.out_dir, desc.chain.name)
-        if recorded is not None:
-            paths["readings"] = recorded
+    if got.readings_csv is not None:
+        paths["readings"] = write_atomic(Path(args.out_dir) / f"{desc.chain.name}.readings.csv",
+                                         got.readings_csv)
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
                     "joints": _joint_rows(desc), "warnings": list(desc.warnings),
-                    "calibrated": "calibration" in desc.discovery})
+                    "calibrated": "calibration" in desc.discovery,
+                    "calibration_source": got.source, "not_calibrated_because": got.why})
         return EXIT_OK
     _print_table(desc)
     for kind, path in paths.items():
