@@ -17,8 +17,9 @@ mean (consecutive readings on a tour need not be independent; a shift raises rho
 makes the test more cautious). Without a shift Z^2(k) / 3 is about F(3, n - 2); the threshold is
 3 times its 1 - alpha / (splits x groups) quantile (Bonferroni over every split tried), so the
 chance that clean readings are called moved is at most alpha (:data:`ALPHA`). Measured on
-Gaussian series (tests/calibrate/test_changepoint.py): 0.1-0.3 % for 20 to 300 readings,
-independent or with lag-1 autocorrelation up to 0.8.
+2,000 Gaussian series each (tests/calibrate/test_changepoint.py): 0 % for 20 and for 300
+independent readings, 0.05 % for 40 readings with lag-1 autocorrelation 0.5, 0.1 % for 300
+with 0.8; none of 12 clean synthetic tracker fits.
 """
 
 from __future__ import annotations
