@@ -123,18 +123,20 @@ def _milli(x: float) -> str:
     return f"{x * 1e3:.3f}"
 
 
-def identifiability_lines(cal: Calibration) -> list[str]:
-    """What the fit could identify, and a warning when these readings identify less than
-    readings at generic configurations would (the description then holds only near the
-    configurations sampled)."""
-    lines = [f"  rank {cal.rank} of {cal.generic_rank} generically identifiable; "
-             f"{len(cal.unidentifiable)} unidentifiable, kept as in the URDF: "
-             f"{compact_names(cal.unidentifiable)}"]
+def identifiability_line(cal: Calibration) -> str:
+    """What the fit could identify, by name."""
+    return (f"  rank {cal.rank} of {cal.generic_rank} generically identifiable; "
+            f"{len(cal.unidentifiable)} unidentifiable, kept as in the URDF: "
+            f"{compact_names(cal.unidentifiable)}")
+
+
+def warn_lost(cal: Calibration) -> None:
+    """A warning on stderr when these readings identify less than readings at generic
+    configurations would: the description then holds only near the configurations sampled."""
     if cal.lost:
-        lines.append(f"  warning: these readings cannot identify {compact_names(cal.lost)} "
-                     "(identifiable from readings at generic configurations): the description "
-                     "is only validated over the configurations sampled (the held-out check)")
-    return lines
+        err(f"warning: these readings cannot identify {compact_names(cal.lost)} (readings at "
+            "generic configurations would): the description is only validated over the "
+            "configurations sampled (the held-out check)")
 
 
 def tool_point_line(cal: Calibration, source: str) -> str:
@@ -163,9 +165,7 @@ def run_file(args: argparse.Namespace) -> int:
              f"({held_out_note()}) for validation...")
     cal = identify(urdf, frame, fit, None, options)
     validation = cal.validate(urdf, frame, held)
-    if cal.lost:
-        for line in identifiability_lines(cal)[1:]:
-            err(line.strip())
+    warn_lost(cal)
     check_validated(cal, validation)
     source = (f"the measured frame {frame} is the tool point the tracker fixes; its offset is "
               "identified from these readings")
@@ -182,8 +182,7 @@ def run_file(args: argparse.Namespace) -> int:
         return EXIT_OK
     out(f"calibrated {stem} from {len(fit)} readings of {frame} in {cal.seconds:.2f} s "
         f"({cal.quantisation}, {len(cal.rejected)} rejected)")
-    for line in identifiability_lines(cal):
-        out(line)
+    out(identifiability_line(cal))
     out(f"  fit        max {_milli(f['max_before_m'])} -> {_milli(f['max_after_m'])} mm, "
         f"{_milli(f['max_before_rad'])} -> {_milli(f['max_after_rad'])} mrad")
     out(f"  held out   max {_milli(v['max_before_m'])} -> {_milli(v['max_after_m'])} mm, "

@@ -9,7 +9,12 @@ from pathlib import Path
 
 from usar_arm.calibrate.identify import CalibrationOptions
 from usar_arm.calibration import WireCalibration, calibrate_description
-from usar_arm.cli.calibrate_cmd import calibration_options, identifiability_lines, tool_point_line
+from usar_arm.cli.calibrate_cmd import (
+    calibration_options,
+    identifiability_line,
+    tool_point_line,
+    warn_lost,
+)
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
@@ -55,8 +60,8 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
     cal = result.calibration
     say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
         f"s ({cal.quantisation}, {len(cal.rejected)} rejected)")
-    for line in identifiability_lines(cal):
-        say(line)
+    say(identifiability_line(cal))
+    warn_lost(cal)
     say(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
         f"{_mm(fit['max_before_rad'])} -> {_mm(fit['max_after_rad'])} mrad "
         "(from each reading's interval middle)")
