@@ -11,7 +11,10 @@ the same turn. The calibrated URDF gets the sensor frame back in REP-103 axes. W
 sits at the arm's Tip (the model puts them no farther apart than the Tip's printed step), the
 flange and tool0 move onto the calibrated sensor point: the Tip is identified through the
 sensor. Otherwise the printed Tip offset stays the only source of the tool point, and the
-report says so.
+report says so (frame bookkeeping: :mod:`usar_arm.calibrate.wire_frames`).
+
+A tour's calibrated description is cached in the description cache entry of the arm's CONF/GEO
+lines, keyed by :class:`CalibrationSettings` (:func:`cached_calibration` finds it again).
 """
 
 from __future__ import annotations
