@@ -409,7 +409,7 @@ def calibrate_section(doc: dict[str, Any]) -> list[str]:
             f"{doc['settings'].get('configurations')} seeded configurations (max).", "",
             *table(["robot (tour)", "as learnt mm", "as learnt mrad", "calibrated mm",
                     "calibrated mrad", "readings", "calibration", "urdf in all", "note"],
-                   rows), "", *_calibration_curve(doc)]
+                   rows), *_calibration_curve(doc)]
 
 
 def _calibration_curve(doc: dict[str, Any]) -> list[str]:
