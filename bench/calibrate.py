@@ -6,9 +6,13 @@ As a solver (its own process)::
 
     python bench/calibrate.py PROBLEMS.json RESULTS.json
 
-Each problem names a robot and a number of poses. Timed: what ``usar-arm urdf --robot R`` does
-on the embedded simulator at --speed 1 over the default UDK wire (discovery and description,
-calibration, writing the files). Judged: tool0 of the as-learnt and of the calibrated URDF
+Each problem names a robot, a number of poses and the seed of the pose choice. Timed: what
+``usar-arm urdf --robot R`` does on the embedded simulator at --speed 1 over the default UDK
+wire (discovery and description, calibration, writing the files). The accuracy against the
+number of poses is measured over several tours per count (different seeds: different poses,
+and the simulator's timing makes every tour's readings differ anyway): the curve gives the
+median and the worst per count (``settings.curve``; plot ``calibrate.png``). Judged: tool0 of
+the as-learnt and of the calibrated URDF
 (forward kinematics by the judge's own Pinocchio model of the URDF text, ``verify.Kinematics``)
 against the simulator's own geometry (``usar_arm.sim.truth.tool0_by_spec``: the spec the
 simulator's physics is built from; nothing learnt, nothing of ``usar_arm.calibrate``) at 1,000
@@ -37,12 +41,15 @@ from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.truth import tool0_by_spec
 
 POSES = {"quick": (14,), "full": (6, 8, 10, 12, 14, 18)}
-"""The tour lengths tried (KR60), one run each: the accuracy against the number of poses."""
+"""The tour lengths tried (KR60): the accuracy against the number of poses."""
+CURVE_RUNS = {"quick": 1, "full": 3}
+"""Tours per length on the curve (seeds 0, 1, ...)."""
 DEFAULT_POSES = 14
 """The default of usar-arm urdf."""
 RUNS = {"quick": {"KR60": 1}, "full": {"KR60": 5, "Fanuc_M16iB20": 3}}
-"""Runs of the default tour per robot: the targets are judged on the worst of them (the
-readings, and so the fit, differ from run to run with the simulator's timing)."""
+"""Runs of the default tour per robot (seeds 0, 1, ...; the curve's default-length tours
+count): the targets are judged on the worst of them (the readings, and so the fit, differ from
+run to run with the simulator's timing)."""
 CONFIGURATIONS = 1000
 
 
@@ -76,7 +83,8 @@ def solver_main(argv: list[str] | None = None) -> int:
         desc = describe(options)
         t_describe = time.perf_counter() - begin
         try:
-            calibrated, result = calibrate_description(desc, options, p["poses"])
+            calibrated, result = calibrate_description(desc, options, p["poses"],
+                                                       seed=p.get("seed", 0))
         except Exception as exc:  # a failed calibration is a result: the as-learnt figures
             learnt = tool0_errors(desc.urdf, p["robot"])
             where = traceback.extract_tb(exc.__traceback__)[-4:]
@@ -104,17 +112,17 @@ def solver_main(argv: list[str] | None = None) -> int:
 
 
 def _plan(mode: str) -> list[tuple[str, int, int]]:
-    """(robot, poses, run) of every calibration: the KR60 curve, then the repeated default
-    tours (the curve's default tour is run 1)."""
-    out = [("KR60", n, 1) for n in POSES[mode]]
+    """(robot, poses, seed) of every calibration: the KR60 curve (CURVE_RUNS seeds per
+    length), then the default tours the curve lacks."""
+    out = [("KR60", n, k) for n in POSES[mode] for k in range(CURVE_RUNS[mode])]
     for robot, runs in RUNS[mode].items():
-        first = 2 if robot == "KR60" and DEFAULT_POSES in POSES[mode] else 1
-        out += [(robot, DEFAULT_POSES, k) for k in range(first, runs + 1)]
+        have = {k for r, n, k in out if r == robot and n == DEFAULT_POSES}
+        out += [(robot, DEFAULT_POSES, k) for k in range(runs) if k not in have]
     return out
 
 
-def _case(robot: str, poses: int, run: int) -> str:
-    return f"{robot} ({poses} poses)" + (f", run {run}" if run > 1 else "")
+def _case(robot: str, poses: int, seed: int) -> str:
+    return f"{robot} ({poses} poses), seed {seed}"
 
 
 def run(ctx: Context) -> dict[str, Any]:
@@ -122,7 +130,7 @@ def run(ctx: Context) -> dict[str, Any]:
     description."""
     started = time.perf_counter()
     plan = _plan(ctx.mode)
-    problems = [{"id": i, "robot": r, "poses": n, "run": k}
+    problems = [{"id": i, "robot": r, "poses": n, "seed": k}
                 for i, (r, n, k) in enumerate(plan)]
     spec = {"stage": "calibrate", "problems": problems}
     path = ctx.work / "calibrate_problems.json"
@@ -138,8 +146,8 @@ def run(ctx: Context) -> dict[str, Any]:
             "consistent", "learnt_m", "learnt_rad", "calibrated_m", "calibrated_rad",
             "validation", "error")})
         raw = {k: [r.get(k)] for k in ("id", "success", "seconds")}
-        cases[_case(p["robot"], p["poses"], p["run"])] = {
-            "robot": p["robot"], "poses": p["poses"], "run": p["run"],
+        cases[_case(p["robot"], p["poses"], p["seed"])] = {
+            "robot": p["robot"], "poses": p["poses"], "seed": p["seed"],
             "problems": {"file": None, "count": 1,
                          "settings": {"configurations": CONFIGURATIONS, "wire": "udk",
                                       "speed": 1.0}},
@@ -147,9 +155,29 @@ def run(ctx: Context) -> dict[str, Any]:
             "ratios": {}}
     return common.stage_document("calibrate", ctx.mode,
                                  {"poses": list(POSES[ctx.mode]),
+                                  "curve_runs": CURVE_RUNS[ctx.mode],
                                   "default_poses": DEFAULT_POSES, "runs": RUNS[ctx.mode],
-                                  "configurations": CONFIGURATIONS}, cases, _targets(cases),
-                                 started)
+                                  "configurations": CONFIGURATIONS, "curve": curve(cases)},
+                                 cases, _targets(cases), started)
+
+
+def curve(cases: dict[str, Any], robot: str = "KR60") -> dict[str, dict[str, Any]]:
+    """Per tour length (poses, as a string key): the runs' tool0 errors (m, rad) and times
+    (s), their median and worst; a failed run counts as worst (None)."""
+    out: dict[str, dict[str, Any]] = {}
+    for n in sorted({c["poses"] for c in cases.values() if c["robot"] == robot}):
+        runs = [c["solvers"]["usar-arm"]["summary"] for c in cases.values()
+                if c["robot"] == robot and c["poses"] == n]
+        row: dict[str, Any] = {"runs": len(runs),
+                               "readings": [s.get("readings") for s in runs]}
+        for key in ("calibrated_m", "calibrated_rad", "seconds"):
+            values = [s.get(key) for s in runs]
+            done = [v for v in values if v is not None]
+            row[key] = values
+            row[f"median_{key}"] = float(np.median(done)) if done else None
+            row[f"worst_{key}"] = _worst(values)
+        out[str(n)] = row
+    return out
 
 
 def _worst(values: list[Any]) -> float | None:

@@ -238,6 +238,40 @@ def execution(doc: dict[str, Any], folder: Path) -> Path:
     return _save(fig, folder / "execution.png")
 
 
+def calibration(doc: dict[str, Any], folder: Path) -> Path | None:
+    """tool0's error after calibration against the tour's poses: every run, the median and
+    the worst per count, the 0.2 mm target; and the time of `usar-arm urdf`."""
+    curve = (doc.get("settings") or {}).get("curve") or {}
+    if not curve:
+        return None
+    fig = Figure(figsize=(10, 3.4))
+    a, b = fig.subplots(1, 2)
+    counts = sorted(int(n) for n in curve)
+    for ax, key, scale, unit, title in (
+            (a, "calibrated_m", 1e3, "mm", "tool0 position error after calibration"),
+            (b, "seconds", 1.0, "s", "usar-arm urdf with calibration")):
+        for n in counts:
+            values = [v * scale for v in curve[str(n)][key] if v is not None]
+            ax.plot([n] * len(values), values, "o", color=OURS, alpha=0.45, markersize=4)
+        for stat, style in (("median", "-"), ("worst", "--")):
+            ys = [curve[str(n)].get(f"{stat}_{key}") for n in counts]
+            xs = [n for n, y in zip(counts, ys, strict=True) if y is not None]
+            ax.plot(xs, [y * scale for y in ys if y is not None], style, color=OURS,
+                    label=f"{stat} of the runs per count")
+        ax.set_xlabel("poses in the tour")
+        ax.set_ylabel(unit)
+        ax.set_xticks(counts)
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, alpha=0.3)
+    a.axhline(0.2, color="red", linestyle="--", linewidth=1, label="target 0.2 mm")
+    b.axhline(45.0, color="red", linestyle="--", linewidth=1, label="budget 45 s")
+    a.set_ylim(bottom=0)
+    a.legend(fontsize=7)
+    b.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, folder / "calibrate.png")
+
+
 def draw_all(docs: dict[str, Any], folder: Path) -> list[Path]:
     """Every plot the present stage files allow."""
     out: list[Path | None] = []
@@ -246,6 +280,8 @@ def draw_all(docs: dict[str, Any], folder: Path) -> list[Path]:
     for stage, fn in simple.items():
         if stage in docs:
             out.append(fn(docs[stage], folder))
+    if "calibrate" in docs:
+        out.append(calibration(docs["calibrate"], folder))
     out.append(scaling_obstacles(docs, folder))
     out.append(scaling_joints(docs, folder))
     return [p for p in out if p is not None]

@@ -414,7 +414,26 @@ def calibrate_section(doc: dict[str, Any]) -> list[str]:
             f"{doc['settings'].get('configurations')} seeded configurations (max).", "",
             *table(["robot (tour)", "as learnt mm", "as learnt mrad", "calibrated mm",
                     "calibrated mrad", "readings", "calibration", "urdf in all", "note"],
-                   rows), ""]
+                   rows), *_calibration_curve(doc)]
+
+
+def _calibration_curve(doc: dict[str, Any]) -> list[str]:
+    """The KR60's accuracy against the tour's poses: median and worst of the runs per count."""
+    curve = doc["settings"].get("curve") or {}
+    if not curve:
+        return []
+
+    def mm(v: Any) -> str:
+        return "-" if v is None else f"{v * 1e3:.3f}"
+
+    rows = [[n, str(c["runs"]), mm(c.get("median_calibrated_m")),
+             mm(c.get("worst_calibrated_m")), mm(c.get("median_calibrated_rad")),
+             mm(c.get("worst_calibrated_rad")), fmt_s(c.get("median_seconds"))]
+            for n, c in sorted(curve.items(), key=lambda kv: int(kv[0]))]
+    return ["KR60 tool0 after calibration against the tour's poses (runs with different "
+            "seeds per count):", "",
+            *table(["poses", "runs", "median mm", "worst mm", "median mrad", "worst mrad",
+                    "median urdf s"], rows), "", "![Calibration](calibrate.png)", ""]
 
 
 def workspace_section(doc: dict[str, Any]) -> list[str]:

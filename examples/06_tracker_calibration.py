@@ -55,4 +55,4 @@ data = MeasurementSet(tuple(readings), "tool0", joint_names=arm.joint_names)
 write_measurements(out / "kr60-tracker.csv", data, length_unit="mm", angle_unit="deg")
 print(f"wrote {out / 'kr60-tracker.csv'}")
 sys.exit(main(["calibrate", "--measurements", str(out / "kr60-tracker.csv"), "--urdf",
-               str(urdf), "--out", str(out / "calibrated")]))
+               str(urdf), "--out-dir", str(out / "calibrated")]))

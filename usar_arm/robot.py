@@ -12,12 +12,15 @@ import hashlib
 import json
 import logging
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from usar_arm.description import DescribeOptions, Description, describe_arm, write_description
 from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.errors import FileFormatError
+from usar_arm.fileio import write_tree_atomic
 from usar_arm.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld, Pair
 from usar_arm.planning.ik import IKOptions, IKSolver
@@ -177,24 +180,86 @@ def description_key(record: DiscoveryRecord, options: DescribeOptions) -> str:
 
 
 CALIBRATED = "calibrated"
-"""Sub-folder of a cache entry holding the calibrated description of the same CONF/GEO."""
+"""Prefix of the sub-folders of a cache entry that hold calibrated descriptions of the same
+CONF/GEO: ``calibrated-<key>``, the key made of the calibration's settings."""
+MADE = "made.json"
+"""The file of a cached calibration that says when and from how many readings it was made;
+written before the URDF, whose presence means the folder is complete."""
 
 
 def cache_folder(record: DiscoveryRecord, options: DescribeOptions,
                  cache: Path | None = None) -> Path:
-    """The cache entry of a discovery: the as-learnt description, and the calibrated one in
-    its :data:`CALIBRATED` sub-folder once the arm was calibrated."""
+    """The cache entry of a discovery: the as-learnt description, and the calibrated ones in
+    its ``calibrated-<key>`` sub-folders (:func:`calibrated_folder`)."""
     return (cache or cache_dir()) / description_key(record, options)
+
+
+def calibrated_folder(entry: Path, settings: Mapping[str, Any]) -> Path:
+    """Where the calibration of a cache entry's arm made with ``settings`` (everything the
+    calibration depends on besides the CONF/GEO lines: poses, seed, scene, fit options; JSON
+    values) is cached."""
+    material = json.dumps({"version": __version__, "settings": settings}, sort_keys=True)
+    return entry / f"{CALIBRATED}-{hashlib.sha256(material.encode()).hexdigest()[:16]}"
+
+
+@dataclass(frozen=True)
+class CachedCalibration:
+    """A calibrated description from the cache: its files (name -> text: URDF, SRDF, joint
+    limits, discovery.json and the tour's readings), when it was made (ISO 8601) and from how
+    many readings."""
+
+    folder: Path
+    files: dict[str, str]
+    made: str
+    readings: int
+
+
+def store_calibrated(folder: Path, files: Mapping[str, str], urdf_name: str, made: str,
+                     readings: int, settings: Mapping[str, Any]) -> None:
+    """Cache a calibrated description's ``files`` in ``folder`` (atomically; the URDF renamed
+    into place last, after :data:`MADE`)."""
+    info = json.dumps({"made": made, "readings": readings, "settings": settings}, indent=2,
+                      sort_keys=True) + "\n"
+    ordered = {**{k: v for k, v in files.items() if k != urdf_name}, MADE: info,
+               urdf_name: files[urdf_name]}
+    write_tree_atomic(folder, ordered)
+
+
+def load_calibrated(folder: Path, robot_name: str) -> CachedCalibration | None:
+    """The calibrated description cached in ``folder`` (None when there is none, or a broken
+    one: logged and ignored)."""
+    urdf = folder / f"{robot_name}.urdf"
+    if not urdf.is_file():
+        return None
+    try:
+        info = json.loads((folder / MADE).read_text())
+        files = {p.name: p.read_text() for p in sorted(folder.iterdir())
+                 if p.is_file() and p.name.startswith(f"{robot_name}.")}
+        return CachedCalibration(folder, files, str(info["made"]), int(info["readings"]))
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        log.warning("ignoring a broken cached calibration %s: %s", folder, exc)
+        return None
+
+
+def latest_calibrated(entry: Path, robot_name: str) -> Path | None:
+    """The cache entry's most recently made calibrated description (any settings), or None."""
+    made = []
+    for folder in entry.glob(f"{CALIBRATED}-*"):
+        cached = load_calibrated(folder, robot_name)
+        if cached is not None:
+            made.append((cached.made, folder.name, folder))
+    return max(made)[2] if made else None
 
 
 def robot_from_record(record: DiscoveryRecord, options: DescribeOptions,
                       cache: Path | None = None, calibrated: bool = True) -> Robot:
     """The Robot a discovery describes, from the cache when the same CONF/GEO were described
-    before (calibrated, when that arm was calibrated and ``calibrated``), else built (and
-    cached)."""
+    before (calibrated, when that arm was calibrated and ``calibrated``: the latest
+    calibration), else built (and cached)."""
     assert record.arm is not None
     folder = cache_folder(record, options, cache)
-    tried = ([folder / CALIBRATED] if calibrated else []) + [folder]
+    latest = latest_calibrated(folder, record.arm.robot_name) if calibrated else None
+    tried = ([latest] if latest is not None else []) + [folder]
     for where in tried:
         urdf = where / f"{record.arm.robot_name}.urdf"
         if not urdf.exists():

@@ -22,19 +22,21 @@ PRISMATIC = (False, False, True)
 finite = st.floats(-3.0, 3.0, allow_nan=False)
 
 
-def _measurement(draw: st.DrawFn, i: int) -> Measurement:
+def _measurement(draw: st.DrawFn, i: int, sigma: float) -> Measurement:
     q = np.array([draw(finite) for _ in JOINTS])
     pos = np.array([draw(finite) for _ in range(3)])
     rpy = np.array([draw(finite) for _ in range(3)])
-    step = draw(st.sampled_from([0.0, 0.001]))
-    sigma = draw(st.sampled_from([0.0, 5e-5]))
+    # a reading may be quantised or not, but a file states a sigma for all readings or none
+    # (an unquantised reading's sigma 0 would read as "stated exact")
+    step = draw(st.sampled_from([0.0, 0.001] if sigma else [0.0]))
     return Measurement(q, pos, rpy, step, step, sigma, sigma / 2, f"m{i}")
 
 
 @st.composite
 def sets(draw: st.DrawFn) -> MeasurementSet:
     n = draw(st.integers(1, 5))
-    return MeasurementSet(tuple(_measurement(draw, i) for i in range(n)), "tool0",
+    sigma = draw(st.sampled_from([0.0, 5e-5]))
+    return MeasurementSet(tuple(_measurement(draw, i, sigma) for i in range(n)), "tool0",
                           joint_names=JOINTS)
 
 
@@ -72,6 +74,7 @@ def test_yaml_in_millimetres_and_degrees_is_read_in_si(tmp_path: Path) -> None:
 
 
 HEADER = "# frame: tool0\njoint_a1_rad,joint_a2_rad,rail_m,x_m,y_m,z_m\n"
+SIGMA = "# frame: tool0\njoint_a1_rad,joint_a2_rad,rail_m,x_m,y_m,z_m,sigma_mm\n"
 
 
 @pytest.mark.parametrize(("text", "line", "says"), [
@@ -84,6 +87,9 @@ HEADER = "# frame: tool0\njoint_a1_rad,joint_a2_rad,rail_m,x_m,y_m,z_m\n"
      "unknown angle unit 'm'"),
     (HEADER + "0,0,0,1,2,3\n9,0,0,1,2,3\n", 4, "outside the limits"),
     ("joint_a1_rad,joint_a2_rad,rail_m,x_m,y_m,z_m\n", 1, "frame"),
+    (SIGMA + "0,0,0,1,2,3,0.05\n0,0,0,1,2,3,-0.05\n", 4, "uncertainty of -5e-05"),
+    (SIGMA + "0,0,0,1,2,3,0\n", 3, "uncertainty of 0 is not a 1-sigma"),
+    (SIGMA.replace("sigma_mm", "step_mm") + "0,0,0,1,2,3,-1\n", 3, "negative step"),
 ])
 def test_bad_csv_is_refused_naming_the_line(tmp_path: Path, text: str, line: int,
                                             says: str) -> None:
@@ -93,6 +99,36 @@ def test_bad_csv_is_refused_naming_the_line(tmp_path: Path, text: str, line: int
         read_measurements(path, JOINTS, prismatic=PRISMATIC, lower=np.array([-3, -3, 0]),
                           upper=np.array([3, 3, 1]))
     assert info.value.line == line and says in str(info.value)
+    if "uncertainty" in says or "step" in says:
+        assert info.value.field in ("sigma_mm", "step_mm")
+
+
+def test_a_zero_sigma_beside_a_step_means_no_noise_beyond_the_truncation(tmp_path: Path
+                                                                         ) -> None:
+    """The wire's readings files state step 1 mm and sigma 0: that is not an error."""
+    path = tmp_path / "m.csv"
+    path.write_text("# frame: tool0\njoint_a1_rad,joint_a2_rad,rail_m,x_m,y_m,z_m,step_mm,"
+                    "sigma_mm\n0,0,0,1,2,3,1,0\n")
+    (m,) = read_measurements(path, JOINTS, prismatic=PRISMATIC).measurements
+    assert (m.step_m, m.sigma_m) == (0.001, 0.0)
+
+
+def test_yaml_with_a_negative_sigma_names_its_line_and_key(tmp_path: Path) -> None:
+    path = tmp_path / "m.yaml"
+    path.write_text("frame: tool0\nunits: {length: mm, angle: deg}\nmeasurements:\n"
+                    "  - {q: [0, 0, 0], position: [1, 2, 3], sigma_position: 0.05}\n"
+                    "  - {q: [0, 0, 0], position: [1, 2, 3], sigma_position: -0.05}\n")
+    with pytest.raises(FileFormatError, match="uncertainty of -5e-05") as info:
+        read_measurements(path, JOINTS, prismatic=PRISMATIC)
+    assert info.value.line == 5 and info.value.field == "sigma_position"
+
+
+def test_readings_stating_a_sigma_beside_readings_stating_none_cannot_be_written(
+        tmp_path: Path) -> None:
+    rows = (Measurement(np.zeros(3), np.zeros(3), None, sigma_m=5e-5),
+            Measurement(np.zeros(3), np.zeros(3), None))
+    with pytest.raises(ValueError, match="all or none"):
+        write_measurements(tmp_path / "m.csv", MeasurementSet(rows, "tool0", joint_names=JOINTS))
 
 
 def test_yaml_without_units_is_refused(tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""Pose selection for observability and dithering by fractions of a printed step."""
+"""Pose selection for observability."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ import numpy as np
 
 from tests.calibrate.synthetic import KR60, random_q
 from usar_arm.calibrate.observability import (
-    dither_offsets,
     pose_jacobians,
     select_poses,
     smallest_singular_value,
@@ -40,14 +39,3 @@ def test_selected_poses_are_better_conditioned_than_random_ones_within_limits() 
                      for s in range(5)]
     assert _sigma_min(model, chosen, reference) > max(random_scores)
     np.testing.assert_array_equal(chosen, select_poses(KR60, FRAME, 30, free, seed=1))
-
-
-def test_dither_offsets_move_the_frame_by_different_fractions_of_a_step() -> None:
-    q = np.array([0.3, -0.8, 0.9, 0.2, 0.6, -0.4])
-    offsets = dither_offsets(KR60, FRAME, q, 6, 1e-3, 1e-3)
-    assert offsets.shape == (6, 6) and not offsets[0].any()
-    home = NOMINAL.frame_pose(q, FRAME)[:3, 3]
-    moves = np.array([NOMINAL.frame_pose(q + d, FRAME)[:3, 3] - home for d in offsets[1:]])
-    assert np.abs(moves).max() < 1e-3  # within one printed step
-    fractions = np.round(moves / 1e-3, 2)
-    assert len({tuple(f) for f in fractions}) == 5  # every reading lands elsewhere

@@ -131,7 +131,7 @@ def test_calibrate_robot_over_the_udk_wire_reaches_the_target(
     KR60 0.07-0.16 mm in ten runs, Fanuc 0.08-0.15 mm in six."""
     monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "out"
-    assert main(["calibrate", "--robot", robot, "--out", str(out), "--json"]) == EXIT_OK
+    assert main(["calibrate", "--robot", robot, "--out-dir", str(out), "--json"]) == EXIT_OK
     doc = json.loads(capsys.readouterr().out)
     urdf = (out / f"{robot}.urdf").read_text()
     act = builtin_robots()[f"USARBot.{robot}"].actuators[0]
@@ -145,7 +145,9 @@ def test_calibrate_robot_over_the_udk_wire_reaches_the_target(
     assert all(p["std"] > 0 for p in section["parameters"])
     assert section["validation"]["summary"]["max_after_m"] < \
         section["validation"]["summary"]["max_before_m"]
-    assert any("identified through the sensor" in n for n in section["notes"])
+    assert "identified through the sensor" in section["tool_point"]["source"]
+    assert 0 < section["tool_point"]["sigma_m_median"] < 2e-4
+    assert section["problems"] == [] and section["lost"] == []
     assert (out / f"{robot}.calibration.png").stat().st_size > 10_000
     assert (out / f"{robot}.readings.csv").read_text().startswith(f"# frame: {sensor}\n")
     # The next arm of the same CONF/GEO comes calibrated from the cache.

@@ -8,16 +8,16 @@ description cache holds, else a tour), and so is moveit-config's; --no-calibrate
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import pytest
 
+from usar_arm.calibration import CalibrationSettings
 from usar_arm.cli import main
 from usar_arm.description import DescribeOptions
 from usar_arm.embedded import run_discovery
 from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
-from usar_arm.robot import CALIBRATED, cache_folder
+from usar_arm.robot import cache_folder, calibrated_folder, store_calibrated
 from usar_arm.urdf.tesseract_package import package_problem, suggest_package_name
 
 GENERATED = Path(__file__).resolve().parents[2] / "robots" / "generated"
@@ -112,12 +112,16 @@ def test_writing_again_replaces_its_files_and_keeps_and_lists_the_others(
 # ---------------------------------------------------------------- which description is written
 def _seed_calibrated(cache: Path, robot: str) -> None:
     """Put the checked-in calibrated description of ``robot`` in the description cache, where
-    a calibration of the arm would have put it."""
+    a default calibration of the arm would have put it."""
     options = DescribeOptions(robot=robot)
-    folder = cache_folder(run_discovery(options), options, cache) / CALIBRATED
-    folder.mkdir(parents=True)
-    for suffix in ("urdf", "srdf", "joint_limits.yaml", "discovery.json"):
-        shutil.copy(GENERATED / f"{robot}.{suffix}", folder)
+    settings = CalibrationSettings()
+    folder = calibrated_folder(cache_folder(run_discovery(options), options, cache),
+                               settings.key())
+    files = {f"{robot}.{suffix}": (GENERATED / f"{robot}.{suffix}").read_text()
+             for suffix in ("urdf", "srdf", "joint_limits.yaml", "discovery.json",
+                            "readings.csv")}
+    store_calibrated(folder, files, f"{robot}.urdf", "2026-11-25T00:00:00+00:00", 321,
+                     settings.key())
 
 
 def test_a_discovered_arm_is_written_calibrated_from_the_cache_as_urdf_writes_it(
@@ -129,7 +133,8 @@ def test_a_discovered_arm_is_written_calibrated_from_the_cache_as_urdf_writes_it
     assert main(["tesseract-config", "--robot", "KR60", "--out", str(found), "--json"]) == EXIT_OK
     captured = capsys.readouterr()
     assert json.loads(captured.out)["description"].startswith("calibrated")
-    assert "the description cache holds" in captured.err and "poses" not in captured.err
+    assert "calibrated description from the cache" in captured.err
+    assert "poses" not in captured.err
     assert main(["tesseract-config", "--urdf", str(GENERATED / "KR60.urdf"), "--out",
                  str(given), "-q"]) == EXIT_OK
     assert _tree(found) == _tree(given)

@@ -3,7 +3,10 @@ poses of one frame (the wire's tip GroundTruth sensor or a laser-tracker file). 
 docs/calibration.md.
 
 measurements (types, file reader) · measurement_writer · parameters (the error model, applied
-to URDF text) · quantised (interval models) · solver (Jacobian, rank, Levenberg-Marquardt) ·
-identify (options, result, the fit) · residuals · validation (held-out check via Pinocchio) ·
-observability (pose selection, dithering) · report (JSON report, the write gate).
+to URDF text) · quantised, likelihood (interval models) · derivatives, solver (Jacobian, rank,
+Levenberg-Marquardt) · result (options, result) · identify (the fit) · bounds, plausibility
+(what a calibration may change; readings that cannot belong to the description) · consistency,
+changepoint (outliers, a base or tool moved mid-run, convergence, covariance) · residuals ·
+validation (held-out blocks, checked via Pinocchio) · observability (pose selection) · report
+(JSON report, the write gate) · tour_readings, wire_frames (the wire's readings and frames).
 """

@@ -1,13 +1,20 @@
 """The fit: Levenberg-Marquardt on the pose residuals, reduced to the identifiable parameters.
 
+0. Plausibility (:mod:`.plausibility`): every reading within :attr:`Bounds.reading_m` /
+   ``reading_rad`` of the nominal description, else an error naming the likely mistake.
 1. Scale: every residual by its own 1-sigma (noise and truncation), every Jacobian column to
    unit norm. 2. Rank: QR with column pivoting of that scaled identification Jacobian gives the
    rank; the parameters kept are chosen in a fixed order of preference (base, tool, joint frames
    root to tip), a parameter whose column depends on those already kept being unidentifiable
-   (named in the report). 3. Levenberg-Marquardt to convergence. 4. Outliers: readings more than
-   ``outlier_sigma`` outside their intervals are removed (worst first, at most 10 %) and the fit
-   repeated; if that is not enough the result is ``consistent = False``. 5. Standard deviations
-   from the residual covariance of the midpoint model at the solution.
+   (named in the report); those that readings at generic configurations would identify but
+   these do not are ``lost``. The fit needs twice as many numbers as the generic rank.
+3. Levenberg-Marquardt to convergence (not converging within ``max_iterations`` makes the fit
+   inconsistent). 4. Outliers: readings more than ``outlier_sigma`` outside their intervals
+   are removed (worst first, at most 10 %) and the fit repeated. 5. Consistency
+   (:mod:`.consistency`): no reading left above ``outlier_sigma``, no change point in the
+   residuals in reading order (:mod:`.changepoint`: a base or tool moved mid-run), converged.
+6. Bounds (:mod:`.bounds`): a fit whose corrections exceed them is an error. 7. Standard
+   deviations from the residual covariance of the midpoint model at the solution.
 """
 
 from __future__ import annotations
@@ -15,89 +22,37 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from usar_arm.calibrate import quantised as qm
+from usar_arm.calibrate.bounds import check_corrections, corrections
+from usar_arm.calibrate.consistency import covariance, judge, tool_sigma
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.calibrate.plausibility import check_readings
 from usar_arm.calibrate.residuals import Residuals, distances
+from usar_arm.calibrate.result import Calibration, CalibrationOptions, ParameterEstimate
 from usar_arm.calibrate.solver import (
     jacobian,
     joint_jacobian,
     levenberg_marquardt,
     preference,
     select_identifiable,
-    structural_rank,
+    structural_columns,
 )
 from usar_arm.errors import CalibrationError
 from usar_arm.spatial import Array
+
+__all__ = ["AUTO_MODEL", "Calibration", "CalibrationOptions", "ParameterEstimate", "identify"]
 
 # The quantisation model "auto" stands for: measured best on synthetic quantised readings
 # (tests/calibrate/test_quantisation_choice.py; figures in docs/calibration.md).
 AUTO_MODEL = "likelihood"
 MAX_REJECTED = 0.10     # at most this fraction of the readings may be rejected as outliers
-
-
-@dataclass(frozen=True)
-class CalibrationOptions:
-    """How to fit (see the module)."""
-
-    quantisation: str = "auto"        # "midpoint" | "set-membership" | "likelihood" | "auto"
-    max_iterations: int = 20
-    outlier_sigma: float = 4.0
-    base: bool = True
-    tool: bool = True
-    default_sigma_m: float = 1e-4     # noise of a position number that states none (m)
-    default_sigma_rad: float = 1e-4   # noise of an angle that states none (rad)
-
-
-@dataclass(frozen=True)
-class ParameterEstimate:
-    """One identified parameter: its name, value and standard deviation (m or rad)."""
-
-    name: str
-    value: float
-    std: float
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """The result of :func:`identify` (see docs/calibration.md)."""
-
-    parameters: tuple[ParameterEstimate, ...]
-    unidentifiable: tuple[str, ...]
-    rank: int
-    base: Array
-    fit: Residuals
-    consistent: bool
-    worst: tuple[str, ...]
-    rejected: tuple[str, ...]
-    quantisation: str
-    measured_frame: str = ""
-    base_guess: Array = field(default_factory=lambda: np.eye(4))
-    iterations: int = 0
-    vector: Array = field(default_factory=lambda: np.zeros(0))
-    tool: bool = True                 # the measured frame's offset was a parameter
-    base_fitted: bool = True          # the base pose was a parameter
-    qr_rank: int = 0                  # the pivoted QR's rank (equals rank unless ill-posed)
-    seconds: float = 0.0              # time the fit took
-
-    def apply(self, urdf: str, tip_joint: str | None = None) -> str:
-        """The calibrated URDF text (joint origins and the measured frame's offset corrected;
-        with ``tip_joint``, that fixed joint moved onto the measured frame: see
-        :meth:`ErrorModel.apply`)."""
-        model = ErrorModel.from_urdf(urdf, self.measured_frame, self.base_fitted, self.tool)
-        return model.apply(urdf, self.vector, tip_joint)
-
-    def validate(self, urdf: str, measured_frame: str,
-                 held_out: Sequence[Measurement]) -> Residuals:
-        """Residuals on readings never used for the fit: the nominal ``urdf`` at the base guess
-        before, the calibrated URDF (evaluated by Pinocchio) at the fitted base after."""
-        from usar_arm.calibrate.validation import validate
-
-        return validate(self, urdf, measured_frame, held_out)
+NUMBERS_PER_PARAMETER = 2
+"""A well-posed fit has at least this many fitted numbers per generically identifiable
+parameter."""
 
 
 def _model_name(options: CalibrationOptions) -> str:
@@ -109,22 +64,27 @@ def _model_name(options: CalibrationOptions) -> str:
 
 
 def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement],
-             base_guess: Array, options: CalibrationOptions = CalibrationOptions()
+             base_guess: Array | None, options: CalibrationOptions | None = None
              ) -> Calibration:
     """Fit the error model of ``urdf`` to the measured poses of ``measured_frame`` in M.
 
-    ``base_guess``: M_from_base_link (4x4) known before the fit. Raises
-    :class:`~usar_arm.errors.CalibrationError` for too few readings.
+    ``base_guess``: M_from_base_link (4x4) known before the fit, or None when the readings'
+    frame is unknown (a tracker in its own frame: the guess is registered from the readings).
+    Raises :class:`~usar_arm.errors.CalibrationError` for too few readings, readings far from
+    the nominal description, or corrections beyond ``options.bounds``.
     """
     start = time.perf_counter()
+    options = options or CalibrationOptions()
     kind = _model_name(options)
     model = ErrorModel.from_urdf(urdf, measured_frame, options.base, options.tool)
-    base_guess = np.asarray(base_guess, float)
     meas = list(measurements)
-    rows = sum(6 if m.rpy is not None else 3 for m in meas)
     if len(meas) < 3:
         raise CalibrationError("too few readings to identify anything", len(meas), 3)
+    if base_guess is None and not options.base:
+        raise CalibrationError("the readings' frame is unknown, so the base must be fitted")
     q = qm.joint_midpoints(meas)
+    registration = check_readings(urdf, model, meas, q, base_guess, options.bounds)
+    base_guess = registration.base
     t = qm.targets(meas, options.default_sigma_m, options.default_sigma_rad)
     step_q = np.array([m.step_q for m in meas])
     if step_q.any():
@@ -134,23 +94,27 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
     jac0 *= t.used.ravel()[:, None]
     cols, qr_rank = select_identifiable(jac0, preference(model))
     per = 6 if all(m.rpy is not None for m in meas) else 3
-    full = structural_rank(model, per == 6)
-    if len(cols) == 0 or rows < full + 6:
-        raise CalibrationError(f"too few readings: {rows} numbers for {full} identifiable "
-                               "parameters (and 6 more numbers to judge the fit)", len(meas),
-                               math.ceil((full + 6) / per))
+    generic = structural_columns(model, per == 6)
+    numbers = int(t.used.sum())
+    need = NUMBERS_PER_PARAMETER * len(generic)
+    if len(cols) == 0 or numbers < need:
+        raise CalibrationError(
+            f"too few readings: {numbers} numbers to fit for the {len(generic)} parameters "
+            f"readings of {measured_frame} identify; a well-posed fit needs "
+            f"{NUMBERS_PER_PARAMETER}x as many ({need})", len(meas), math.ceil(need / per))
     t = _unstated_noise(model, cols, q, base_guess, t, meas, options)
     keep = np.ones(len(meas), bool)
-    p, its = p0, 0
+    p, its, converged = p0, 0, True
     limit = int(MAX_REJECTED * len(meas))
     for _ in range(limit + 1):
         tk = _subset(t, keep)
-        p, its = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, "midpoint",
-                                     options.max_iterations)
+        first = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, "midpoint",
+                                    options.max_iterations)
+        p, its, converged = first.p, first.iterations, first.converged
         if kind != "midpoint":  # started from the midpoint solution: inside or near the set
-            p, more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
-                                          options.max_iterations)
-            its += more
+            more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
+                                       options.max_iterations)
+            p, its, converged = more.p, its + more.iterations, converged and more.converged
         sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t, kind)
         sc[~keep] = 0.0
         worst = int(np.argmax(sc))
@@ -159,23 +123,31 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
         keep[worst] = False
     e = qm.errors(model.poses(p, q, base_guess), t)
     sc = qm.scores(e, t, kind)
-    consistent = bool(sc[keep].max() <= options.outlier_sigma) if keep.any() else False
-    std = _std(model, p, cols, q[keep], base_guess, _subset(t, keep))
+    verdict = judge(e, t, sc, keep, converged, options)
+    found = corrections(model, p)
+    check_corrections(found, options.bounds)
+    cov = covariance(model, p, cols, q[keep], base_guess, _subset(t, keep))
     before = distances(model.poses(p0, q, base_guess), t)
     after = distances(model.poses(p, q, base_guess), t)
     order = np.argsort(-np.where(keep, sc, np.inf), kind="stable")
     names = model.names
     return Calibration(
         parameters=tuple(ParameterEstimate(names[c], float(p[c]), float(s))
-                         for c, s in zip(cols, std, strict=True)),
+                         for c, s in zip(cols, np.sqrt(np.maximum(np.diag(cov), 0.0)),
+                                         strict=True)),
         unidentifiable=tuple(names[c] for c in range(model.size) if c not in cols),
         rank=len(cols), base=model.base_pose(p, base_guess),
         fit=Residuals(t.labels, before[0], before[1], after[0], after[1]),
-        consistent=consistent, worst=tuple(t.labels[k] for k in order[:5]),
+        consistent=not verdict.problems, worst=tuple(t.labels[k] for k in order[:5]),
         rejected=tuple(t.labels[k] for k in np.flatnonzero(~keep)), quantisation=kind,
         measured_frame=measured_frame, base_guess=base_guess, iterations=its, vector=p,
         tool=model.tool_joint is not None, base_fitted=options.base,
-        qr_rank=qr_rank, seconds=time.perf_counter() - start)
+        qr_rank=qr_rank, seconds=time.perf_counter() - start, generic_rank=len(generic),
+        lost=tuple(names[c] for c in generic if c not in cols), problems=verdict.problems,
+        change=verdict.change, change_label=verdict.change_label, converged=converged,
+        corrections=found, bounds=options.bounds,
+        tool_sigma_m=tool_sigma(model, p, cols, q[keep], base_guess, cov),
+        registered=registration.registered)
 
 
 def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t: qm.Targets,
@@ -187,8 +159,8 @@ def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t
     rot = np.array([m.rpy is not None and not (m.sigma_rad > 0 or m.step_rad > 0) for m in meas])
     if not pos.any() and not rot.any():
         return t
-    p, _ = levenberg_marquardt(model, np.zeros(model.size), cols, q, base, t, "midpoint",
-                               options.max_iterations)
+    p = levenberg_marquardt(model, np.zeros(model.size), cols, q, base, t, "midpoint",
+                            options.max_iterations).p
     e = np.abs(qm.errors(model.poses(p, q, base), t))
     dof = max(1.0 - len(cols) / max(int(t.used.sum()), 1), 0.1)
     sig_m = float(np.median(e[pos, :3]) * 1.4826 / np.sqrt(dof)) if pos.any() \
@@ -204,15 +176,3 @@ def _subset(t: qm.Targets, keep: Array) -> qm.Targets:
                       tuple(lb for lb, k in zip(t.labels, keep, strict=True) if k),
                       None if t.joint_sigma is None else t.joint_sigma[keep],
                       None if t.joint_extra is None else t.joint_extra[keep])
-
-
-def _std(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
-         t: qm.Targets) -> Array:
-    """Standard deviations (m, rad) from the midpoint model's residual covariance."""
-    e = qm.errors(model.poses(p, q, base), t)
-    r, d = qm.residuals(e, t, "midpoint")
-    jac = jacobian(model, p, cols, q, base, t) * d.ravel()[:, None]
-    dof = max(int(t.used.sum()) - len(cols), 1)
-    s2 = float((r ** 2).sum()) / dof
-    cov = np.linalg.pinv(jac.T @ jac) * s2
-    return np.sqrt(np.maximum(np.diag(cov), 0.0))

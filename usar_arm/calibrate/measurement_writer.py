@@ -29,8 +29,8 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
                                                                        strict=True)]
     header += [f"{a}_{length_unit}" for a in POSITION]
     header += [f"{a}_{angle_unit}" for a in ANGLES] if has_rpy else []
-    header += [f"step_{length_unit}", f"step_{angle_unit}", f"sigma_{length_unit}",
-               f"sigma_{angle_unit}", "label"]
+    extra = _uncertainty_columns(data, length_unit, angle_unit)
+    header += [name for name, _, _ in extra] + ["label"]
     buf = io.StringIO()
     buf.write(f"# frame: {data.frame}\n")
     for key, value in data.header:
@@ -50,10 +50,31 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
         row = [repr(float(v / s)) for v, s in zip(m.q, qs, strict=True)]
         row += [repr(float(v / ls)) for v in m.position]
         row += [repr(float(v / ang)) for v in m.rpy] if has_rpy and m.rpy is not None else []
-        row += [repr(m.step_m / ls), repr(m.step_rad / ang), repr(m.sigma_m / ls),
-                repr(m.sigma_rad / ang), m.label]
+        row += [repr(getattr(m, attr) / scale) for _, attr, scale in extra] + [m.label]
         w.writerow(row)
     return buf.getvalue()
+
+
+def _uncertainty_columns(data: MeasurementSet, length_unit: str, angle_unit: str
+                         ) -> list[tuple[str, str, float]]:
+    """(column, Measurement attribute, unit scale) of the step and sigma columns to write: a
+    step column when a reading is quantised, a sigma column when a reading states a sigma or a
+    step (a reading's sigma 0 beside a step: no noise beyond the truncation; an unquantised
+    reading without a sigma has none, which the reader reads as 'not stated'). Raises
+    ValueError for readings that state a sigma beside readings that state none."""
+    ls, ang = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
+    out = []
+    for kind, unit, scale in (("m", length_unit, ls), ("rad", angle_unit, ang)):
+        steps = [getattr(m, f"step_{kind}") for m in data.measurements]
+        sigmas = [getattr(m, f"sigma_{kind}") for m in data.measurements]
+        if any(steps):
+            out.append((f"step_{unit}", f"step_{kind}", scale))
+        if any(steps) or any(sigmas):
+            if any(sg == 0 and st == 0 for sg, st in zip(sigmas, steps, strict=True)):
+                raise ValueError(f"some readings state a sigma_{kind} and others none; a "
+                                 "file states it for all or none")
+            out.append((f"sigma_{unit}", f"sigma_{kind}", scale))
+    return sorted(out, key=lambda c: c[0].startswith("sigma"))
 
 
 def write_measurements(path: str | Path, data: MeasurementSet, length_unit: str = "m",

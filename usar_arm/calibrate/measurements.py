@@ -112,6 +112,22 @@ def _check_limits(q: Array, names: Sequence[str], lower: Array | None, upper: Ar
                                   line=line, field=name)
 
 
+def _check_uncertainty(vals: dict[str, float], path: str, line: int | None,
+                       fields: dict[str, str]) -> None:
+    """A stated sigma must be positive (zero only beside a step: no noise beyond the
+    truncation); a step must not be negative. Keys ``sigma_m``, ``step_rad``... (SI)."""
+    for kind in ("m", "rad"):
+        sigma, step = vals.get(f"sigma_{kind}"), vals.get(f"step_{kind}", 0.0)
+        if step < 0:
+            raise FileFormatError(path, f"a negative step ({step:g}) is no step",
+                                  line=line, field=fields[f"step_{kind}"])
+        if sigma is not None and (sigma < 0 or (sigma == 0 and step == 0)):
+            raise FileFormatError(
+                path, f"an uncertainty of {sigma:g} is not a 1-sigma (it must be positive; "
+                "leave the column out to have the noise estimated from the readings)",
+                line=line, field=fields[f"sigma_{kind}"])
+
+
 def _split(col: str) -> tuple[str, str]:
     base, _, unit = col.rpartition("_")
     return (base, unit) if base else (col, "")
@@ -195,6 +211,7 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
         q = np.array([get(n) for n in joint_names])
         _check_limits(q, joint_names, lower, upper, path, i)
         vals = {key: _number(row[k], path, i, header[k]) * s for key, (k, s, _) in extra.items()}
+        _check_uncertainty(vals, path, i, {key: header[k] for key, (k, _, _) in extra.items()})
         label = row[cols["label"][0]] if "label" in cols else f"{Path(path).name} line {i}"
         rows.append(Measurement(
             q, np.array([get(n) for n in POSITION]),
@@ -247,9 +264,14 @@ def _read_yaml(path: str, joint_names: Sequence[str], prismatic: Sequence[bool],
         def scalar(key: str, s: float, item: Any = item, line: int | None = line) -> float:
             return _number(item[key], path, line, key) * s if key in item else 0.0
 
+        keys = {"step_m": "step_position", "step_rad": "step_angle",
+                "sigma_m": "sigma_position", "sigma_rad": "sigma_angle"}
+        vals = {k: scalar(key, ls if k.endswith("_m") else ang) for k, key in keys.items()
+                if key in item}
+        _check_uncertainty(vals, path, line, keys)
         rows.append(Measurement(q, _vector(item, "position", 3, ls, path, line), rpy,
-                                scalar("step_position", ls), scalar("step_angle", ang),
-                                scalar("sigma_position", ls), scalar("sigma_angle", ang),
+                                vals.get("step_m", 0.0), vals.get("step_rad", 0.0),
+                                vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0),
                                 str(item.get("label", f"{Path(path).name} line {line}"))))
     return MeasurementSet(tuple(rows), str(data["frame"]), lu, au, tuple(joint_names))
 

@@ -1,4 +1,4 @@
-"""Which configurations to measure: observability-driven pose selection and dithering.
+"""Which configurations to measure: observability-driven pose selection.
 
 :func:`select_poses` picks configurations (within limits, ``is_free``) whose stacked
 identification Jacobian -- pose of the measured frame (m, rad) w.r.t. the identifiable
@@ -6,9 +6,8 @@ parameters (m, rad), both in natural units so 1 mm weighs as 1 mrad -- has the l
 singular value: a greedy pass over random candidates (D-optimal until the rank is reached, then
 the smallest eigenvalue of J^T J), then one exchange pass. Deterministic for a seed.
 
-:func:`dither_offsets` gives small joint offsets that move the measured frame by different
-fractions of a printed step on every printed axis, so the truncated numbers of repeated readings
-fall at different places inside their steps.
+No dithering is needed on the wire: the tour reads the sensor in motion, which moves every
+printed number through its step (docs/calibration.md, "Pose selection and dithering").
 """
 
 from __future__ import annotations
@@ -102,21 +101,3 @@ def _score(gram: Array) -> float:
         return float(ev[0])
     big = ev[ev > RANK_TOL * max(ev[-1], 1e-300)]
     return -1e6 * (len(ev) - len(big)) + float(np.log(big).sum()) * 1e-3
-
-
-def dither_offsets(urdf: str, measured_frame: str, q: Array, count: int, step_m: float,
-                   step_rad: float) -> Array:
-    """(count, n) joint offsets (rad / m) to add to ``q``: the first is zero, the k-th moves
-    the measured frame by a different fraction of ``step_m`` along each axis and turns it by a
-    different fraction of ``step_rad`` about each (fractions from an additive recurrence with
-    irrational increments), by the pseudo-inverse of the frame's Jacobian at ``q``."""
-    km = KinematicModel(urdf)
-    jac = km.jacobian(np.asarray(q, float), measured_frame)
-    pinv = np.linalg.pinv(jac)
-    rates = np.sqrt(np.array([2.0, 3.0, 5.0, 7.0, 11.0, 13.0])) % 1.0
-    scale = np.array([step_m] * 3 + [step_rad] * 3)
-    out = np.zeros((count, km.nq))
-    for k in range(1, count):
-        frac = (k * rates) % 1.0 - 0.5
-        out[k] = pinv @ (frac * scale)
-    return out

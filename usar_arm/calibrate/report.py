@@ -4,10 +4,12 @@ held-out readings, consistency), and the check that decides whether a fit may be
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
-from usar_arm.calibrate.identify import Calibration
+from usar_arm.calibrate.bounds import largest
 from usar_arm.calibrate.residuals import Residuals
+from usar_arm.calibrate.result import Calibration
 from usar_arm.errors import CalibrationError
 
 DIGITS = 12
@@ -26,15 +28,31 @@ def _rounded(value: Any) -> Any:
     return value
 
 
+def compact_names(names: Sequence[str]) -> str:
+    """Parameter names grouped by frame, e.g. ``joint_a1.origin.{x,y,z}, base.{x,yaw}``."""
+    groups: dict[str, list[str]] = {}
+    for name in names:
+        head, _, axis = name.rpartition(".")
+        groups.setdefault(head, []).append(axis)
+    return ", ".join(f"{head}.{axes[0]}" if len(axes) == 1 else f"{head}.{{{','.join(axes)}}}"
+                     for head, axes in groups.items())
+
+
 def calibration_dict(cal: Calibration, validation: Residuals | None,
-                     notes: tuple[str, ...] = ()) -> dict[str, Any]:
-    """The report (units: m and rad; numbers to :data:`DIGITS` significant digits; the fit's
-    duration, which varies from run to run, is left out)."""
+                     notes: tuple[str, ...] = (), tool_point: str = "") -> dict[str, Any]:
+    """The report (units: m and rad, in the keys; numbers to :data:`DIGITS` significant
+    digits; the fit's duration, which varies from run to run, is left out). ``tool_point``:
+    which source fixes the tool point."""
+    change = cal.change
     return _rounded({
         "measured_frame": cal.measured_frame,
         "quantisation": cal.quantisation,
         "consistent": cal.consistent,
+        "problems": list(cal.problems),
+        "converged": cal.converged,
         "rank": cal.rank,
+        "generic_rank": cal.generic_rank,
+        "lost": list(cal.lost),
         "parameters": [{"name": p.name, "value": p.value, "std": p.std}
                        for p in cal.parameters],
         "unidentifiable": list(cal.unidentifiable),
@@ -42,6 +60,14 @@ def calibration_dict(cal: Calibration, validation: Residuals | None,
         "rejected": list(cal.rejected),
         "worst": list(cal.worst),
         "iterations": cal.iterations,
+        "change_point": None if change is None else {
+            "first_reading_after": cal.change_label, "group": change.group,
+            "shift": list(change.shift), "statistic": change.statistic,
+            "threshold": change.threshold, "detected": change.detected},
+        "bounds": cal.bounds.report(),
+        "largest_corrections": largest(cal.corrections),
+        "tool_point": {"source": tool_point, "sigma_m_median": cal.tool_sigma_m[0],
+                       "sigma_m_max": cal.tool_sigma_m[1]},
         "fit": {"summary": cal.fit.summary(), "readings": cal.fit.rows()},
         "validation": None if validation is None else {
             "summary": validation.summary(), "readings": validation.rows()},
@@ -53,8 +79,9 @@ def check_validated(cal: Calibration, validation: Residuals) -> None:
     """Raise :class:`CalibrationError` unless the fit is consistent and the held-out readings
     are no worse after than before (rms of position and of rotation)."""
     if not cal.consistent:
-        raise CalibrationError("the readings contradict the model (consistent: false); worst "
-                               f"readings: {', '.join(cal.worst)}")
+        raise CalibrationError("the readings contradict the model (consistent: false): "
+                               f"{'; '.join(cal.problems)}; worst readings: "
+                               f"{', '.join(cal.worst)}")
     s = validation.summary()
     if len(validation.labels) == 0:
         raise CalibrationError("no held-out readings to validate the fit on")

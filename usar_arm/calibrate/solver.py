@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -53,9 +54,21 @@ def select_identifiable(jac: Array, order: Sequence[int]) -> tuple[list[int], in
     return kept, rank
 
 
+@dataclass(frozen=True)
+class Fitted:
+    """Levenberg-Marquardt's answer: the parameters, the iterations taken, and whether it
+    converged (relative cost change below 1e-10, or no step lowers the cost any more) rather
+    than stopping at its cap."""
+
+    p: Array
+    iterations: int
+    converged: bool
+
+
 def levenberg_marquardt(model: ErrorModel, p: Array, cols: list[int], q: Array, base: Array,
-                        t: qm.Targets, kind: str, iterations: int) -> tuple[Array, int]:
-    """Levenberg-Marquardt on the weighted residuals over the parameters ``cols``."""
+                        t: qm.Targets, kind: str, iterations: int) -> Fitted:
+    """Levenberg-Marquardt on the weighted residuals over the parameters ``cols``, at most
+    ``iterations`` steps."""
     def cost(x: Array) -> tuple[float, Array, Array]:
         e = qm.errors(model.poses(x, q, base), t)
         r, d = qm.residuals(e, t, kind)
@@ -80,19 +93,21 @@ def levenberg_marquardt(model: ErrorModel, p: Array, cols: list[int], q: Array, 
                 break
             lam *= 10
         if not improved:
-            break
+            return Fitted(p, it, True)
         p, r, d = trial, r1, d1
         lam = max(lam / 10, 1e-9)
         done = c0 - c1 < 1e-10 * c0 + 1e-14
         c0 = c1
         if done:
-            break
-    return p, it
+            return Fitted(p, it, True)
+    return Fitted(p, it, False)
 
 
-def structural_rank(model: ErrorModel, rotations: bool = True, samples: int = 40) -> int:
-    """How many parameters readings at generic configurations identify (random configurations
-    within the joint limits, seed 0; position-only when ``rotations`` is False)."""
+def structural_columns(model: ErrorModel, rotations: bool = True, samples: int = 40
+                       ) -> list[int]:
+    """The parameters readings at generic configurations identify, chosen in the order of
+    :func:`preference` (random configurations within the joint limits, seed 0; position-only
+    when ``rotations`` is False)."""
     joints = [j for j in model.path if j.actuated]
     lo = np.array([j.limits.lower if j.limits else -np.pi for j in joints])
     hi = np.array([j.limits.upper if j.limits else np.pi for j in joints])
@@ -101,7 +116,7 @@ def structural_rank(model: ErrorModel, rotations: bool = True, samples: int = 40
                                 sigma_m=1e-3, sigma_rad=1e-3) for qk in q], 1e-3, 1e-3)
     jac = jacobian(model, np.zeros(model.size), range(model.size), q, np.eye(4), t)
     jac *= t.used.ravel()[:, None]
-    return len(select_identifiable(jac, preference(model))[0])
+    return select_identifiable(jac, preference(model))[0]
 
 
 def preference(model: ErrorModel) -> list[int]:

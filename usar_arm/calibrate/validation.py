@@ -11,6 +11,7 @@ from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals, distances
+from usar_arm.errors import CalibrationError
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.spatial import Array
 
@@ -35,10 +36,35 @@ def validate(cal: Calibration, urdf: str, measured_frame: str,
     return Residuals(t.labels, before[0], before[1], after[0], after[1])
 
 
-def split_held_out(readings: Sequence[Measurement], every: int = 5
+BLOCKS = 10
+"""The readings are cut into this many contiguous blocks in reading order."""
+HELD_OUT_BLOCKS = (4, 9)
+"""The blocks held out (the 5th and the 10th): 20 % of the readings, in two stretches of
+consecutive readings, so the validation configurations are far from the fitted ones."""
+MIN_HELD_OUT = 5
+"""Fewest held-out readings a validation is judged on."""
+
+
+def split_held_out(readings: Sequence[Measurement]
                    ) -> tuple[list[Measurement], list[Measurement]]:
-    """(fit, held out): every ``every``-th reading (the every-th, 2 every-th, ...) is held out
-    and never fitted; deterministic, and spread over the run like the readings themselves."""
-    held = [m for k, m in enumerate(readings) if k % every == every - 1]
-    fit = [m for k, m in enumerate(readings) if k % every != every - 1]
-    return fit, held
+    """(fit, held out): the readings cut into :data:`BLOCKS` contiguous blocks in reading
+    order (sizes differing by at most one), blocks :data:`HELD_OUT_BLOCKS` held out and never
+    fitted; deterministic. Raises :class:`~usar_arm.errors.CalibrationError` when fewer than
+    :data:`MIN_HELD_OUT` readings would be held out."""
+    n = len(readings)
+    block = np.arange(n) * BLOCKS // max(n, 1)
+    held_mask = np.isin(block, HELD_OUT_BLOCKS)
+    held = [m for m, h in zip(readings, held_mask, strict=True) if h]
+    if len(held) < MIN_HELD_OUT:
+        share = len(HELD_OUT_BLOCKS) / BLOCKS
+        raise CalibrationError(
+            f"too few readings to validate: {n} readings hold out {len(held)} "
+            f"({share:.0%} in {len(HELD_OUT_BLOCKS)} blocks), at least {MIN_HELD_OUT} needed",
+            n, int(np.ceil(MIN_HELD_OUT / share)))
+    return [m for m, h in zip(readings, held_mask, strict=True) if not h], held
+
+
+def held_out_note() -> str:
+    """How the readings are split, in words (for the reports)."""
+    return (f"blocks {' and '.join(str(b + 1) for b in HELD_OUT_BLOCKS)} of {BLOCKS} "
+            f"contiguous blocks in reading order, {len(HELD_OUT_BLOCKS) / BLOCKS:.0%}")

@@ -1,9 +1,10 @@
 """``usar-arm calibrate``: identify an arm's kinematic parameters from measured tool poses.
 
 FILE mode (``--measurements FILE --urdf X.urdf``): a laser-tracker style file (CSV or YAML, see
-usar_arm/calibrate/measurements.py) in base_link; every fifth reading (the 5th, 10th, ...) is held
-out for validation and never fitted. The calibrated URDF and <stem>.calibration.json are written
-atomically, and only after the fit is consistent and holds on the held-out readings.
+usar_arm/calibrate/measurements.py), in base_link or in the tracker's own frame (registered);
+two blocks of consecutive readings (20 %) are held out for validation and never fitted. The
+calibrated URDF and <stem>.calibration.json are written atomically, and only after the fit is
+consistent, within the plausibility bounds, and holds on the held-out readings.
 """
 
 from __future__ import annotations
@@ -12,20 +13,33 @@ import argparse
 import json
 from pathlib import Path
 
-import numpy as np
-
-from usar_arm.calibrate.identify import CalibrationOptions, identify
+from usar_arm.calibrate.bounds import Bounds
+from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
 from usar_arm.calibrate.measurements import read_measurements
-from usar_arm.calibrate.report import calibration_dict, check_validated
-from usar_arm.calibrate.validation import split_held_out
-from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
+from usar_arm.calibrate.report import calibration_dict, check_validated, compact_names
+from usar_arm.calibrate.validation import held_out_note, split_held_out
+from usar_arm.cli.common import (
+    add_verbosity,
+    err,
+    out,
+    print_json,
+    progress,
+    setup_logging,
+    verbosity,
+)
 from usar_arm.errors import EXIT_OK, FileFormatError, InvalidInputError
 from usar_arm.fileio import write_tree_atomic
 from usar_arm.model import JointType
 from usar_arm.urdf.reader import parse_urdf
 
-HOLD_OUT_EVERY = 5  # every fifth reading is held out for validation
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
+BOUND_OPTIONS = (("reading", "--max-reading-offset",
+                  "how far a reading may sit from the nominal description before the fit"),
+                 ("joint", "--max-joint-correction", "the largest correction of a joint frame"),
+                 ("tool", "--max-tool-correction",
+                  "the largest correction of the measured frame's mount"),
+                 ("base", "--max-base-correction",
+                  "the largest correction of the base from its guess"))
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -33,17 +47,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "calibrate", help="identify joint frames, tool and base from measured tool poses",
         description="Kinematic calibration. FILE mode: fit URDF's joint frames, the measured "
                     "frame's offset and the base pose to the poses in FILE (CSV or YAML, units "
-                    "stated), validate on every fifth reading (held out), and write the "
-                    "calibrated URDF and a calibration.json. Nothing is written unless the fit "
-                    "is consistent and holds on the held-out readings.")
+                    "stated), validate on two blocks of consecutive readings (20 %, held out), "
+                    "and write the calibrated URDF and a calibration.json. Nothing is written "
+                    "unless the readings are plausible for the URDF, the corrections within "
+                    "their bounds, the fit consistent and holding on the held-out readings.")
     p.add_argument("--measurements", metavar="FILE", help="measured poses (CSV or YAML)")
     p.add_argument("--urdf", metavar="X.urdf", help="the description to calibrate")
     p.add_argument("--frame", help="FILE mode: measured frame (default: the file's)")
-    p.add_argument("--out", default="calibrated", metavar="DIR",
-                   help="where to write (default ./calibrated)")
+    p.add_argument("--out-dir", "--out", dest="out", default="calibrated", metavar="DIR",
+                   help="where to write (default ./calibrated; --out is the same)")
     p.add_argument("--quantisation", default="auto",
                    choices=["auto", "midpoint", "set-membership", "likelihood"],
                    help="model of truncated readings (default auto = likelihood)")
+    defaults = Bounds()
+    for kind, flag, what in BOUND_OPTIONS:
+        m, rad = defaults.of(kind)
+        p.add_argument(flag, type=float, nargs=2, default=(m, rad), metavar=("M", "RAD"),
+                       help=f"{what} (m, rad; default {m:g} {rad:g})")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_robot_mode(p)
     add_verbosity(p)
@@ -91,8 +111,39 @@ def run_robot(args: argparse.Namespace) -> int:
     return calibrate_robot(args)
 
 
+def calibration_options(args: argparse.Namespace) -> CalibrationOptions:
+    """The fit's options from the arguments (bounds in SI units)."""
+    values = {f"{kind}_{unit}": float(v) for kind, flag, _ in BOUND_OPTIONS
+              for unit, v in zip(("m", "rad"), getattr(args, flag[2:].replace("-", "_")),
+                                 strict=True)}
+    return CalibrationOptions(quantisation=args.quantisation, bounds=Bounds(**values))
+
+
 def _milli(x: float) -> str:
     return f"{x * 1e3:.3f}"
+
+
+def identifiability_line(cal: Calibration) -> str:
+    """What the fit could identify, by name."""
+    return (f"  rank {cal.rank} of {cal.generic_rank} generically identifiable; "
+            f"{len(cal.unidentifiable)} unidentifiable, kept as in the URDF: "
+            f"{compact_names(cal.unidentifiable)}")
+
+
+def warn_lost(cal: Calibration) -> None:
+    """A warning on stderr when these readings identify less than readings at generic
+    configurations would: the description then holds only near the configurations sampled."""
+    if cal.lost:
+        err(f"warning: these readings cannot identify {compact_names(cal.lost)} (readings at "
+            "generic configurations would): the description is only validated over the "
+            "configurations sampled (the held-out check)")
+
+
+def tool_point_line(cal: Calibration, source: str) -> str:
+    """How well the tool point is fixed, and by what."""
+    med, worst = cal.tool_sigma_m
+    return (f"  tool point {cal.measured_frame}: 1-sigma {_milli(med)} mm median, "
+            f"{_milli(worst)} mm max over the fitted configurations; {source}")
 
 
 def run_file(args: argparse.Namespace) -> int:
@@ -107,20 +158,21 @@ def run_file(args: argparse.Namespace) -> int:
                              prismatic=[j.type is JointType.PRISMATIC for j in joints],
                              lower=chain.lower(), upper=chain.upper())
     frame = args.frame or data.frame
+    options = calibration_options(args)
     readings = list(data.measurements)
-    fit, held = split_held_out(readings, HOLD_OUT_EVERY)
-    progress(f"fitting {len(fit)} readings of {frame}; {len(held)} held out (every "
-             f"{HOLD_OUT_EVERY}th) for validation...")
-    cal = identify(urdf, frame, fit, np.eye(4), CalibrationOptions(quantisation=args.quantisation))
+    fit, held = split_held_out(readings)
+    progress(f"fitting {len(fit)} readings of {frame}; {len(held)} held out "
+             f"({held_out_note()}) for validation...")
+    cal = identify(urdf, frame, fit, None, options)
     validation = cal.validate(urdf, frame, held)
+    warn_lost(cal)
     check_validated(cal, validation)
+    source = (f"the measured frame {frame} is the tool point the tracker fixes; its offset is "
+              "identified from these readings")
     report = calibration_dict(cal, validation, (
         f"file mode: {Path(args.measurements).name}, {len(fit)} readings fitted, {len(held)} "
-        f"held out (every {HOLD_OUT_EVERY}th)",
-        f"the measured frame {frame} is the tool point the tracker fixes; its offset is "
-        "identified from these readings"))
+        f"held out ({held_out_note()})",), source)
     stem = urdf_path.stem
-
     paths = write_tree_atomic(args.out, {
         f"{stem}.calibration.json": json.dumps(report, indent=2) + "\n",
         f"{stem}.urdf": cal.apply(urdf)})
@@ -129,13 +181,22 @@ def run_file(args: argparse.Namespace) -> int:
         print_json({"files": [str(p) for p in paths], "calibration": report})
         return EXIT_OK
     out(f"calibrated {stem} from {len(fit)} readings of {frame} in {cal.seconds:.2f} s "
-        f"({cal.quantisation}, rank {cal.rank}, {len(cal.unidentifiable)} unidentifiable, "
-        f"{len(cal.rejected)} rejected)")
+        f"({cal.quantisation}, {len(cal.rejected)} rejected)")
+    out(identifiability_line(cal))
     out(f"  fit        max {_milli(f['max_before_m'])} -> {_milli(f['max_after_m'])} mm, "
         f"{_milli(f['max_before_rad'])} -> {_milli(f['max_after_rad'])} mrad")
     out(f"  held out   max {_milli(v['max_before_m'])} -> {_milli(v['max_after_m'])} mm, "
         f"{_milli(v['max_before_rad'])} -> {_milli(v['max_after_rad'])} mrad "
         f"({len(held)} readings)")
+    out(tool_point_line(cal, source))
+    out(f"  bounds     readings {_bound(options, 'reading')}, joint frames "
+        f"{_bound(options, 'joint')}, tool {_bound(options, 'tool')}, base "
+        f"{_bound(options, 'base')}")
     for p in paths:
         out(f"  wrote {p}")
     return EXIT_OK
+
+
+def _bound(options: CalibrationOptions, kind: str) -> str:
+    m, rad = options.bounds.of(kind)
+    return f"{m * 1e3:g} mm / {rad * 1e3:g} mrad"

@@ -7,7 +7,14 @@ import argparse
 from collections.abc import Callable
 from pathlib import Path
 
+from usar_arm.calibrate.identify import CalibrationOptions
 from usar_arm.calibration import WireCalibration, calibrate_description
+from usar_arm.cli.calibrate_cmd import (
+    calibration_options,
+    identifiability_line,
+    tool_point_line,
+    warn_lost,
+)
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
@@ -32,10 +39,12 @@ def has_tip_sensor(desc: Description) -> bool:
 
 
 def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: str | None,
-              seed: int, say: Callable[[str], None] = out, readings: str | None = None
+              seed: int, say: Callable[[str], None] = out, readings: str | None = None,
+              calibration: CalibrationOptions | None = None, entry: Path | None = None
               ) -> tuple[Description, WireCalibration]:
     """Calibrate with a progress line on stderr, then ``say`` the before/after figures
-    (``readings``: a recorded tour's readings file instead of a tour)."""
+    (``readings``: a recorded tour's readings file instead of a tour; ``entry``: the
+    description cache's entry to cache the result in, default the spawned arm's)."""
     if readings is None:
         err(f"calibrating {desc.chain.name}: a tour through {poses} poses, reading its tip "
             "sensor...")
@@ -46,12 +55,13 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
         err(f"  poses {done}/{total}")
 
     calibrated, result = calibrate_description(desc, options, poses, scene, seed, tick,
-                                               readings)
+                                               readings, calibration=calibration, entry=entry)
     fit, val = result.calibration.fit.summary(), result.validation.summary()
     cal = result.calibration
     say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
-        f"s ({cal.quantisation}, rank {cal.rank}, {len(cal.unidentifiable)} unidentifiable, "
-        f"{len(cal.rejected)} rejected)")
+        f"s ({cal.quantisation}, {len(cal.rejected)} rejected)")
+    say(identifiability_line(cal))
+    warn_lost(cal)
     say(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
         f"{_mm(fit['max_before_rad'])} -> {_mm(fit['max_after_rad'])} mrad "
         "(from each reading's interval middle)")
@@ -64,7 +74,7 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
             f"flange {_mm(before['max_flange_error_m'])} -> {_mm(truth['max_flange_error_m'])} "
             f"mm, joint axes {_mm(before['max_joint_axis_error_rad'])} -> "
             f"{_mm(truth['max_joint_axis_error_rad'])} mrad")
-    say(f"  tool point: {result.tool_point}")
+    say(tool_point_line(cal, result.tool_point))
     return calibrated, result
 
 
@@ -97,7 +107,8 @@ def calibrate_robot(args: argparse.Namespace) -> int:
     err(f"discovering {options.robot_class}...")
     desc = describe(options)
     calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed,
-                                   err if args.json else out, args.readings)
+                                   err if args.json else out, args.readings,
+                                   calibration_options(args))
     paths = write_description(calibrated, args.out)
     recorded = write_readings(result, args.out, desc.chain.name)
     if recorded is not None:

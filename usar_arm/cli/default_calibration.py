@@ -2,92 +2,111 @@
 sensor by default (``usar-arm urdf``, ``tesseract-config``, ``moveit-config``), as learnt with
 ``--no-calibrate``, when the arm has no tip sensor, or when its calibration fails.
 
-``urdf`` tours the arm every time (it records the tour's readings beside the description). The
-config commands first take the calibrated description the description cache holds for the same
-CONF/GEO lines and options (an earlier ``urdf``, ``calibrate``, ``demo`` or config command made
-it), so a second call is instant; only without one do they tour (about 35 s for the KR60).
+:func:`describe_calibrated` is the one path: discover, then take the calibration the description
+cache holds for this arm (its CONF/GEO lines and the description options) made with the same
+settings, unless ``--recalibrate``; else tour the arm (about 35 s for the KR60; the result is
+cached for the next time), or fit a recorded tour's readings. Every fallback to the as-learnt
+description is said on stderr, with its reason.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from usar_arm.calibration import WireCalibration
+from usar_arm.calibration import CalibrationSettings, cached_calibration
 from usar_arm.cli.calibrate_cmd import POSES
 from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor
-from usar_arm.cli.common import err
+from usar_arm.cli.common import err, out
 from usar_arm.cli.robot_args import options_from
 from usar_arm.description import DescribeOptions, Description
-from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.embedded import describe_discovered, run_discovery
 from usar_arm.errors import CalibrationError, ExecutionAbortedError
-from usar_arm.robot import CALIBRATED, Robot, cache_folder, robot_from_texts
+from usar_arm.robot import Robot, cache_folder, robot_from_texts
 
-log = logging.getLogger(__name__)
 Say = Callable[[str], None]
 
 
 def add_calibration_args(p: argparse.ArgumentParser) -> None:
-    """--no-calibrate and --poses."""
+    """--no-calibrate, --poses and --recalibrate."""
     p.add_argument("--no-calibrate", action="store_true",
                    help="write the description as learnt; by default an arm with a tip pose "
                         "sensor is first calibrated through it (a tour of --poses poses)")
     p.add_argument("--poses", type=int, default=POSES, metavar="N",
                    help=f"poses of the calibration tour (default {POSES})")
+    p.add_argument("--recalibrate", action="store_true",
+                   help="tour again even when the description cache holds this arm's "
+                        "calibration with the same settings")
 
 
-def skip_reason(desc: Description, options: DescribeOptions, no_calibrate: bool) -> str | None:
-    """Why ``desc`` is written as learnt (None: it is to be calibrated)."""
-    if no_calibrate:
+@dataclass(frozen=True)
+class Described:
+    """What :func:`describe_calibrated` gives: the description to write (calibrated or as
+    learnt), the tour's readings file text to write beside it (None when not calibrated from
+    a tour), and where the calibration came from: ``tour``, ``cache``, ``readings`` or None
+    (as learnt; ``why`` says why)."""
+
+    description: Description
+    readings_csv: str | None
+    source: str | None
+    why: str = ""
+
+
+def _skip_reason(desc: Description, options: DescribeOptions, calibrate_arm: bool) -> str:
+    """Why ``desc`` is written as learnt ("": it is to be calibrated)."""
+    if not calibrate_arm:
         return "not calibrating (--no-calibrate): the description is as learnt"
     if not has_tip_sensor(desc):
-        return (f"not calibrating: the server reports no tip pose sensor on "
-                f"{desc.chain.name}'s arm, so the description is as learnt (calibrate "
-                "--measurements FILE fits one to a tracker's readings)")
+        return (f"not calibrating: the server reports no tip pose sensor on {desc.chain.name}'s "
+                "arm, so the description is as learnt (calibrate --measurements FILE fits one "
+                "to a tracker's readings)")
     if options.frame != "z-up":
         return "not calibrating: calibration works on z-up descriptions (--frame z-up)"
-    return None
+    return ""
 
 
-def by_default(desc: Description, options: DescribeOptions, no_calibrate: bool, poses: int,
-               say: Say, readings: str | None = None
-               ) -> tuple[Description, WireCalibration | None]:
-    """``desc`` calibrated (a tour of ``poses`` poses, or ``readings``) unless
-    :func:`skip_reason` gives a reason, said on stderr; a failed calibration without
-    ``readings`` leaves it as learnt, also said (with ``readings`` it raises)."""
-    reason = skip_reason(desc, options, no_calibrate)
-    if reason is not None:
-        err(reason)
-        return desc, None
+def describe_calibrated(options: DescribeOptions, *, calibrate_arm: bool = True,
+                        poses: int = POSES, readings: str | None = None,
+                        recalibrate: bool = False, say: Say = out) -> Described:
+    """Discover the arm ``options`` name and describe it calibrated through its tip sensor:
+    from the description cache when this arm (its CONF/GEO lines and the description options)
+    was calibrated with the same settings before, unless ``recalibrate``; else by a tour of
+    ``poses`` poses (cached for the next time), or from a tour's ``readings`` file. An arm
+    without a tip sensor, ``calibrate_arm`` False, or a failed tour (inconsistent readings, an
+    aborted motion) give the as-learnt description and the reason (on stderr and in ``why``).
+    Progress goes to stderr, the calibration's figures to ``say``."""
+    if calibrate_arm:
+        check_poses(poses)
+    record = run_discovery(options)
+    desc = describe_discovered(record, options)
+    why = _skip_reason(desc, options, calibrate_arm)
+    if why:
+        err(why)
+        return Described(desc, None, None, why)
+    entry = cache_folder(record, options)
+    settings = CalibrationSettings(poses)
+    hit = None if readings is not None or recalibrate else \
+        cached_calibration(entry, desc.chain.name, settings)
+    if hit is not None:
+        name = desc.chain.name
+        say(f"calibrated description from the cache, made {hit.made} from {hit.readings} "
+            "readings; --recalibrate to tour again")
+        cached = replace(desc, urdf=hit.files[f"{name}.urdf"],
+                         discovery=json.loads(hit.files[f"{name}.discovery.json"]))
+        return Described(cached, hit.files.get(f"{name}.readings.csv"), "cache")
     try:
-        return calibrate(desc, options, poses, None, 0, say, readings)
+        calibrated, result = calibrate(desc, options, poses, None, 0, say, readings,
+                                       settings.options, entry)
     except (CalibrationError, ExecutionAbortedError) as exc:
         if readings is not None:
             raise
-        err(f"calibration failed, so the description is as learnt: {exc}")
-        return desc, None
-
-
-def cached_calibration(record: DiscoveryRecord, options: DescribeOptions, desc: Description
-                       ) -> Description | None:
-    """The calibrated description of ``desc`` the description cache holds (None when it holds
-    none, or one built with other options: a different SRDF or joint limits)."""
-    folder = cache_folder(record, options) / CALIBRATED
-    names = list(desc.files())
-    try:
-        files = {name: (folder / name).read_text() for name in names}
-        discovery = json.loads(files[names[3]])
-    except (OSError, ValueError):
-        return None
-    if files[names[1]] != desc.srdf or files[names[2]] != desc.joint_limits \
-            or "calibration" not in discovery:
-        log.info("ignoring the cached calibration in %s: made with other options", folder)
-        return None
-    return replace(desc, urdf=files[names[0]], discovery=discovery)
+        why = f"calibration failed, so the description is as learnt: {exc}"
+        err(why)
+        return Described(desc, None, None, why)
+    csv = result.tour.csv() if result.tour is not None else None
+    return Described(calibrated, csv, "readings" if readings is not None else "tour")
 
 
 @dataclass(frozen=True)
@@ -101,28 +120,19 @@ class Chosen:
     note: str
 
 
+NOTES = {"cache": "calibrated through its tip sensor (the description cache's)",
+         "tour": "calibrated through its tip sensor (a new tour)", None: "as learnt"}
+
+
 def config_description(args: argparse.Namespace, say: Say = err) -> Chosen:
     """Discover the arm ``args`` name and choose its description as ``usar-arm urdf`` does by
-    default (:func:`by_default`), taking a calibration the description cache holds first."""
+    default (:func:`describe_calibrated`)."""
     options = options_from(args)
-    if not args.no_calibrate:
-        check_poses(args.poses)
     where = "the embedded simulator" if options.host is None else f"{args.host}:{args.port}"
     err(f"discovering {options.robot_class} on {where}...")
-    record = run_discovery(options)
-    desc = describe_discovered(record, options)
-    cached = None
-    if skip_reason(desc, options, args.no_calibrate) is None:
-        cached = cached_calibration(record, options, desc)
-    if cached is not None:
-        desc, note = cached, "calibrated through its tip sensor (the description cache's)"
-        err(f"using the calibration of {desc.chain.name} the description cache holds (an "
-            "earlier tour through its tip sensor; --no-calibrate: the description as learnt)")
-    else:
-        desc, _ = by_default(desc, options, args.no_calibrate, args.poses, say)
-        note = ("calibrated through its tip sensor (a new tour)"
-                if "calibration" in desc.discovery else "as learnt")
-    calibrated = "calibration" in desc.discovery
+    got = describe_calibrated(options, calibrate_arm=not args.no_calibrate, poses=args.poses,
+                              recalibrate=args.recalibrate, say=say)
+    desc, note = got.description, NOTES.get(got.source, "calibrated")
     robot = robot_from_texts(desc.files(), f"{desc.chain.name}.urdf",
                              f"{note} description of {desc.chain.name}")
-    return Chosen(desc, robot, calibrated, note)
+    return Chosen(desc, robot, "calibration" in desc.discovery, note)

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from usar_arm.cli.calibrate_robot import check_poses, write_readings
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
-from usar_arm.cli.default_calibration import add_calibration_args, by_default, config_description
+from usar_arm.cli.default_calibration import (
+    add_calibration_args,
+    config_description,
+    describe_calibrated,
+)
 from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.description import Description, write_description
-from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.fileio import write_tree_atomic
+from usar_arm.fileio import write_atomic, write_tree_atomic
 from usar_arm.urdf.moveit import moveit_files, package_name
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 
@@ -89,21 +92,21 @@ def run_urdf(args: argparse.Namespace) -> int:
     options = options_from(args)
     if args.readings is not None and args.no_calibrate:
         raise InvalidInputError("--readings calibrates; it cannot go with --no-calibrate")
-    if not args.no_calibrate:
-        check_poses(args.poses)
     err(f"discovering {options.robot_class} on "
         f"{'the embedded simulator' if options.host is None else f'{args.host}:{args.port}'}...")
-    desc, result = by_default(describe(options), options, args.no_calibrate, args.poses,
-                              err if args.json else out, args.readings)
+    got = describe_calibrated(options, calibrate_arm=not args.no_calibrate, poses=args.poses,
+                              readings=args.readings, recalibrate=args.recalibrate,
+                              say=err if args.json else out)
+    desc = got.description
     paths = write_description(desc, args.out_dir)
-    if result is not None:
-        recorded = write_readings(result, args.out_dir, desc.chain.name)
-        if recorded is not None:
-            paths["readings"] = recorded
+    if got.readings_csv is not None:
+        paths["readings"] = write_atomic(Path(args.out_dir) / f"{desc.chain.name}.readings.csv",
+                                         got.readings_csv)
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
                     "joints": _joint_rows(desc), "warnings": list(desc.warnings),
-                    "calibrated": "calibration" in desc.discovery})
+                    "calibrated": "calibration" in desc.discovery,
+                    "calibration_source": got.source, "not_calibrated_because": got.why})
         return EXIT_OK
     _print_table(desc)
     for kind, path in paths.items():
