@@ -34,6 +34,11 @@ from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
 from usar_arm.version import __version__
 
+GENERATOR = 2
+"""The version of what discovery writes from the same CONF/GEO lines and options; part of the
+description cache's key, so a cached description made by an older generator is made again.
+2: link cylinders span their joints (1: trimmed short of them)."""
+
 log = logging.getLogger("usar_arm.description")
 
 FRAMES = ("z-up", "z-down")

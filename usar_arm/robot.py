@@ -17,7 +17,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from usar_arm.description import DescribeOptions, Description, describe_arm, write_description
+from usar_arm.description import (
+    GENERATOR,
+    DescribeOptions,
+    Description,
+    describe_arm,
+    write_description,
+)
 from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.errors import FileFormatError
 from usar_arm.fileio import write_tree_atomic
@@ -172,7 +178,8 @@ def cache_dir() -> Path:
 def description_key(record: DiscoveryRecord, options: DescribeOptions) -> str:
     """A key made of everything a description depends on: the CONF/GEO lines and the options."""
     limits = Path(options.velocity_limits).read_text() if options.velocity_limits else ""
-    material = json.dumps({"version": __version__, "class": record.robot_class,
+    material = json.dumps({"version": __version__, "generator": GENERATOR,
+                           "class": record.robot_class,
                            "lines": record.reply_lines(), "naming": options.naming,
                            "frame": options.frame, "limits": limits,
                            "acm": [options.acm_samples, options.acm_seed]}, sort_keys=True)

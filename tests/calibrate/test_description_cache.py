@@ -55,6 +55,19 @@ def test_the_key_changes_with_every_setting_and_only_then(tmp_path: Path) -> Non
     assert all(f.parent == entry for f in folders)
 
 
+def test_a_description_made_by_an_older_generator_is_not_taken_from_the_cache(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The entry's key covers the generator's version: descriptions cached before the link
+    cylinders spanned their joints (generator 1) are made again, not served with their gaps."""
+    import usar_arm.robot as robot_module
+
+    options = DescribeOptions(robot="KR60")
+    record = run_discovery(options)
+    now = robot_module.description_key(record, options)
+    monkeypatch.setattr(robot_module, "GENERATOR", robot_module.GENERATOR - 1)
+    assert robot_module.description_key(record, options) != now
+
+
 def test_a_stored_calibration_is_found_by_its_settings_and_arm_connect_takes_the_latest(
         tmp_path: Path) -> None:
     entry = tmp_path / "entry"
