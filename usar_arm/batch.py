@@ -41,10 +41,34 @@ from usar_arm.workspace.engine import (
     run_job,
 )
 
-WEIGHTS = {"ik": 1, "plan": 60}
-"""Relative cost of a problem, for sizing chunks."""
-CHUNK_WEIGHT = 480
-"""About this much work per chunk (480 IK problems, 8 plans)."""
+COST_US = {"ik": 40, "plan": 1000}
+"""Typical microseconds one problem of each kind costs a worker (KR60, one core of the 2-core
+machine of the README's figures, measured over 300 IK problems and 80 plans of random
+reachable poses and random collision-free configurations): an IK problem 26 us median in the
+empty scene, 37 us in ``table`` (39 us per problem in the old 480-problem chunks); a plan
+0.9 ms median in ``table`` and 1.0 ms in ``shelf`` (most joint-space segments are free; an
+RRTConnect plan costs 2 to 10 ms, a failed one its time limit)."""
+CHUNK_US = 100_000
+"""A chunk holds problems until their typical cost reaches this (us; 0.1 s: 2,500 IK problems
+or 100 plans): twice the floor of 50 ms of work per chunk, below which a chunk's round trip
+(pickling, the pipe or Ray, saving it) costs a noticeable share, so that a chunk of the
+cheapest IK problems measured (26 us) still takes 65 ms. Chunks of hard plans take longer
+(their cost is unknown before they run); on a large file their number keeps the workers
+busy."""
+
+
+def chunk_problems(problems: list[Problem]) -> list[list[Problem]]:
+    """The problems cut, in input order, into chunks whose typical cost (:data:`COST_US`)
+    reaches :data:`CHUNK_US` (the last one may cost less)."""
+    chunks: list[list[Problem]] = []
+    cost = CHUNK_US
+    for p in problems:
+        if cost >= CHUNK_US:
+            chunks.append([])
+            cost = 0
+        chunks[-1].append(p)
+        cost += COST_US[p.kind]
+    return chunks
 
 
 @dataclass(frozen=True)
@@ -155,22 +179,20 @@ def bad_line(b: BadLine) -> dict[str, Any]:
 
 def batch_job(problems: list[Problem], build: ArmBuilder, scenes: dict[str, Scene],
               options: BatchOptions, description: str, version: str) -> Job:
-    """The job: chunks of about :data:`CHUNK_WEIGHT` work, in input order."""
-    chunks: list[list[Problem]] = [[]]
-    weight = 0
-    for p in problems:
-        if weight >= CHUNK_WEIGHT:
-            chunks.append([])
-            weight = 0
-        chunks[-1].append(p)
-        weight += WEIGHTS[p.kind]
-    chunks = [c for c in chunks if c]
-    key = digest("batch", version, description,
-                 {k: scene_fingerprint(s) for k, s in sorted(scenes.items())},
-                 [(p.line, p.kind) for p in problems], options.seed,
-                 repr(options.motion), options.trajectories)
+    """The job: chunks of about :data:`CHUNK_US` of work, in input order. Its key covers
+    every problem's content (line, id, kind, scene, poses, joints, flags), the chunk layout,
+    the scenes' content, the description, the options and the version."""
+    chunks = chunk_problems(problems)
+    parts = {
+        "problems": digest([p.content() for p in problems], [len(c) for c in chunks]),
+        "robot description": digest(description),
+        "scenes": digest({k: scene_fingerprint(s) for k, s in sorted(scenes.items())}),
+        "settings": digest(options.seed, repr(options.motion), options.trajectories),
+        "usar-arm version": version,
+    }
     prepare = functools.partial(_prepare, build, scenes, options)
-    return Job("batch", prepare, _chunk, chunks, key, [len(c) for c in chunks])
+    return Job("batch", prepare, _chunk, chunks, digest("batch", parts),
+               [len(c) for c in chunks], parts)
 
 
 def merge(results: list[Result], bad: list[BadLine]) -> list[str]:

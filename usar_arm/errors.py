@@ -417,3 +417,27 @@ class ClusterUnavailableError(UsarArmError):
         self.address = address
         self.reason = reason
         super().__init__(f"cannot use the Ray cluster at '{address}': {reason}")
+
+
+class ResumeMismatchError(InvalidInputError):
+    """``--resume`` found finished chunks of another job in the output folder (another robot,
+    scene, problems file or setting): they are not used, and nothing is computed.
+
+    Attributes:
+        folder: the folder of the chunks. found_key, key: the kept job's key and this job's.
+        differences: what differs (e.g. ``problems``, ``settings``), empty when the kept job
+            does not say.
+    """
+
+    def __init__(self, folder: str, found_key: str | None, key: str,
+                 differences: Sequence[str] = ()):
+        self.folder = folder
+        self.found_key = found_key
+        self.key = key
+        self.differences = tuple(differences)
+        what = (f"its {' and '.join(self.differences)} differ" if self.differences
+                else "the robot, scene, input or settings differ")
+        super().__init__(
+            f"{folder} holds finished chunks of another job ({what}; kept key {found_key}, "
+            f"this job's {key}): they would give another job's answers. Run without --resume "
+            "to start over, or resume with the same input and settings")

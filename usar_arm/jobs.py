@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +20,7 @@ from usar_arm.planning.scene import Scene
 from usar_arm.robot import Robot, robot_from_texts
 from usar_arm.spatial import Array
 from usar_arm.version import __version__
-from usar_arm.workspace.arm_model import ArmBuilder
+from usar_arm.workspace.arm_model import ArmBuilder, scene_fingerprint
 from usar_arm.workspace.edges import EdgeResult
 from usar_arm.workspace.engine import (
     Backend,
@@ -29,6 +29,7 @@ from usar_arm.workspace.engine import (
     Job,
     Progress,
     RunStats,
+    digest,
     run_job,
 )
 from usar_arm.workspace.placement import (
@@ -130,7 +131,11 @@ def reach_map(robot: Robot, scene: Scene, settings: ReachSettings, backend: Back
     with ``resume``, taken from there) until the caller has written the map and calls
     :func:`finish`."""
     plan = plan or plan_map(robot, settings)
-    job = reach_job(plan, arm_builder(robot), scene, description_text(robot), __version__)
+    description = description_text(robot)
+    job = reach_job(plan, arm_builder(robot), scene, description, __version__)
+    job = replace(job, parts={  # what a refused --resume names (the key is reach_job's)
+        "robot description": digest(description), "scene": digest(scene_fingerprint(scene)),
+        "settings": digest(asdict(plan.settings)), "usar-arm version": __version__})
     results, stats, _ = _run(job, backend, out_dir, resume, progress)
     m = assemble(plan, results, robot.chain.joint_names)
     if not settings.edges:

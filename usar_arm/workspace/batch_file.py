@@ -50,6 +50,17 @@ class Problem:
     goal: Array | None = None
     motion: str = "ptp"
 
+    def content(self) -> list[Any]:
+        """Everything the problem's answer depends on, as JSON values (arrays as nested
+        lists of floats, exact): for a job's key."""
+        return [self.line, self.id, self.kind, self.scene, _listed(self.pose),
+                _listed(self.seed), self.all, _listed(self.start), _listed(self.goal),
+                self.motion]
+
+
+def _listed(a: Array | None) -> list[Any] | None:
+    return None if a is None else np.asarray(a, float).tolist()
+
 
 @dataclass(frozen=True)
 class BadLine:

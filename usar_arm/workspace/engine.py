@@ -21,14 +21,14 @@ import json
 import logging
 import time
 import traceback
-from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
-from usar_arm.errors import ChunkFailedError, InvalidInputError
+from usar_arm.errors import ChunkFailedError, ResumeMismatchError
 from usar_arm.fileio import write_atomic
 
 log = logging.getLogger("usar_arm.workspace")
@@ -49,6 +49,8 @@ class Job:
         chunks: the chunks, small descriptions of the work (e.g. voxel indices).
         key: a digest of everything the results depend on (checked on resume).
         units: work units per chunk (e.g. queries), for the progress rate.
+        parts: the key's parts by name (``problems``, ``settings``...: a digest each), kept
+            beside the chunks so that a refused resume can say what differs.
     """
 
     name: str
@@ -57,6 +59,7 @@ class Job:
     chunks: Sequence[Any]
     key: str
     units: Sequence[int]
+    parts: Mapping[str, str] = field(default_factory=dict)
 
 
 class Backend(Protocol):
@@ -145,21 +148,18 @@ class ChunkStore:
         finished (an unreadable one is run again).
 
         Raises:
-            InvalidInputError: resuming a folder that holds another job's chunks.
+            ResumeMismatchError: resuming a folder that holds another job's chunks (naming
+                the parts of the key that differ).
         """
         meta = self.folder / "job.json"
         if resume and meta.exists():
-            found = json.loads(meta.read_text()).get("key")
-            if found != self.job.key:
-                raise InvalidInputError(
-                    f"{self.folder} holds chunks of another job (key {found}, this job "
-                    f"{self.job.key}: robot, scene or settings differ); run without --resume "
-                    "to start over")
+            self._check_same_job(meta)
         elif not resume:
             for old in self.folder.glob("chunk-*.npz"):
                 old.unlink()
         self.folder.mkdir(parents=True, exist_ok=True)
         write_atomic(meta, json.dumps({"job": self.job.name, "key": self.job.key,
+                                       "parts": dict(self.job.parts),
                                        "chunks": len(self.job.chunks)}) + "\n")
         done: dict[int, Result] = {}
         if resume:
@@ -172,6 +172,20 @@ class ChunkStore:
                         log.warning("chunk file %s unreadable (%s): running it again",
                                     self.path(i), exc)
         return done
+
+    def _check_same_job(self, meta: Path) -> None:
+        """Refuse chunks of another job, naming what differs where the kept job says."""
+        try:
+            kept = json.loads(meta.read_text())
+        except (OSError, ValueError):
+            kept = {}
+        found = kept.get("key") if isinstance(kept, dict) else None
+        if found == self.job.key:
+            return
+        parts = kept.get("parts") if isinstance(kept, dict) else None
+        differences = [name for name, value in self.job.parts.items()
+                       if isinstance(parts, dict) and parts.get(name) != value]
+        raise ResumeMismatchError(str(self.folder), found, self.job.key, differences)
 
     def save(self, i: int, result: Result) -> None:
         """Keep chunk ``i``'s result."""

@@ -192,11 +192,12 @@ def place_job(found: Candidates, build: ArmBuilder, scene: Scene, targets: list[
     per = settings.chunk_candidates
     chunks = [rows[s:s + per] for s in range(0, len(rows), per)]
     poses = np.array([t.pose for t in targets])
-    key = digest("place", version, description, scene_fingerprint(scene), asdict(settings),
-                 poses.tolist(), refs)
+    parts = {"robot description": digest(description),
+             "scene": digest(scene_fingerprint(scene)), "targets": digest(poses.tolist()),
+             "settings": digest(asdict(settings), refs), "usar-arm version": version}
     prepare = functools.partial(prepare_context, build, scene, poses, settings.floor, refs)
-    return Job("placement study", prepare, _chunk, chunks, key,
-               [len(c) * len(targets) for c in chunks])
+    return Job("placement study", prepare, _chunk, chunks, digest("place", parts),
+               [len(c) * len(targets) for c in chunks], parts)
 
 
 @dataclass(frozen=True)
