@@ -1,9 +1,13 @@
-"""The Ray backend on a local Ray instance (2 CPUs): the same map as the process pool, a dead
-actor's chunk retried, and an address that does not answer refused within the timeout."""
+"""The Ray backend: ``--ray local`` starts a fresh instance of its own (in a command of its
+own), and on one module-wide local instance of 2 CPUs, joined with ``auto``: the same map as
+the process pool, a dead actor's chunk retried, more workers than CPUs capped, an actor that
+cannot start named within its timeout; addresses that do not answer are refused in time."""
 
 from __future__ import annotations
 
 import functools
+import json
+import logging
 import subprocess
 import sys
 import time
@@ -24,22 +28,69 @@ from . import faults
 
 ray = pytest.importorskip("ray", reason="the ray extra is not installed "
                                         "(pip install 'usar-arm[ray]')")
+from usar_arm.workspace.ray_backend import RayBackend  # noqa: E402  (needs ray)
+
+REPO = Path(__file__).resolve().parents[2]
+URDF = str(REPO / "robots" / "generated" / "KR60.urdf")
+SMALL = ["--resolution", "0.3", "--orientations", "16"]
 
 
 @pytest.fixture(scope="module")
 def local_ray() -> Iterator[None]:
-    """One local Ray instance with 2 CPUs for the module (the backends join it)."""
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
+    """One local Ray instance with 2 CPUs for the module, which ``auto`` joins."""
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False,
              object_store_memory=256 * 2**20)
     yield
     ray.shutdown()
+
+
+def _squares_job(work: object, key: str, folder: Path, chunks: int = 6) -> Job:
+    parts = [np.arange(10 * i, 10 * i + 10) for i in range(chunks)]
+    return Job("test", functools.partial(faults.prepare, str(folder)), work,  # type: ignore[arg-type]
+               parts, key, [10] * chunks)
+
+
+def _squares(results: list[dict[str, np.ndarray]]) -> np.ndarray:
+    return np.concatenate([r["squares"] for r in results])
+
+
+def test_local_starts_a_fresh_instance_of_its_own_and_gives_the_pools_map(
+        local_ray: None, tmp_path: Path) -> None:
+    """The real --ray local path, in a command of its own (this process is connected to the
+    module's instance, which local must neither join nor stop)."""
+    command = [str(Path(sys.executable).parent / "usar-arm"), "reach", "--urdf", URDF, *SMALL,
+               "--scene", "table", "--json", "-q"]
+    on_ray = subprocess.run([*command, "--ray", "local", "--workers", "2",
+                             "--out", str(tmp_path / "ray")], capture_output=True, text=True,
+                            timeout=300, check=False)
+    assert on_ray.returncode == 0, on_ray.stderr[-3000:]
+    run = json.loads(on_ray.stdout)["run"]
+    assert run["backend"] == "2 Ray actors on a fresh local Ray instance"
+    assert 0 < run["backend_start_seconds"] <= run["seconds"]
+    pool = subprocess.run([*command, "--workers", "2", "--out", str(tmp_path / "pool")],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert pool.returncode == 0, pool.stderr[-3000:]
+    with np.load(tmp_path / "ray" / "reach.npz") as a, np.load(tmp_path / "pool" /
+                                                               "reach.npz") as b:
+        for name in ("index", "manipulability", "margin", "best_orientation", "reachable"):
+            assert np.array_equal(a[name], b[name]), name
+        assert np.array_equal(a["best_q"], b["best_q"], equal_nan=True)
+    assert ray.is_initialized() and ray.cluster_resources()["CPU"] == 2  # ours lives on
+
+
+def test_local_refuses_a_process_already_connected_to_another_instance(
+        local_ray: None) -> None:
+    with pytest.raises(ClusterUnavailableError, match="already connected") as err:
+        jobs.backend_for(2, "local").start()
+    assert "--ray auto" in str(err.value)
+    assert ray.is_initialized()
 
 
 def test_ray_gives_the_same_map_as_the_process_pool(local_ray: None, kr60: Robot) -> None:
     settings = ReachSettings(0.3, 16)
     scene = load_scene("table")
     pool = jobs.reach_map(kr60, scene, settings, jobs.backend_for(2)).map
-    on_ray = jobs.reach_map(kr60, scene, settings, jobs.backend_for(None, "local")).map
+    on_ray = jobs.reach_map(kr60, scene, settings, jobs.backend_for(None, "auto")).map
     for name in ("index", "manipulability", "margin", "best_orientation", "reachable"):
         assert np.array_equal(getattr(pool, name), getattr(on_ray, name)), name
     assert np.array_equal(pool.best_q, on_ray.best_q, equal_nan=True)
@@ -47,27 +98,63 @@ def test_ray_gives_the_same_map_as_the_process_pool(local_ray: None, kr60: Robot
 
 def test_a_dead_actor_has_its_chunk_retried_and_a_second_death_names_it(
         local_ray: None, tmp_path: Path) -> None:
-    chunks = [np.arange(10 * i, 10 * i + 10) for i in range(6)]
-
-    def job(work: object, key: str) -> Job:
-        return Job("test", functools.partial(faults.prepare, str(tmp_path)), work,  # type: ignore[arg-type]
-                   chunks, key, [10] * 6)
-
-    backend = jobs.backend_for(2, "local")
-    results, _ = run_job(job(faults.dies_once_on_chunk_3, "once"), backend)
+    backend = jobs.backend_for(2, "auto")
+    results, _ = run_job(_squares_job(faults.dies_once_on_chunk_3, "once", tmp_path), backend)
     assert (tmp_path / "died").exists()
-    assert np.array_equal(np.concatenate([r["squares"] for r in results]),
-                          np.arange(60) ** 2)
+    assert np.array_equal(_squares(results), np.arange(60) ** 2)
     with pytest.raises(ChunkFailedError) as err:
-        run_job(job(faults.always_dies_on_chunk_3, "always"), backend)
+        run_job(_squares_job(faults.always_dies_on_chunk_3, "always", tmp_path), backend)
     assert err.value.chunk == 3 and err.value.attempts == 2
+
+
+def test_a_chunk_that_raises_is_retried_on_its_living_actor(local_ray: None,
+                                                            tmp_path: Path) -> None:
+    results, _ = run_job(_squares_job(faults.raises_once_on_chunk_3, "raises", tmp_path),
+                         jobs.backend_for(2, "auto"))
+    assert (tmp_path / "raised").exists()
+    assert np.array_equal(_squares(results), np.arange(60) ** 2)
+
+
+def test_more_workers_than_free_cpus_are_capped_and_said(
+        local_ray: None, tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    backend = jobs.backend_for(4, "auto")
+    begin = time.perf_counter()
+    with caplog.at_level(logging.WARNING, logger="usar_arm.workspace"):
+        results, stats = run_job(_squares_job(faults.square, "capped", tmp_path, 12), backend)
+    assert np.array_equal(_squares(results), np.arange(120) ** 2)
+    assert stats.workers == 2 and stats.backend.startswith("2 Ray actors")
+    assert "4 Ray actors asked for" in caplog.text and "2 CPUs free" in caplog.text
+    assert time.perf_counter() - begin < 60
+
+
+def test_an_actor_that_cannot_start_is_named_within_its_timeout(
+        local_ray: None, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Four actors on 2 CPUs, as when another job takes the CPUs between the count and the
+    actors' placement: two can never be scheduled, and the run must not wait forever."""
+    monkeypatch.setattr(RayBackend, "_actor_count", lambda self: 4)
+    backend = RayBackend("auto", 4, start_timeout=5.0)
+    begin = time.perf_counter()
+    with pytest.raises(ClusterUnavailableError, match=r"actor \d of 4 was not ready within 5 s"):
+        run_job(_squares_job(faults.square, "stuck", tmp_path, 40), backend)
+    assert time.perf_counter() - begin < 5.0 + 10.0
+    deadline = time.monotonic() + 10.0  # its actors were killed (Ray frees their CPUs soon)
+    while ray.available_resources().get("CPU") != 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert ray.available_resources().get("CPU") == 2
+
+
+def test_before_it_connects_the_backend_does_not_claim_zero_actors() -> None:
+    assert "0 Ray" not in RayBackend("10.255.255.1:6379").describe()
+    assert RayBackend("h:6379", 3).describe().startswith("3 Ray actors (at most one per")
+    with pytest.raises(ClusterUnavailableError, match="HOST:PORT"):
+        RayBackend("nonsense")
 
 
 def test_a_refused_address_is_reported_at_once() -> None:
     backend = jobs.backend_for(None, "127.0.0.1:1", timeout=1.0)
     begin = time.perf_counter()
     with pytest.raises(ClusterUnavailableError) as err:
-        next(iter(backend.run(Job("x", lambda: None, lambda c, k: {}, [1], "k", [1]), [0])))
+        backend.start()
     assert time.perf_counter() - begin < 2.0
     assert "127.0.0.1:1" in str(err.value) and "1 s" in str(err.value)
 
@@ -77,8 +164,7 @@ def test_an_address_that_accepts_tcp_but_is_no_ray_head_fails_within_the_timeout
     """This network answers TCP on any address (a proxy), so only Ray's own attempts to reach
     a GCS can tell; they are bounded by --ray-timeout. In a fresh process: this one may
     already be connected to the module's local Ray."""
-    urdf = str(Path(__file__).resolve().parents[2] / "robots/generated/KR60.urdf")
-    command = [str(Path(sys.executable).parent / "usar-arm"), "reach", "--urdf", urdf,
+    command = [str(Path(sys.executable).parent / "usar-arm"), "reach", "--urdf", URDF,
                "--out", str(tmp_path), "--ray", "10.255.255.1:6379", "--ray-timeout", "1"]
     begin = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)

@@ -64,11 +64,11 @@ def test_reach_refuses_bad_settings_before_any_work(args: list[str], says: str, 
     assert not (tmp_path / "m").exists()
 
 
-def test_an_unanswering_ray_address_fails_within_its_timeout(tmp_path: Path,
-                                                            capsys: pytest.CaptureFixture[str]
-                                                            ) -> None:
-    begin = time.perf_counter()
-    code = _reach(tmp_path / "m", "--ray", "127.0.0.1:1", "--ray-timeout", "1")
+def test_an_unanswering_ray_address_fails_within_its_timeout_before_any_planning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    begin = time.perf_counter()  # (planned, a 1 mm map would be refused as too large: 65)
+    code = _reach(tmp_path / "m", "--ray", "127.0.0.1:1", "--ray-timeout", "1",
+                  "--resolution", "0.001")
     assert code == EXIT_UNAVAILABLE and time.perf_counter() - begin < 10
     assert "127.0.0.1:1" in capsys.readouterr().err
     assert not (tmp_path / "m" / "reach.npz").exists()

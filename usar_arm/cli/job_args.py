@@ -39,11 +39,15 @@ def add_job_args(p: argparse.ArgumentParser) -> None:
 
 
 def backend_from_args(args: argparse.Namespace) -> Backend:
-    """The backend the arguments name."""
+    """The backend the arguments name, started: a Ray cluster that does not answer fails
+    before anything is planned, and Ray's actors start while the command plans (the job's run
+    stops it; Ray's own exit handler, should the command fail before)."""
     if args.workers is not None and args.workers < 0:
         raise InvalidInputError(f"--workers is a number of processes (0 or more), got "
                                 f"{args.workers}")
-    return jobs.backend_for(args.workers, args.ray, args.ray_timeout)
+    backend = jobs.backend_for(args.workers, args.ray, args.ray_timeout)
+    backend.start()
+    return backend
 
 
 def versions() -> dict[str, str]:
@@ -62,6 +66,7 @@ def run_record(stats: RunStats) -> dict[str, Any]:
     rate = stats.units / stats.seconds if stats.seconds > 0 and stats.chunks_resumed == 0 \
         else None
     return {"backend": stats.backend, "workers": stats.workers, "seconds": stats.seconds,
+            "backend_start_seconds": stats.start_seconds,
             "units": stats.units, "chunks_run": stats.chunks_run,
             "chunks_resumed": stats.chunks_resumed,
             "units_per_second": rate,

@@ -63,13 +63,28 @@ class Job:
 
 
 class Backend(Protocol):
-    """Where chunks run."""
+    """Where chunks run.
+
+    ``start`` may be called early (before the job is known), so that connecting to a cluster
+    fails fast and its workers start while the caller plans; ``run`` starts the backend when
+    nobody did and stops it at the end (``close``, which may also be called on any error
+    before a run). ``start_seconds`` is the time ``start`` took (s): a run's time includes it.
+    """
 
     workers: int
+    start_seconds: float
+
+    def start(self) -> bool:
+        """Get ready to run chunks; False when already started (and not closed since)."""
+        ...
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
         """Yield (chunk index, result) for every chunk in ``todo``, in any order; retry a
-        failed chunk once, then raise ChunkFailedError."""
+        failed chunk once, then raise ChunkFailedError. Stops the backend at the end."""
+        ...
+
+    def close(self) -> None:
+        """Stop whatever ``start`` started (idempotent)."""
         ...
 
     def describe(self) -> str:
@@ -112,6 +127,14 @@ class InProcess:
     """Chunks run one after the other in this process (no start-up cost: small jobs, tests)."""
 
     workers = 1
+    start_seconds = 0.0
+
+    def start(self) -> bool:
+        """Nothing to start."""
+        return True
+
+    def close(self) -> None:
+        """Nothing to stop."""
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
         for i in todo:
@@ -209,7 +232,9 @@ class ChunkStore:
 
 @dataclass(frozen=True)
 class RunStats:
-    """How a job ran: chunks run now and found finished, units (queries), seconds, backend."""
+    """How a job ran: chunks run now and found finished, units (queries), seconds (from the
+    backend's start, included wherever it happened, to the last chunk's result and the
+    backend's stop), the backend, its workers and the seconds its start took."""
 
     chunks_run: int
     chunks_resumed: int
@@ -217,6 +242,7 @@ class RunStats:
     seconds: float
     backend: str
     workers: int
+    start_seconds: float = 0.0
 
 
 Progress = Callable[[int, int], None]
@@ -225,22 +251,30 @@ Progress = Callable[[int, int], None]
 
 def run_job(job: Job, backend: Backend, store: ChunkStore | None = None, resume: bool = False,
             progress: Progress | None = None) -> tuple[list[Result], RunStats]:
-    """Every chunk's result, in chunk order, and how the run went."""
+    """Every chunk's result, in chunk order, and how the run went. The backend is stopped at
+    the end, whatever happens (a refused resume, a failed chunk, Ctrl-C)."""
     start = time.perf_counter()
-    results: dict[int, Result] = store.start(resume) if store is not None else {}
-    resumed = len(results)
-    total = int(sum(job.units))
-    done_units = int(sum(job.units[i] for i in results))
-    if progress is not None:
-        progress(done_units, total)
-    todo = [i for i in range(len(job.chunks)) if i not in results]
-    for i, result in backend.run(job, todo):
-        results[i] = result
-        if store is not None:
-            store.save(i, result)
-        done_units += int(job.units[i])
+    try:
+        results: dict[int, Result] = store.start(resume) if store is not None else {}
+        resumed = len(results)
+        total = int(sum(job.units))
+        done_units = int(sum(job.units[i] for i in results))
         if progress is not None:
             progress(done_units, total)
-    stats = RunStats(len(todo), resumed, total, time.perf_counter() - start,
-                     backend.describe(), backend.workers)
+        todo = [i for i in range(len(job.chunks)) if i not in results]
+        # a start made before the run (to fail fast, or to start the workers while the
+        # caller planned) is the run's time too
+        started_before = 0.0 if not todo or backend.start() else backend.start_seconds
+        for i, result in backend.run(job, todo) if todo else ():
+            results[i] = result
+            if store is not None:
+                store.save(i, result)
+            done_units += int(job.units[i])
+            if progress is not None:
+                progress(done_units, total)
+    finally:
+        backend.close()
+    stats = RunStats(len(todo), resumed, total,
+                     time.perf_counter() - start + started_before, backend.describe(),
+                     backend.workers, backend.start_seconds)
     return [results[i] for i in range(len(job.chunks))], stats

@@ -83,13 +83,23 @@ class _Worker:
 
 
 class ProcessBackend:
-    """Chunks run in ``workers`` local processes (default: one per core)."""
+    """Chunks run in ``workers`` local processes (default: one per core), started by each run
+    (in milliseconds when forked) and stopped at its end."""
+
+    start_seconds = 0.0
 
     def __init__(self, workers: int | None = None, start_method: str = "auto"):
         if workers is not None and workers < 1:
             raise ValueError(f"--workers must be at least 1, got {workers}")
         self.workers = int(workers or os.cpu_count() or 1)
         self.start_method = start_method
+
+    def start(self) -> bool:
+        """Nothing to start before the job is known (a run forks its workers)."""
+        return True
+
+    def close(self) -> None:
+        """Nothing left running between runs."""
 
     def describe(self) -> str:
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
@@ -117,8 +127,7 @@ class ProcessBackend:
             while queue or any(w.chunk is not None for w in workers):
                 for w in workers:
                     if w.chunk is None and queue:
-                        w.chunk = queue.popleft()
-                        w.conn.send((w.chunk, job.chunks[w.chunk]))
+                        self._send(w, queue.popleft(), job)
                 busy = [w for w in workers if w.chunk is not None]
                 ready = set(wait([w.conn for w in busy] + [w.process.sentinel for w in busy]))
                 for k, w in enumerate(workers):
@@ -128,6 +137,8 @@ class ProcessBackend:
                     reply = self._reply(w)
                     if reply is not None and reply[0] == "ok":
                         w.chunk = None
+                        if queue:  # its next chunk first: the worker runs while this is saved
+                            self._send(w, queue.popleft(), job)
                         yield i, reply[2]
                         continue
                     reason = reply[2] if reply is not None else (
@@ -143,6 +154,11 @@ class ProcessBackend:
         finally:
             for w in workers:
                 w.stop()
+
+    @staticmethod
+    def _send(w: _Worker, i: int, job: Job) -> None:
+        w.chunk = i
+        w.conn.send((i, job.chunks[i]))
 
     @staticmethod
     def _reply(w: _Worker) -> tuple[str, int, Any] | None:

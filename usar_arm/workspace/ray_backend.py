@@ -1,19 +1,29 @@
 """The Ray execution backend: chunks as calls on Ray actors, on a cluster of any size.
 
 The only module that imports ``ray`` (an optional extra: ``pip install 'usar-arm[ray]'``).
-One actor per CPU of the cluster (or ``workers``) builds the job's context once from the job,
-which travels by value (URDF, SRDF and scene text: Pinocchio models, FCL geometry and OMPL
-spaces do not pickle), then runs one chunk at a time. The driver keeps one call in flight per
-actor and collects them with ``ray.wait`` as they finish (never one ``ray.get`` of thousands of
-references). A chunk whose actor dies or raises is retried once on a fresh actor; a second
-failure stops the run.
+:meth:`RayBackend.start` connects (or starts a local instance) and creates the actors at once,
+so a bad address fails before any planning and the actors' processes start (a fresh Python
+importing usar-arm, Pinocchio, FCL) while the caller plans. One actor per free CPU of the
+cluster (``workers`` asks for fewer or more: more than the free CPUs are not started, which a
+log line says, as actors that cannot be scheduled would hold their chunks forever). Each actor
+gets the job by value (URDF, SRDF and scene text: Pinocchio models, FCL geometry and OMPL
+spaces do not pickle), builds its context once, and always has :data:`IN_FLIGHT` calls
+queued, so it never waits for the driver while a result travels. The driver collects them
+with ``ray.wait`` as they finish (never one ``ray.get`` of thousands of references).
 
-Addresses: ``local`` always starts a fresh Ray instance on this machine (and stops it at the
-end); ``auto`` joins the cluster ``RAY_ADDRESS`` names, or the one ``ray start`` left on this
-machine; ``HOST:PORT`` (a head node's GCS, port 6379 by default) or ``ray://HOST:PORT`` joins
-that cluster. An address that does not answer within ``timeout`` seconds is an error saying so:
-a refused connection is found before Ray is asked, and Ray's own retries (about one a second,
-20 by default) are bounded by the timeout.
+No wait is unbounded: an actor that is not ready within ``start_timeout`` is an error naming
+it, and a call without an answer within ``call_timeout`` counts as a failure of its chunk. A
+chunk whose actor dies or raises is retried once (on a fresh actor when it died; the chunks
+queued behind it are not charged); a second failure stops the run.
+
+Addresses: ``local`` always starts a fresh Ray instance on this machine (workers at the
+priority of the process pool's, nice 0, rather than Ray's default 15) and stops it at the
+end; a process already connected to another Ray instance is refused rather than joined.
+``auto`` joins the cluster ``RAY_ADDRESS`` names, or the one ``ray start`` left on this machine
+(or the instance this process is connected to); ``HOST:PORT`` (a head node's GCS, port 6379
+by default) or ``ray://HOST:PORT`` joins that cluster. An address that does not answer within
+``timeout`` seconds is an error saying so: a refused connection is found before Ray is asked,
+and Ray's own retries (about one a second, 20 by default) are bounded by the timeout.
 """
 
 from __future__ import annotations
@@ -22,8 +32,10 @@ import logging
 import math
 import os
 import socket
+import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import ray
@@ -39,17 +51,50 @@ default): something may accept TCP on an address without being a Ray head (a pro
 LOCAL_OBJECT_STORE = 256 * 2**20
 """Bytes of object store for a local instance (results are small; Ray's default takes 30 % of
 the machine's memory)."""
+LOCAL_SYSTEM_CONFIG = {"worker_niceness": 0}
+"""Ray starts its workers at nice 15; a local instance is this command's own, so its actors
+run at the priority of the process pool's workers (on a busy machine nice 15 gives them a
+fraction of a core)."""
+IN_FLIGHT = 2
+"""Calls queued per actor: the next chunk is there when one finishes."""
+START_TIMEOUT = 120.0
+"""s an actor may take to start (a fresh Python importing usar-arm: about 2 s on 2 cores)."""
+CALL_TIMEOUT = 3600.0
+"""s a chunk's call may run before it counts as failed (chunks take about 0.1 to 1 s)."""
+POLL = 1.0
+"""s between checks of those deadlines while waiting."""
+FREE_WAIT = 3.0
+"""s to wait for CPUs held by actors that are being killed before counting the free ones."""
 
 
 class _ChunkActor:
-    """Runs chunks of one job (its context built on the first chunk)."""
+    """Runs chunks of the job it was given last (its context built on the first chunk)."""
 
-    def __init__(self, key: str, prepare: Callable[[], Any],
-                 work: Callable[[Any, Any], Result]):
-        self.key, self.prepare, self.work = key, prepare, work
+    def __init__(self) -> None:
+        self.job: tuple[str, Callable[[], Any], Callable[[Any, Any], Result]] | None = None
+
+    def setup(self, key: str, prepare: Callable[[], Any],
+              work: Callable[[Any, Any], Result]) -> int:
+        """Take the job; the process id (the actor is ready)."""
+        self.job = (key, prepare, work)
+        return os.getpid()
 
     def run(self, chunk: Any) -> Result:
-        return run_chunk(self.key, self.prepare, self.work, chunk)
+        """One chunk's result."""
+        assert self.job is not None, "setup comes first"
+        return run_chunk(*self.job, chunk)
+
+
+@dataclass(eq=False)
+class _Slot:
+    """An actor, its place among the actors and its calls, oldest first."""
+
+    actor: Any
+    name: str
+    created: float
+    ready: Any = None  # the reference of its setup call until it answered
+    calls: deque[tuple[Any, int]] = field(default_factory=deque)
+    since: float = 0.0  # when its oldest call could start (s, monotonic)
 
 
 def _host_port(address: str) -> tuple[str, int] | None:
@@ -71,21 +116,70 @@ class RayBackend:
 
     Args:
         address: ``local``, ``auto``, ``HOST:PORT`` or ``ray://HOST:PORT``.
-        workers: actors to start (default: the cluster's CPUs).
+        workers: actors to start (default: one per free CPU of the cluster; never more).
         timeout: s to wait for the cluster to answer.
+        start_timeout: s an actor may take to become ready.
+        call_timeout: s a chunk's call may take.
     """
 
     def __init__(self, address: str = "auto", workers: int | None = None,
-                 timeout: float = 10.0):
+                 timeout: float = 10.0, start_timeout: float = START_TIMEOUT,
+                 call_timeout: float = CALL_TIMEOUT):
+        _host_port(address)  # (a malformed address is refused at once)
         self.address = address
         self.requested = workers
         self.workers = workers or 0
         self.timeout = timeout
+        self.start_timeout = start_timeout
+        self.call_timeout = call_timeout
+        self.start_seconds = 0.0
+        self.slots: list[_Slot] = []
+        self._owns_ray = False
+        self._started = self._counted = False
+        self._actor_class: Any = None
 
     def describe(self) -> str:
-        where = "a local Ray instance" if self.address == "local" else \
+        where = "a fresh local Ray instance" if self.address == "local" else \
             f"the Ray cluster at {self.address}"
-        return f"{self.workers} Ray actors on {where}"
+        if not self._counted:  # (before it connects, it does not know how many)
+            count = f"{self.requested} Ray actors (at most" if self.requested else \
+                "Ray actors ("
+            return f"{count} one per free CPU) on {where}"
+        return f"{self.workers} Ray actor{'s' if self.workers != 1 else ''} on {where}"
+
+    # ------------------------------------------------------------------ start and stop
+    def start(self) -> bool:
+        """Connect (or start a local instance) and create the actors; False when already
+        started.
+
+        Raises:
+            ClusterUnavailableError: no answer, another instance already connected for
+                ``local``, or no free CPU.
+        """
+        if self._started:
+            return False
+        begin = time.perf_counter()
+        self._owns_ray = self._connect()
+        self._started = True
+        try:
+            self._actor_class = ray.remote(num_cpus=1)(_ChunkActor)
+            self.workers, self._counted = self._actor_count(), True
+            self.slots = [self._new_slot(k) for k in range(self.workers)]
+        except BaseException:
+            self.close()
+            raise
+        self.start_seconds = time.perf_counter() - begin
+        return True
+
+    def close(self) -> None:
+        """Kill the actors, and stop the Ray instance when this backend started it."""
+        if ray.is_initialized():
+            for slot in self.slots:
+                ray.kill(slot.actor)
+        self.slots = []
+        if self._owns_ray:
+            ray.shutdown()
+        self._owns_ray = self._started = False
 
     def _connect(self) -> bool:
         """Connect (or start); True when this backend started the Ray instance."""
@@ -99,8 +193,12 @@ class RayBackend:
                                   f"{self.timeout:g} s ({exc.strerror or exc})") from None
         if ray.is_initialized():  # this process already joined a cluster: only that one
             current = ray.get_runtime_context().gcs_address
-            if self.address not in ("auto", "local") and target is not None and \
-                    current.rpartition(":")[2] != str(target[1]):
+            if self.address == "local":
+                raise ClusterUnavailableError(
+                    self.address, f"this process is already connected to the Ray instance at "
+                                  f"{current}, which local would not start; use --ray auto to "
+                                  "run on it, or disconnect (ray.shutdown()) first")
+            if target is not None and current.rpartition(":")[2] != str(target[1]):
                 raise ClusterUnavailableError(
                     self.address, f"this process is already connected to the Ray cluster at "
                                   f"{current}")
@@ -109,7 +207,8 @@ class RayBackend:
                                    "logging_level": logging.WARNING}
         if self.address == "local":
             options.update(num_cpus=self.requested or os.cpu_count() or 1,
-                           object_store_memory=LOCAL_OBJECT_STORE)
+                           object_store_memory=LOCAL_OBJECT_STORE,
+                           _system_config=dict(LOCAL_SYSTEM_CONFIG))
         wait = WAIT_VARIABLE not in os.environ and self.address != "local"
         if wait:  # Ray retries its GCS about once a second: bound the retries by the timeout
             os.environ[WAIT_VARIABLE] = str(max(1, math.ceil(self.timeout)))
@@ -124,40 +223,157 @@ class RayBackend:
                 del os.environ[WAIT_VARIABLE]
         return True
 
+    def _actor_count(self) -> int:
+        """The actors to start: as many as asked for (default: the cluster's CPUs), but no
+        more than the CPUs free now."""
+        total = float(ray.cluster_resources().get("CPU", 0.0))
+        asked = self.requested or int(total)
+        deadline = time.monotonic() + FREE_WAIT
+        while (free := int(ray.available_resources().get("CPU", 0.0))) < min(asked, total) \
+                and time.monotonic() < deadline:
+            time.sleep(0.1)  # (the actors of a run that just ended may still be leaving)
+        if free < 1:
+            raise ClusterUnavailableError(
+                self.address, f"no CPU free for an actor (the cluster has {total:g}, all in "
+                              "use)")
+        if asked > free:
+            log.warning("%d Ray actors asked for, but the cluster at %s has %d CPUs free (of "
+                        "%g): starting %d", asked, self.address, free, total, free)
+        return min(asked, free)
+
+    def _new_slot(self, k: int) -> _Slot:
+        return _Slot(self._actor_class.remote(), f"actor {k + 1} of {self.workers}",
+                     time.monotonic())
+
+    # ------------------------------------------------------------------ the run
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
-        started = self._connect()
-        actor_class: Any = ray.remote(num_cpus=1)(_ChunkActor)
-        cpus = int(ray.cluster_resources().get("CPU", 1))
-        self.workers = max(1, min(self.requested or cpus, len(todo) or 1))
-        queue = deque(todo)
-        failures: dict[int, list[str]] = {}
-        actors: list[Any] = [actor_class.remote(job.key, job.prepare, job.work)
-                  for _ in range(self.workers)]
-        flying: dict[Any, tuple[int, int]] = {}  # reference -> (chunk, actor slot)
+        self.start()
         try:
-            while queue or flying:
-                busy = {slot for _, slot in flying.values()}
-                for slot in range(len(actors)):
-                    if slot not in busy and queue:
-                        i = queue.popleft()
-                        flying[actors[slot].run.remote(job.chunks[i])] = (i, slot)
-                ready, _ = ray.wait(list(flying), num_returns=1)
-                for ref in ready:
-                    i, slot = flying.pop(ref)
-                    try:
-                        result: Result = ray.get(ref)
-                    except ray.exceptions.RayError as exc:
-                        reason = str(exc).strip().splitlines()[-1][:300]
-                        failures.setdefault(i, []).append(reason)
-                        if len(failures[i]) >= ATTEMPTS:
-                            raise ChunkFailedError(i, len(failures[i]), reason) from None
-                        queue.appendleft(i)
-                        ray.kill(actors[slot])
-                        actors[slot] = actor_class.remote(job.key, job.prepare, job.work)
-                        continue
-                    yield i, result
+            yield from _Run(self, job, todo).results()
         finally:
-            for actor in actors:
-                ray.kill(actor)
-            if started:
-                ray.shutdown()
+            self.close()
+
+    def replace(self, k: int, job: Job) -> _Slot:
+        """A fresh actor in place of slot ``k`` (its old one killed), given the job."""
+        ray.kill(self.slots[k].actor)
+        slot = self.slots[k] = self._new_slot(k)
+        slot.ready = slot.actor.setup.remote(job.key, job.prepare, job.work)
+        return slot
+
+
+class _Run:
+    """One job's chunks through the backend's actors."""
+
+    def __init__(self, backend: RayBackend, job: Job, todo: Sequence[int]):
+        self.backend, self.job = backend, job
+        self.queue = deque(todo)
+        self.failures: dict[int, list[str]] = {}
+        self.start_failures: dict[int, list[str]] = {}
+        for slot in backend.slots:
+            slot.ready = slot.actor.setup.remote(job.key, job.prepare, job.work)
+
+    def results(self) -> Iterator[tuple[int, Result]]:
+        while self.queue or any(s.calls for s in self.backend.slots):
+            self._feed()
+            slots = self.backend.slots
+            waiting = [s.ready for s in slots if s.ready is not None] + [
+                ref for s in slots for ref, _ in s.calls]
+            ready, _ = ray.wait(waiting, num_returns=1, timeout=POLL)
+            for ref in ready:
+                yield from self._collect(ref)
+            yield from self._check_deadlines()
+
+    def _feed(self) -> None:
+        """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup)."""
+        for slot in self.backend.slots:
+            while self.queue and len(slot.calls) < IN_FLIGHT:
+                i = self.queue.popleft()
+                if not slot.calls:
+                    slot.since = time.monotonic()
+                slot.calls.append((slot.actor.run.remote(self.job.chunks[i]), i))
+
+    def _collect(self, ref: Any) -> Iterator[tuple[int, Result]]:
+        """The answer ``ref`` (a setup's or a chunk's) brought."""
+        for k, slot in enumerate(self.backend.slots):
+            if slot.ready is not None and slot.ready == ref:
+                try:
+                    ray.get(ref)
+                except ray.exceptions.RayError as exc:
+                    yield from self._actor_lost(k, f"it did not start: {_reason(exc)}")
+                    return
+                slot.ready, slot.since = None, time.monotonic()
+                return
+            n = next((n for n, (call, _) in enumerate(slot.calls) if call == ref), None)
+            if n is None:
+                continue
+            i = slot.calls[n][1]
+            try:
+                result: Result = ray.get(ref)
+            except ray.exceptions.RayActorError as exc:
+                yield from self._actor_lost(k, _reason(exc))
+                return
+            except ray.exceptions.RayError as exc:  # the chunk raised; its actor lives on
+                del slot.calls[n]
+                self._failed(i, _reason(exc))
+                return
+            del slot.calls[n]
+            slot.since = time.monotonic()
+            yield i, result
+            return
+
+    def _actor_lost(self, k: int, reason: str) -> Iterator[tuple[int, Result]]:
+        """The actor of slot ``k`` is gone: keep what it finished, charge the chunk it was
+        running (none when it never started: then the slot's start), queue the others again
+        uncharged, and start a fresh actor."""
+        slot = self.backend.slots[k]
+        again: list[int] = []
+        for ref, i in slot.calls:
+            try:
+                done, _ = ray.wait([ref], timeout=0)
+                if done:
+                    yield i, ray.get(ref)
+                    continue
+            except ray.exceptions.RayError:
+                pass
+            again.append(i)
+        slot.calls.clear()
+        charged = again.pop(0) if again and slot.ready is None else None
+        self.queue.extendleft(reversed(again))
+        if slot.ready is not None:  # it never became ready: no chunk of it ran
+            self.start_failures.setdefault(k, []).append(reason)
+            if len(self.start_failures[k]) >= ATTEMPTS:
+                raise ClusterUnavailableError(
+                    self.backend.address,
+                    f"Ray {slot.name} failed to start {ATTEMPTS} times: {reason}")
+        if charged is not None:
+            self._failed(charged, reason)  # (queued again first)
+        self.backend.replace(k, self.job)
+
+    def _failed(self, i: int, reason: str) -> None:
+        """Chunk ``i`` failed: queue it again first, or stop after :data:`ATTEMPTS`."""
+        self.failures.setdefault(i, []).append(reason)
+        if len(self.failures[i]) >= ATTEMPTS:
+            raise ChunkFailedError(i, len(self.failures[i]), reason)
+        self.queue.appendleft(i)
+
+    def _check_deadlines(self) -> Iterator[tuple[int, Result]]:
+        """No wait is unbounded: an actor not ready in time is an error naming it; a call
+        without an answer in time is a failure of its chunk (and its actor is replaced)."""
+        now = time.monotonic()
+        for k, slot in enumerate(self.backend.slots):
+            if slot.ready is not None and now - slot.created > self.backend.start_timeout:
+                raise ClusterUnavailableError(
+                    self.backend.address,
+                    f"Ray {slot.name} was not ready within {self.backend.start_timeout:g} s "
+                    f"({len(self.backend.slots)} actors of 1 CPU each: is a node gone, or are "
+                    "its CPUs taken by another job?)")
+            if slot.ready is None and slot.calls and \
+                    now - slot.since > self.backend.call_timeout:
+                ray.kill(slot.actor)
+                yield from self._actor_lost(
+                    k, f"no answer within {self.backend.call_timeout:g} s")
+
+
+def _reason(exc: BaseException) -> str:
+    """The last line of a Ray error (the worker's exception), at most 300 characters."""
+    return str(exc).strip().splitlines()[-1][:300]
