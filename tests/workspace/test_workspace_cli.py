@@ -28,7 +28,7 @@ def _reach(out: Path, *extra: str) -> int:
     return main(["reach", "--urdf", URDF, *SMALL, "--out", str(out), "-q", *extra])
 
 
-def test_reach_writes_the_map_its_record_and_two_slices(tmp_path: Path,
+def test_reach_writes_the_map_its_record_and_three_slices(tmp_path: Path,
                                                         capsys: pytest.CaptureFixture[str]
                                                         ) -> None:
     assert _reach(tmp_path, "--scene", "table", "--workers", "2", "--json") == EXIT_OK
@@ -43,7 +43,7 @@ def test_reach_writes_the_map_its_record_and_two_slices(tmp_path: Path,
     assert doc["settings"]["orientations"] == 16 and doc["scene"]["name"] == "table"
     assert doc["run"]["workers"] == 2 and doc["run"]["units_per_second"] > 0
     assert set(doc["versions"]) >= {"usar-arm", "numpy", "python"}
-    for name in ("reach-xz.png", "reach-xy.png"):
+    for name in ("reach-xz.png", "reach-xy.png", "reach-xy-shoulder.png"):
         assert imread(tmp_path / name).shape[0] > 400
     assert not (tmp_path / ".chunks").exists()
     assert json.loads((tmp_path / "reach.json").read_text())["counts"] == doc["counts"]

@@ -29,7 +29,7 @@ from usar_arm.cli.job_args import (
 )
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.export.reach_plot import reach_slice_png
+from usar_arm.export.reach_plot import reach_slice_png, shoulder
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.workspace.edges import EdgeResult
@@ -43,8 +43,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                     "included) and, at every voxel centre, solve collision-free IK for a "
                     "fixed, near-uniform set of tool orientations. Writes DIR/reach.npz "
                     "(index, manipulability, joint margin, a witness configuration per "
-                    "voxel), DIR/reach.json and slice pictures DIR/reach-xz.png, "
-                    "DIR/reach-xy.png.")
+                    "voxel), DIR/reach.json and slice pictures through the base "
+                    "DIR/reach-xz.png (y = 0) and DIR/reach-xy.png (z = 0), and at shoulder "
+                    "height DIR/reach-xy-shoulder.png.")
     p.add_argument("--scene", default=None, metavar="FILE",
                    help="obstacles (a YAML file, or one of empty, table, shelf, cage)")
     p.add_argument("--resolution", type=float, default=0.05, metavar="M",
@@ -160,13 +161,19 @@ def run(args: argparse.Namespace) -> int:
         "memory_estimate_bytes": plan.memory_bytes,
         "versions": versions(),
     }
-    centre = (plan.bound.sweep_low + plan.bound.sweep_high) / 2
+    joint, height = shoulder(robot.chain)
+    name = robot.chain.name
     files: dict[str, str | bytes] = {
         "reach.npz": reach.to_bytes(),
         "reach-xz.png": reach_slice_png(reach.index, reach.origin, reach.resolution, "xz",
-                                        robot.chain, scene, at=0.0),
+                                        robot.chain, scene, 0.0,
+                                        f"{name} reachability through the base"),
         "reach-xy.png": reach_slice_png(reach.index, reach.origin, reach.resolution, "xy",
-                                        robot.chain, scene, at=float(centre[2])),
+                                        robot.chain, scene, 0.0,
+                                        f"{name} reachability through the base"),
+        "reach-xy-shoulder.png": reach_slice_png(
+            reach.index, reach.origin, reach.resolution, "xy", robot.chain, scene, height,
+            f"{name} reachability at shoulder height ({joint})"),
         "reach.json": json.dumps(record, indent=2) + "\n",
     }
     written = write_outputs(args.out, files)

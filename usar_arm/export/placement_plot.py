@@ -1,5 +1,6 @@
 """Top view of a placement study: the feasible base positions coloured by their best score
-(over the headings), the best base with its heading, the targets and the scene's outlines."""
+(over the headings), the best base with its heading, the targets and the scene's outlines.
+Targets above one another share a label (``pick, pick_above``); no two labels overlap."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from usar_arm.export.reach_plot import outline
+from usar_arm.export.reach_plot import outline, place_labels
 from usar_arm.planning.scene import Scene
 from usar_arm.spatial import Array
 
@@ -46,10 +47,8 @@ def placement_png(x: Array, y: Array, yaw: Array, score: Array, best: int, step:
     for obj in (scene.objects if scene is not None else ()):
         ring = outline(obj, 0, 1)
         ax.plot(ring[:, 0], ring[:, 1], color="#d62728", lw=1.0, ls="--")
-    for name, pose in targets:
-        ax.plot(pose[0, 3], pose[1, 3], "x", color="black", ms=7)
-        ax.annotate(name, (pose[0, 3], pose[1, 3]), textcoords="offset points", xytext=(4, 4),
-                    fontsize=7)
+    for _, pose in targets:
+        ax.plot(pose[0, 3], pose[1, 3], "x", color="black", ms=7, zorder=5)
     bx, by, byaw = float(x[best]), float(y[best]), float(yaw[best])
     ax.plot(bx, by, "o", color="#ff7f0e", ms=9, label=f"best base ({bx:.2f}, {by:.2f}) m, "
                                                        f"yaw {np.degrees(byaw):.0f} deg")
@@ -60,6 +59,10 @@ def placement_png(x: Array, y: Array, yaw: Array, score: Array, best: int, step:
     ax.set_aspect("equal")
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(title or "base placement: feasible positions", fontsize=10)
+    left_out = place_labels(ax, [(name, float(p[0, 3]), float(p[1, 3])) for name, p in targets],
+                            "black", clear_points=10.0)
+    if left_out:
+        fig.text(0.02, 0.02, "not labelled: " + ", ".join(left_out), fontsize=7)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png")
     return buffer.getvalue()
