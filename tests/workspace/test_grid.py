@@ -10,6 +10,7 @@ import pytest
 from usar_arm.errors import MapTooLargeError
 from usar_arm.robot import Robot
 from usar_arm.workspace.grid import (
+    bytes_per_voxel,
     candidate_voxels,
     check_memory,
     grid_for,
@@ -71,3 +72,12 @@ def test_a_map_too_fine_for_the_memory_is_refused_with_the_numbers(kr60: Robot) 
     assert "GiB" in str(err.value) and "resolution of at least" in str(err.value)
     fits = grid_for(reach_bound(kr60.chain), err.value.resolution_that_fits_m)
     assert check_memory(fits, 6, 64, available=24 * 2**30) <= 12 * 2**30
+
+
+def test_the_memory_estimate_counts_the_chunk_results_the_command_holds(kr60: Robot) -> None:
+    """The chunks' results (every voxel's arrays and its index) are held until the map is
+    assembled: they count beside the map and its compressed copy."""
+    grid = grid_for(reach_bound(kr60.chain), 0.1)
+    per_voxel = bytes_per_voxel(6, 64)
+    assert per_voxel == 3 * 4 + 8 * 6 + 4 + 8
+    assert check_memory(grid, 6, 64, available=2**40) == grid.size * (3 * per_voxel + 8)

@@ -154,15 +154,24 @@ def available_memory() -> int:
     return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
 
 
+def chunk_bytes_per_voxel(dof: int, orientations: int) -> int:
+    """Memory (bytes) one voxel takes in a chunk's result, held by the command until the map
+    is assembled: the voxel's arrays and its flat index (int64)."""
+    return bytes_per_voxel(dof, orientations) + 8
+
+
 def check_memory(grid: VoxelGrid, dof: int, orientations: int,
                  available: int | None = None) -> int:
-    """The estimated peak memory (bytes) of a map on ``grid``: the assembled arrays twice (the
-    map and its compressed copy on saving). Refuses a map above half the available memory.
+    """The estimated peak memory (bytes) of a map on ``grid``: the chunks' results the command
+    holds until it assembles them, the assembled arrays, and their compressed copy on saving
+    (as large, at worst), every voxel of the grid counted (the candidates are fewer).
+    Refuses a map above half the available memory.
 
     Raises:
         MapTooLargeError: with the estimate, the memory available and a resolution that fits.
     """
-    need = 2 * grid.size * bytes_per_voxel(dof, orientations)
+    need = grid.size * (2 * bytes_per_voxel(dof, orientations)
+                        + chunk_bytes_per_voxel(dof, orientations))
     have = available_memory() if available is None else available
     if need > have // 2:
         fits = grid.resolution * (need / (have // 2)) ** (1.0 / 3.0)
