@@ -78,6 +78,32 @@ def test_local_starts_a_fresh_instance_of_its_own_and_gives_the_pools_map(
     assert ray.is_initialized() and ray.cluster_resources()["CPU"] == 2  # ours lives on
 
 
+LOCAL_TWICE = """
+import functools, sys, numpy as np, ray
+from usar_arm.workspace.engine import Job, run_job
+from usar_arm.workspace.ray_backend import RayBackend
+from tests.workspace import faults
+chunks = [np.arange(3 * i, 3 * i + 3) for i in range(4)]
+job = Job("t", functools.partial(faults.prepare, sys.argv[1]), faults.square, chunks, "k",
+          [3] * 4)
+backend = RayBackend("local", 1)
+gcs = []
+for _ in range(2):
+    results, _ = run_job(job, backend)
+    assert np.array_equal(np.concatenate([r["squares"] for r in results]), np.arange(12) ** 2)
+    assert RayBackend.stopping is not None  # stopping in the background
+    gcs.append(backend.gcs_address)
+assert gcs[0] != gcs[1], gcs  # a fresh instance each time
+print("ok")
+"""
+
+
+def test_local_starts_afresh_each_run_and_stops_in_the_background(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "-c", LOCAL_TWICE, str(tmp_path)], cwd=REPO,
+                          capture_output=True, text=True, timeout=180, check=False)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-3000:]
+
+
 def test_local_refuses_a_process_already_connected_to_another_instance(
         local_ray: None) -> None:
     with pytest.raises(ClusterUnavailableError, match="already connected") as err:

@@ -32,11 +32,12 @@ import logging
 import math
 import os
 import socket
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import ray
 
@@ -63,6 +64,9 @@ CALL_TIMEOUT = 3600.0
 """s a chunk's call may run before it counts as failed (chunks take about 0.1 to 1 s)."""
 POLL = 1.0
 """s between checks of those deadlines while waiting."""
+STOP_TIMEOUT = 30.0
+"""s to wait for the shutdown of a local instance before another start (it takes about 1.4 s:
+Ray stops its processes one after the other, each given up to 1 s to leave)."""
 FREE_WAIT = 3.0
 """s to wait for CPUs held by actors that are being killed before counting the free ones."""
 
@@ -122,6 +126,11 @@ class RayBackend:
         call_timeout: s a chunk's call may take.
     """
 
+    stopping: ClassVar[threading.Thread | None] = None
+    """The shutdown of a local instance, under way in the background (it overlaps what the
+    caller does with the results; a later start waits for it, and so does the interpreter at
+    exit). One per process, as Ray's connection is."""
+
     def __init__(self, address: str = "auto", workers: int | None = None,
                  timeout: float = 10.0, start_timeout: float = START_TIMEOUT,
                  call_timeout: float = CALL_TIMEOUT):
@@ -133,6 +142,7 @@ class RayBackend:
         self.start_timeout = start_timeout
         self.call_timeout = call_timeout
         self.start_seconds = 0.0
+        self.gcs_address = ""  # (the instance's, once connected)
         self.slots: list[_Slot] = []
         self._owns_ray = False
         self._started = self._counted = False
@@ -159,9 +169,13 @@ class RayBackend:
         if self._started:
             return False
         begin = time.perf_counter()
+        if RayBackend.stopping is not None:
+            RayBackend.stopping.join(STOP_TIMEOUT)
+            RayBackend.stopping = None
         self._owns_ray = self._connect()
         self._started = True
         try:
+            self.gcs_address = ray.get_runtime_context().gcs_address
             self._actor_class = ray.remote(num_cpus=1)(_ChunkActor)
             self.workers, self._counted = self._actor_count(), True
             self.slots = [self._new_slot(k) for k in range(self.workers)]
@@ -172,13 +186,16 @@ class RayBackend:
         return True
 
     def close(self) -> None:
-        """Kill the actors, and stop the Ray instance when this backend started it."""
+        """Kill the actors, and stop the Ray instance when this backend started it: in the
+        background (:attr:`stopping`), as Ray gives each of its processes up to 1 s to leave,
+        one after the other, while the caller has results to write."""
         if ray.is_initialized():
             for slot in self.slots:
                 ray.kill(slot.actor)
         self.slots = []
         if self._owns_ray:
-            ray.shutdown()
+            RayBackend.stopping = threading.Thread(target=ray.shutdown, name="ray-shutdown")
+            RayBackend.stopping.start()
         self._owns_ray = self._started = False
 
     def _connect(self) -> bool:
