@@ -79,5 +79,5 @@ def test_the_memory_estimate_counts_the_chunk_results_the_command_holds(kr60: Ro
     assembled: they count beside the map and its compressed copy."""
     grid = grid_for(reach_bound(kr60.chain), 0.1)
     per_voxel = bytes_per_voxel(6, 64)
-    assert per_voxel == 3 * 4 + 8 * 6 + 4 + 8
-    assert check_memory(grid, 6, 64, available=2**40) == grid.size * (3 * per_voxel + 8)
+    assert per_voxel == 3 * 4 + 8 * 6 + 4 + 8 + 1  # ... the reachable bits, the edge flag
+    assert check_memory(grid, 6, 64, available=2**40) == grid.size * (3 * per_voxel - 1 + 8)

@@ -139,8 +139,9 @@ def candidate_voxels(grid: VoxelGrid, bound: ReachBound) -> NDArray[np.int64]:
 
 def bytes_per_voxel(dof: int, orientations: int) -> int:
     """Memory (bytes) one voxel of a map takes: index, manipulability, joint margin (float32),
-    best configuration (float64 x dof), its orientation (int32) and the reachable bits."""
-    return 3 * 4 + 8 * dof + 4 + (orientations + 7) // 8
+    best configuration (float64 x dof), its orientation (int32), the reachable bits and the
+    edge flag (bool)."""
+    return 3 * 4 + 8 * dof + 4 + (orientations + 7) // 8 + 1
 
 
 def available_memory() -> int:
@@ -156,15 +157,16 @@ def available_memory() -> int:
 
 def chunk_bytes_per_voxel(dof: int, orientations: int) -> int:
     """Memory (bytes) one voxel takes in a chunk's result, held by the command until the map
-    is assembled: the voxel's arrays and its flat index (int64)."""
-    return bytes_per_voxel(dof, orientations) + 8
+    is assembled: the voxel's arrays (no edge flag) and its flat index (int64)."""
+    return bytes_per_voxel(dof, orientations) - 1 + 8
 
 
 def check_memory(grid: VoxelGrid, dof: int, orientations: int,
                  available: int | None = None) -> int:
     """The estimated peak memory (bytes) of a map on ``grid``: the chunks' results the command
-    holds until it assembles them, the assembled arrays, and their compressed copy on saving
-    (as large, at worst), every voxel of the grid counted (the candidates are fewer).
+    holds until it has assembled them, the assembled arrays, and a second copy of them (the
+    edge search's marked copy, then the compressed copy on saving, as large at worst), every
+    voxel of the grid counted (the candidates are fewer).
     Refuses a map above half the available memory.
 
     Raises:
