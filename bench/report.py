@@ -439,9 +439,16 @@ def _calibration_curve(doc: dict[str, Any]) -> list[str]:
 def workspace_section(doc: dict[str, Any]) -> list[str]:
     reach = doc["cases"]["KR60 reach"]
     res, n_o = reach["settings"]["resolution_m"], reach["settings"]["orientations"]
-    rows = [[label, fmt_s(r["wall_seconds"]), fmt_s(r["job_seconds"]), f"{r['queries']:,}",
-             str(r["workers"]), f"{r['queries_per_second_per_worker'] or 0:,.0f}",
-             f"{r['voxels_reached']:,}"] for label, r in reach["runs"].items()]
+    def runs_of(r: dict[str, Any], key: str) -> str:
+        every = r.get(f"{key}_all")
+        return fmt_s(r[key]) + (f" ({', '.join(fmt_s(x) for x in every)})"
+                                if every and len(every) > 1 else "")
+
+    rows = [[label, runs_of(r, "wall_seconds"), runs_of(r, "job_seconds"),
+             "-" if r.get("edge_seconds") is None else fmt_s(r["edge_seconds"]),
+             f"{r['queries']:,}", str(r["workers"]),
+             f"{r['queries_per_second_per_worker'] or 0:,.0f}", f"{r['voxels_reached']:,}"]
+            for label, r in reach["runs"].items()]
     j = reach["judge"]
     place = doc["cases"]["KR60 place"]
     best = place["best"]
@@ -451,14 +458,19 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
               f"{r['true_tip_error_rad'] * 1e3:.2f}"] for r in place["cycle"]]
     return ["No peer builds an IK-verified, collision-aware reachability map; our figures, "
             "judged by the bench's own Pinocchio and python-fcl. `usar-arm reach` of the KR60 "
-            f"(empty scene, {res} m voxels, {n_o} orientations), whole command (wall) and the "
-            "job alone (workers' and Ray's start included):", "",
-            *table(["backend", "wall", "job", "queries", "workers", "queries/s per worker",
-                    "voxels reached"], rows), "",
+            f"(empty scene, {res} m voxels, {n_o} orientations), whole command (wall), the "
+            "job alone (the voxel centres on the backend, workers' and Ray's start included) "
+            "and the edge search (in the command's process); the median run, every run in "
+            "brackets where runs alternated:", "",
+            *table(["backend", "wall", "job", "edge search", "queries", "workers",
+                    "queries/s per worker", "voxels reached"], rows), "",
             f"Maps identical across backends: {'yes' if reach['identical_maps'] else 'NO'}. "
-            f"Judge: {j['witness_failures']} of {j['witnesses']} sampled witnesses fail (max "
+            f"Judge: {j['witness_failures'] + j.get('edge_witness_failures', 0)} of "
+            f"{j['witnesses']} sampled witnesses fail (max "
             f"{j['witness_max_position_m'] * 1e3:.4f} mm, {j['witness_max_rotation_rad'] * 1e3:.4f}"
-            f" mrad from their voxel's centre and orientation); of {j['landings']:,} random "
+            f" mrad from their voxel's centre and orientation; {j.get('edge_voxels', 0):,} edge "
+            "voxels' witnesses inside their cell, nearest their orientation); of "
+            f"{j['landings']:,} random "
             f"collision-free configurations, {fmt_pct(j['landed_fraction'])} land in a marked "
             f"voxel and {j['not_landed_beside_a_marked_voxel']} of the other "
             f"{j['not_landed']} beside one; {j['marked_beyond_sampled_reach']} marked voxels "

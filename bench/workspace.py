@@ -45,6 +45,8 @@ TARGETS = common.ROOT / "examples" / "workspace" / "table-targets.yaml"
 MAPS = {"quick": (0.2, 32), "full": (0.1, 64)}
 PLACE_STEP = {"quick": 0.3, "full": 0.1}
 WITNESSES = {"quick": 300, "full": 1000}
+ROUNDS = {"quick": 1, "full": 3}
+"""Alternating runs of the pool and of each Ray set-up (the medians are compared)."""
 LANDINGS = 10_000
 REACH_SAMPLES = 200_000
 
@@ -171,30 +173,39 @@ def run(ctx: Context) -> dict[str, Any]:
     settings = ["--urdf", str(URDF), "--resolution", str(res), "--orientations", str(n_o),
                 "--json", "-q"]
     runs: dict[str, Any] = {}
-    for label, backend in (("1 worker", ["--workers", "1"]), ("2 workers", ["--workers", "2"]),
-                           ("ray local", ["--ray", "local"])):
-        out = ctx.work / f"reach-{label.replace(' ', '-')}"
+
+    def reach(label: str, backend: list[str], folder: str) -> dict[str, Any]:
+        out = ctx.work / folder
         doc, wall = _run(_command("reach", *settings, *backend, "--out", str(out)), label)
-        runs[label] = {"wall_seconds": wall, "job_seconds": doc["run"]["seconds"],
-                       "queries": doc["counts"]["queries"], "workers": doc["run"]["workers"],
-                       "queries_per_second_per_worker":
-                           doc["run"]["units_per_second_per_worker"],
-                       "voxels_reached": doc["counts"]["voxels_reached"],
-                       "edges": doc["edges"], "folder": str(out)}
+        return {"wall_seconds": wall, "job_seconds": doc["run"]["seconds"],
+                "backend_start_seconds": doc["run"].get("backend_start_seconds"),
+                "edge_seconds": (doc["edges"] or {}).get("seconds"),
+                "queries": doc["counts"]["queries"], "workers": doc["run"]["workers"],
+                "queries_per_second_per_worker": doc["run"]["units_per_second_per_worker"],
+                "voxels_reached": doc["counts"]["voxels_reached"], "edges": doc["edges"],
+                "folder": str(out)}
+
+    runs["1 worker"] = reach("1 worker", ["--workers", "1"], "reach-1-worker")
+    rounds: dict[str, list[dict[str, Any]]] = {"2 workers": [], "ray local": []}
+    for r in range(ROUNDS[ctx.mode]):  # alternating, so a noisy spell slows both alike
+        rounds["2 workers"].append(reach("2 workers", ["--workers", "2"], f"reach-2-{r}"))
+        rounds["ray local"].append(reach("ray local", ["--ray", "local"], f"reach-ray-{r}"))
     ray = str(Path(sys.executable).parent / "ray")
     subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--include-dashboard=false",
-                    "--disable-usage-stats"], capture_output=True, check=True, timeout=300)
+                    "--disable-usage-stats"], capture_output=True, check=True, timeout=300,
+                   env={**os.environ, "RAY_worker_niceness": "0"})
+    rounds["ray, cluster running"] = []
     try:
-        out = ctx.work / "reach-ray-running"
-        doc, wall = _run(_command("reach", *settings, "--ray", "auto", "--out", str(out)),
-                         "ray (cluster running)")
+        for r in range(ROUNDS[ctx.mode]):
+            rounds["ray, cluster running"].append(
+                reach("ray (cluster running)", ["--ray", "auto"], f"reach-running-{r}"))
     finally:
         subprocess.run([ray, "stop", "--force"], capture_output=True, check=False, timeout=300)
-    runs["ray, cluster running"] = {
-        "wall_seconds": wall, "job_seconds": doc["run"]["seconds"],
-        "queries": doc["counts"]["queries"], "workers": doc["run"]["workers"],
-        "queries_per_second_per_worker": doc["run"]["units_per_second_per_worker"],
-        "voxels_reached": doc["counts"]["voxels_reached"], "folder": str(out)}
+    for label, found in rounds.items():  # the median run by whole-command time, with the rest
+        ordered = sorted(found, key=lambda x: x["wall_seconds"])
+        runs[label] = {**ordered[len(ordered) // 2],
+                       "wall_seconds_all": [x["wall_seconds"] for x in found],
+                       "job_seconds_all": [x["job_seconds"] for x in found]}
     maps = {label: np.load(Path(r["folder"]) / "reach.npz") for label, r in runs.items()}
     identical = all(np.array_equal(maps["2 workers"][k], m[k], equal_nan=True)
                     for m in maps.values() for k in ("index", "best_q", "manipulability", "edge"))
@@ -210,9 +221,15 @@ def run(ctx: Context) -> dict[str, Any]:
                           capture_output=True, text=True, timeout=1800, check=False)
     rows = json.loads(cycle_out.read_text())["rows"] if done.returncode == 0 else []
     one, two, on_ray = runs["1 worker"], runs["2 workers"], runs["ray local"]
+    running = runs["ray, cluster running"]
     speedup = one["job_seconds"] / two["job_seconds"]
-    ray_ratio = runs["ray, cluster running"]["job_seconds"] / two["job_seconds"]
-    fresh_ratio = on_ray["job_seconds"] / two["job_seconds"]
+    wall_speedup = one["wall_seconds"] / two["wall_seconds"]
+
+    def median(xs: list[float]) -> float:
+        return float(np.median(xs))
+
+    def ratio(run: dict[str, Any], key: str) -> float:
+        return median(run[f"{key}_all"]) / median(two[f"{key}_all"])
     cases = {"KR60 reach": {"runs": runs, "identical_maps": identical, "judge": verdicts,
                             "settings": {"resolution_m": res, "orientations": n_o,
                                          "scene": "empty"}},
@@ -221,12 +238,20 @@ def run(ctx: Context) -> dict[str, Any]:
                             "cycle_error": done.stderr[-1500:] if done.returncode else None}}
     targets = [
         common.target("KR60 map, empty scene, 2 workers (wall, the whole command)",
-                      two["wall_seconds"], 60.0, "<=", "s", f"{res} m, {n_o} orientations, "
-                      f"{two['queries']:,} queries"),
-        common.target("speed-up from 1 to 2 local workers (job time)", speedup, 1.8, ">=", "x"),
-        common.target("Ray on a running local cluster / process pool (job time)", ray_ratio,
-                      1.15, "<=", "x", f"--ray local, which starts a fresh Ray per command: "
-                                       f"{fresh_ratio:.2f}x"),
+                      median(two["wall_seconds_all"]), 60.0, "<=", "s",
+                      f"{res} m, {n_o} orientations, {two['queries']:,} queries; the edge "
+                      f"search {two['edge_seconds']:.1f} s of it"),
+        common.target("speed-up from 1 to 2 local workers (the queries' throughput: job time)",
+                      speedup, 1.8, ">=", "x", f"whole command {wall_speedup:.2f}x (start-up, "
+                      "the edge search and writing run once, in the command's process)"),
+        common.target("--ray local (a fresh Ray for the command) / process pool (whole command)",
+                      ratio(on_ray, "wall_seconds"), 1.15, "<=", "x",
+                      f"job time {ratio(on_ray, 'job_seconds'):.2f}x; Ray's start "
+                      f"{on_ray['backend_start_seconds'] or 0:.1f} s; medians of "
+                      f"{len(on_ray['wall_seconds_all'])} alternating runs"),
+        common.target("Ray on a running local cluster / process pool (whole command)",
+                      ratio(running, "wall_seconds"), 1.15, "<=", "x",
+                      f"job time {ratio(running, 'job_seconds'):.2f}x"),
         common.target("maps identical across backends and worker counts", float(identical),
                       1.0, ">=", "bool"),
         common.target("witness failures (FK, limits, brute-force collision)",
