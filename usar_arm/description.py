@@ -34,10 +34,10 @@ from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
 from usar_arm.version import __version__
 
-GENERATOR = 2
+GENERATOR = 1
 """The version of what discovery writes from the same CONF/GEO lines and options; part of the
-description cache's key, so a cached description made by an older generator is made again.
-2: link cylinders span their joints (1: trimmed short of them)."""
+description cache's key, so a description cached by a generator that wrote something else is
+made again (bump it when the geometry, the collision matrix or the files change)."""
 
 log = logging.getLogger("usar_arm.description")
 

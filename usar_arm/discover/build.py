@@ -25,49 +25,37 @@ RADIUS_PER_LENGTH = 0.12
 RADIUS_RANGE = (0.03, 0.10)
 """...clamped to this range (m)."""
 MIN_CYLINDER_LENGTH = 0.01
-"""Links shorter than this (m) get no geometry."""
+"""Links shorter than this (m, after trimming) get no geometry."""
 
 
 def _vec(a: Array) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
-def link_cylinder(start: Array, end: Array, frame: Array | None = None,
-                  stands: bool = False) -> Cylinder | None:
-    """A cylinder along the whole segment start -> end (m, link frame), joint to joint.
+def link_cylinder(start: Array, end: Array, frame: Array | None = None) -> Cylinder | None:
+    """A cylinder along the segment start -> end (m, link frame), kept clear of the joints.
 
-    The radius grows with the segment's length. The cylinder spans the segment from joint to
-    joint, so consecutive links' cylinders meet at every joint and the arm's centre line is
-    covered from the base to the tip: an obstacle cannot pass between two links. (Until this
-    release both ends were trimmed by the radius, which left a gap of up to 0.13 m at each
-    joint of the KR60 through which a 5 cm floor slab passed: reachability maps in the table
-    scene showed tool0 0.5 m below the floor.) ``frame`` (4x4) maps the segment's coordinates
-    into the link frame when they differ.
-
-    ``stands``: the segment starts on the robot's mount (a rail carriage whose joint sits at the
-    base): the cylinder starts one radius up the segment, so that the link stands on what the
-    base stands on rather than reaching into it (nothing can pass between a mount and the link
-    standing on it).
+    The radius grows with the segment's length; both ends are trimmed by the radius so the
+    cylinder does not reach into the neighbouring links' joint housings. ``frame`` (4x4) maps the
+    segment's coordinates into the link frame when they differ.
     """
-    start = np.asarray(start, dtype=float)
-    d = np.asarray(end, dtype=float) - start
-    full = float(np.linalg.norm(d))
-    radius = min(RADIUS_RANGE[1], max(RADIUS_RANGE[0], RADIUS_PER_LENGTH * full))
-    if stands and full > 2 * radius:
-        start = start + d / full * radius
-        d = d * (1 - radius / full)
+    d = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
     length = float(np.linalg.norm(d))
-    if length < MIN_CYLINDER_LENGTH:
+    radius = min(RADIUS_RANGE[1], max(RADIUS_RANGE[0], RADIUS_PER_LENGTH * length))
+    trimmed = length - 2 * radius
+    if trimmed < max(MIN_CYLINDER_LENGTH, 0.4 * length):
+        trimmed = length * 0.6
+    if trimmed < MIN_CYLINDER_LENGTH:
         return None
     z = d / length
     ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     x = np.cross(ref, z)
     x /= np.linalg.norm(x)
     rot = np.column_stack([x, np.cross(z, x), z])
-    pose = transform(rot, start + d / 2)
+    pose = transform(rot, np.asarray(start, dtype=float) + d / 2)
     if frame is not None:
         pose = frame @ pose
-    return Cylinder(radius, length, Origin(_vec(pose[:3, 3]), matrix_to_rpy(pose[:3, :3])))
+    return Cylinder(radius, trimmed, Origin(_vec(pose[:3, 3]), matrix_to_rpy(pose[:3, :3])))
 
 
 def flange_rotation(direction: Array) -> Array:
@@ -110,8 +98,7 @@ def build_chain(arm: WireArm, frames: ArmFrames, limits: Sequence[MotionLimits],
     for k in range(n):
         wj = arm.joints[k]
         end = p[k + 1] if k + 1 < n else frames.tip
-        stands = k == 0 and base_geometry is None and bool(np.linalg.norm(p[0]) < 1e-3)
-        geometry = link_cylinder(np.zeros(3), end - p[k], stands=stands)
+        geometry = link_cylinder(np.zeros(3), end - p[k])
         links.append(Link(naming.link(k + 1), geometry, KUKA_ORANGE, "kuka_orange"))
         if k == 0:
             origin = Origin(_vec(first_origin[:3, 3]), matrix_to_rpy(first_origin[:3, :3]))
