@@ -49,6 +49,20 @@ def test_a_step_is_found_where_it_is_and_its_size_measured() -> None:
     assert found.index == 37 and found.size == pytest.approx(1.0, abs=0.05)
 
 
+def test_a_significant_shift_smaller_than_one_reading_s_error_is_not_a_move() -> None:
+    """Over 400 readings a 0.3-step shift is highly significant; below the floor (one
+    reading's own 1-sigma) it is reported, not called a move; the same shift is a move when
+    the readings' error is smaller than it."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(0.0, 0.05, (400, 3))
+    x[200:, 0] += 0.3
+    below = change_point({"orientation": x}, floors={"orientation": 0.5})
+    assert below is not None and below.statistic > 5 * below.threshold
+    assert not below.detected and below.size == pytest.approx(0.3, abs=0.03)
+    above = change_point({"orientation": x}, floors={"orientation": 0.2})
+    assert above is not None and above.detected and above.index == 200
+
+
 def _ar1(rng: np.random.Generator, n: int, rho: float) -> np.ndarray:
     """(n, 6) independent AR(1) columns of unit variance and lag-1 autocorrelation rho."""
     e = rng.normal(size=(n, 6)) * np.sqrt(1 - rho ** 2)

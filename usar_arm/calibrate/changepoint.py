@@ -16,8 +16,13 @@ with s^2 the pooled variance of the residuals about their own segment's mean, in
 mean (consecutive readings on a tour need not be independent; a shift raises rho, which only
 makes the test more cautious). Without a shift Z^2(k) / 3 is about F(3, n - 2); the threshold is
 3 times its 1 - alpha / (splits x groups) quantile (Bonferroni over every split tried), so the
-chance that clean readings are called moved is at most alpha (:data:`ALPHA`). Measured on
-2,000 Gaussian series each (tests/calibrate/test_changepoint.py): 0 % for 20 and for 300
+chance that clean readings are called moved is at most alpha (:data:`ALPHA`). A significant
+shift is called a move only when it is also at least as large as one reading's own error (the
+group's ``floor``: the norm of a reading's 1-sigma, noise and truncation): over hundreds of
+readings a tour's unmodelled structure can make a tenth of a printed step significant (a KR60
+tour read 0.3 mrad, statistic 27 against 26, where a printed step is 1 mrad), and a shift
+below what one reading can tell does not move the description by more than its readings can.
+Measured on 2,000 Gaussian series each (tests/calibrate/test_changepoint.py): 0 % for 20 and for 300
 independent readings, 0.05 % for 40 readings with lag-1 autocorrelation 0.5, 0.1 % for 300
 with 0.8; none of 12 clean synthetic tracker fits.
 """
@@ -47,7 +52,8 @@ class ChangePoint:
         index: the first reading after the split (0-based, in the series' order).
         statistic: Z^2 there (see the module); threshold: the Bonferroni bound.
         shift: the mean residual after minus before, per number of the group (m or rad).
-        group: ``position`` or ``orientation``.
+        group: ``position`` or ``orientation``. floor: the smallest shift called a move (m or
+        rad; see the module).
     """
 
     index: int
@@ -55,11 +61,12 @@ class ChangePoint:
     threshold: float
     shift: tuple[float, ...]
     group: str
+    floor: float = 0.0
 
     @property
     def detected(self) -> bool:
-        """Whether the split is significant."""
-        return self.statistic > self.threshold
+        """Whether the split is significant and its shift at least the floor."""
+        return self.statistic > self.threshold and self.size >= self.floor
 
     @property
     def size(self) -> float:
@@ -104,10 +111,12 @@ def threshold(n: int, d: int, alpha: float, tests: int) -> float:
 
 
 def change_point(groups: dict[str, Array], alpha: float = ALPHA,
-                 min_segment: int = MIN_SEGMENT) -> ChangePoint | None:
+                 min_segment: int = MIN_SEGMENT, floors: dict[str, float] | None = None
+                 ) -> ChangePoint | None:
     """The strongest split over the residual series of ``groups`` (name -> (n, d), rows in
     reading order; a group with too few rows is skipped), judged against the Bonferroni
-    threshold; None when no group is long enough to split."""
+    threshold and the group's ``floors`` (m or rad; 0 when not given); None when no group is
+    long enough to split."""
     usable = {g: x for g, x in groups.items() if len(x) >= 2 * min_segment}
     splits = sum(len(x) - 2 * min_segment + 1 for x in usable.values())
     best: ChangePoint | None = None
@@ -116,7 +125,8 @@ def change_point(groups: dict[str, Array], alpha: float = ALPHA,
         k = int(np.argmax(stats))
         found = ChangePoint(k + min_segment, float(stats[k]),
                             threshold(len(x), x.shape[1], alpha, splits),
-                            tuple(float(v) for v in shifts[k]), group)
+                            tuple(float(v) for v in shifts[k]), group,
+                            (floors or {}).get(group, 0.0))
         if best is None or found.statistic / found.threshold > best.statistic / best.threshold:
             best = found
     return best

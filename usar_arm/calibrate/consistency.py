@@ -1,7 +1,8 @@
 """After the fit: is it consistent, and how well does it fix the measured frame?
 
 A fit is consistent when (1) no kept reading scores above ``outlier_sigma``, (2) the residuals
-in reading order show no change point (:mod:`.changepoint`: a base or tool that moved mid-run)
+in reading order show no change point (:mod:`.changepoint`: a base or tool that moved mid-run,
+by at least one reading's own 1-sigma, its noise and truncation)
 and (3) Levenberg-Marquardt converged. Each failure is one sentence in
 :attr:`Verdict.problems`. The parameters' covariance is the midpoint model's residual
 covariance s^2 (J^T J)^-1 at the solution; propagated through the measured frame's position
@@ -44,8 +45,13 @@ def judge(e: Array, t: qm.Targets, scores: Array, keep: Array, converged: bool,
                         "sigma outside their intervals after rejecting the worst 10 %")
     rows = np.flatnonzero(keep)
     oriented = rows[t.used[rows, 3:].all(axis=1)]
+    scale = t.scale
+    floors = {"position": float(np.median(np.linalg.norm(scale[rows, :3], axis=1)))
+              if len(rows) else 0.0,
+              "orientation": float(np.median(np.linalg.norm(scale[oriented, 3:], axis=1)))
+              if len(oriented) else 0.0}
     change = change_point({"position": e[rows, :3], "orientation": e[oriented, 3:]},
-                          options.change_alpha)
+                          options.change_alpha, floors=floors)
     label = ""
     if change is not None:
         label = t.labels[(rows if change.group == "position" else oriented)[change.index]]
