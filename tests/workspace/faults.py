@@ -23,6 +23,12 @@ def square(folder: str, chunk: np.ndarray) -> Result:
     return {"values": chunk, "squares": chunk * chunk}
 
 
+def slow_square(folder: str, chunk: np.ndarray) -> Result:
+    """A healthy chunk of 0.2 s (Ray's start takes seconds: a helper gets some)."""
+    time.sleep(0.2)
+    return square(folder, chunk)
+
+
 def _first_time(folder: str, name: str) -> bool:
     mark = Path(folder) / name
     try:

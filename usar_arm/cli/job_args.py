@@ -69,6 +69,7 @@ def run_record(stats: RunStats) -> dict[str, Any]:
             "backend_start_seconds": stats.start_seconds,
             "units": stats.units, "chunks_run": stats.chunks_run,
             "chunks_resumed": stats.chunks_resumed,
+            "chunks_run_by_the_command_while_ray_started": stats.chunks_here,
             "units_per_second": rate,
             "units_per_second_per_worker": rate / stats.workers if rate else None}
 

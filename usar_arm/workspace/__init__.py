@@ -25,15 +25,35 @@ jobs.backend_for(workers=2))``, ``jobs.place(...)``; :mod:`usar_arm.batch` runs 
 
 from __future__ import annotations
 
-from usar_arm.workspace.engine import InProcess, RunStats
-from usar_arm.workspace.grid import ReachBound, VoxelGrid, reach_bound
-from usar_arm.workspace.orientations import OrientationSet, orientation_set
-from usar_arm.workspace.placement import PlaceSettings
-from usar_arm.workspace.pool import ProcessBackend
-from usar_arm.workspace.reach import ReachPlan, ReachSettings
-from usar_arm.workspace.reach_map import ReachMap
-from usar_arm.workspace.targets import Target, load_targets
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from usar_arm.workspace.engine import InProcess, RunStats
+    from usar_arm.workspace.grid import ReachBound, VoxelGrid, reach_bound
+    from usar_arm.workspace.orientations import OrientationSet, orientation_set
+    from usar_arm.workspace.placement import PlaceSettings
+    from usar_arm.workspace.pool import ProcessBackend
+    from usar_arm.workspace.reach import ReachPlan, ReachSettings
+    from usar_arm.workspace.reach_map import ReachMap
+    from usar_arm.workspace.targets import Target, load_targets
+
+_HOMES = {"InProcess": "engine", "RunStats": "engine", "ReachBound": "grid",
+          "VoxelGrid": "grid", "reach_bound": "grid", "OrientationSet": "orientations",
+          "orientation_set": "orientations", "PlaceSettings": "placement",
+          "ProcessBackend": "pool", "ReachPlan": "reach", "ReachSettings": "reach",
+          "ReachMap": "reach_map", "Target": "targets", "load_targets": "targets"}
+"""Where each name of the package lives. They are imported when first asked for, so that a
+process that needs one module (a Ray worker, the process that owns a local Ray instance) does
+not load Pinocchio, FCL and the compiled kernels for nothing."""
 
 __all__ = ["InProcess", "OrientationSet", "PlaceSettings", "ProcessBackend", "ReachBound",
            "ReachMap", "ReachPlan", "ReachSettings", "RunStats", "Target", "VoxelGrid",
            "load_targets", "orientation_set", "reach_bound"]
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'usar_arm.workspace' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"usar_arm.workspace.{home}"), name)

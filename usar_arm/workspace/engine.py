@@ -234,7 +234,8 @@ class ChunkStore:
 class RunStats:
     """How a job ran: chunks run now and found finished, units (queries), seconds (from the
     backend's start, included wherever it happened, to the last chunk's result and the
-    backend's stop), the backend, its workers and the seconds its start took."""
+    backend's stop), the backend, its workers, the seconds its start took and the chunks the
+    calling process ran itself while it started (``--ray local``)."""
 
     chunks_run: int
     chunks_resumed: int
@@ -243,6 +244,7 @@ class RunStats:
     backend: str
     workers: int
     start_seconds: float = 0.0
+    chunks_here: int = 0
 
 
 Progress = Callable[[int, int], None]
@@ -276,5 +278,6 @@ def run_job(job: Job, backend: Backend, store: ChunkStore | None = None, resume:
         backend.close()
     stats = RunStats(len(todo), resumed, total,
                      time.perf_counter() - start + started_before, backend.describe(),
-                     backend.workers, backend.start_seconds)
+                     backend.workers, backend.start_seconds,
+                     int(getattr(backend, "chunks_here", 0)))
     return [results[i] for i in range(len(job.chunks))], stats

@@ -61,7 +61,9 @@ def _serve(conn: Connection, key: str, prepare: Callable[[], Any],
 
 
 @dataclass(eq=False)
-class _Worker:
+class Worker:
+    """A worker process, its pipe and the chunk it runs (None when idle)."""
+
     process: BaseProcess
     conn: Connection
     chunk: int | None = None
@@ -80,6 +82,36 @@ class _Worker:
             self.process.kill()
             self.process.join(SHUTDOWN_TIMEOUT)
         self.conn.close()
+
+
+def start_method(asked: str = "auto") -> str:
+    """``fork`` while this process runs a single thread, else ``forkserver`` (or as asked)."""
+    if asked != "auto":
+        return asked
+    return "fork" if threading.active_count() == 1 else "forkserver"
+
+
+def start_worker(context: Any, job: Job) -> Worker:
+    """A worker process for ``job`` (of a multiprocessing ``context``), waiting for chunks."""
+    parent, child = context.Pipe()
+    process = context.Process(target=_serve, args=(child, job.key, job.prepare, job.work),
+                              daemon=True, name="usar-arm-worker")
+    process.start()
+    child.close()
+    return Worker(process, parent)
+
+
+def reply(w: Worker) -> tuple[str, int, Any] | None:
+    """The worker's reply (("ok", index, result) or ("error", index, reason)), or None when
+    it died before giving one."""
+    try:
+        if w.conn.poll():
+            answer: tuple[str, int, Any] = w.conn.recv()
+            return answer
+    except (EOFError, OSError):
+        pass
+    w.process.join(SHUTDOWN_TIMEOUT)
+    return None
 
 
 class ProcessBackend:
@@ -104,24 +136,14 @@ class ProcessBackend:
     def describe(self) -> str:
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
 
-    def _start(self, context: Any, job: Job) -> _Worker:
-        parent, child = context.Pipe()
-        process = context.Process(target=_serve, args=(child, job.key, job.prepare, job.work),
-                                  daemon=True, name="usar-arm-worker")
-        process.start()
-        child.close()
-        return _Worker(process, parent)
-
-    def _method(self) -> str:
-        if self.start_method != "auto":
-            return self.start_method
-        return "fork" if threading.active_count() == 1 else "forkserver"
+    def _start(self, context: Any, job: Job) -> Worker:
+        return start_worker(context, job)
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
-        context = mp.get_context(self._method())
+        context = mp.get_context(start_method(self.start_method))
         queue = deque(todo)
         failures: dict[int, list[str]] = {}
-        workers: list[_Worker] = []
+        workers: list[Worker] = []
         try:
             workers = [self._start(context, job) for _ in range(min(self.workers, len(queue)))]
             while queue or any(w.chunk is not None for w in workers):
@@ -134,21 +156,21 @@ class ProcessBackend:
                     if w.chunk is None or not (w.conn in ready or w.process.sentinel in ready):
                         continue
                     i = w.chunk
-                    reply = self._reply(w)
-                    if reply is not None and reply[0] == "ok":
+                    answer = reply(w)
+                    if answer is not None and answer[0] == "ok":
                         w.chunk = None
                         if queue:  # its next chunk first: the worker runs while this is saved
                             self._send(w, queue.popleft(), job)
-                        yield i, reply[2]
+                        yield i, answer[2]
                         continue
-                    reason = reply[2] if reply is not None else (
+                    reason = answer[2] if answer is not None else (
                         f"its worker process died (exit code {w.process.exitcode})")
                     failures.setdefault(i, []).append(reason)
                     if len(failures[i]) >= ATTEMPTS:
                         raise ChunkFailedError(i, len(failures[i]), reason)
                     queue.appendleft(i)
                     w.chunk = None
-                    if reply is None:  # a dead worker is replaced by a fresh one
+                    if answer is None:  # a dead worker is replaced by a fresh one
                         w.stop()
                         workers[k] = self._start(context, job)
         finally:
@@ -156,18 +178,7 @@ class ProcessBackend:
                 w.stop()
 
     @staticmethod
-    def _send(w: _Worker, i: int, job: Job) -> None:
+    def _send(w: Worker, i: int, job: Job) -> None:
         w.chunk = i
         w.conn.send((i, job.chunks[i]))
 
-    @staticmethod
-    def _reply(w: _Worker) -> tuple[str, int, Any] | None:
-        """The worker's reply, or None when it died before giving one."""
-        try:
-            if w.conn.poll():
-                reply: tuple[str, int, Any] = w.conn.recv()
-                return reply
-        except (EOFError, OSError):
-            pass
-        w.process.join(SHUTDOWN_TIMEOUT)
-        return None

@@ -1,9 +1,10 @@
 """The Ray execution backend: chunks as calls on Ray actors, on a cluster of any size.
 
 The only module that imports ``ray`` (an optional extra: ``pip install 'usar-arm[ray]'``).
-:meth:`RayBackend.start` connects (or starts a local instance) and creates the actors at once,
-so a bad address fails before any planning and the actors' processes start (a fresh Python
-importing usar-arm, Pinocchio, FCL) while the caller plans. One actor per free CPU of the
+:meth:`RayBackend.start` connects and creates the actors at once (for ``local``: starts the
+instance's process, joined when it is up), so a bad address fails before any planning and
+the actors' processes start (a fresh Python importing usar-arm, Pinocchio, FCL) while the
+caller plans. One actor per free CPU of the
 cluster (``workers`` asks for fewer or more: more than the free CPUs are not started, which a
 log line says, as actors that cannot be scheduled would hold their chunks forever). Each actor
 gets the job by value (URDF, SRDF and scene text: Pinocchio models, FCL geometry and OMPL
@@ -18,7 +19,12 @@ queued behind it are not charged); a second failure stops the run.
 
 Addresses: ``local`` always starts a fresh Ray instance on this machine (workers at the
 priority of the process pool's, nice 0, rather than Ray's default 15) and stops it at the
-end; a process already connected to another Ray instance is refused rather than joined.
+end; a process already connected to another Ray instance is refused rather than joined. The
+instance is started by a process of its own (:mod:`.local_head`; run as ``python -m
+usar_arm.workspace.ray_backend N``, :func:`serve_local`) while this one goes on, and until its
+actors are ready a helper runs chunks (:mod:`.warm_up_helper`). The ``usar-arm`` executable
+starts that process before it loads its commands (:mod:`usar_arm.__main__`).
+
 ``auto`` joins the cluster ``RAY_ADDRESS`` names, or the one ``ray start`` left on this machine
 (or the instance this process is connected to); ``HOST:PORT`` (a head node's GCS, port 6379
 by default) or ``ray://HOST:PORT`` joins that cluster. An address that does not answer within
@@ -31,7 +37,9 @@ from __future__ import annotations
 import logging
 import math
 import os
+import signal
 import socket
+import sys
 import threading
 import time
 from collections import deque
@@ -42,7 +50,14 @@ from typing import Any, ClassVar
 import ray
 
 from usar_arm.errors import ChunkFailedError, ClusterUnavailableError
-from usar_arm.workspace.engine import ATTEMPTS, Job, Result, run_chunk
+from usar_arm.workspace.engine import (
+    ATTEMPTS,
+    Job,
+    Result,
+    run_chunk,
+)
+from usar_arm.workspace.local_head import ANNOUNCE, AUTH_VARIABLE, LocalHead, take_early
+from usar_arm.workspace.warm_up_helper import WarmUpHelper
 
 log = logging.getLogger("usar_arm.workspace")
 
@@ -64,6 +79,8 @@ CALL_TIMEOUT = 3600.0
 """s a chunk's call may run before it counts as failed (chunks take about 0.1 to 1 s)."""
 POLL = 1.0
 """s between checks of those deadlines while waiting."""
+HELPER_POLL = 0.05
+"""s between looks at the actors while the helper runs a chunk (a chunk takes 0.05 to 1 s)."""
 STOP_TIMEOUT = 30.0
 """s to wait for the shutdown of a local instance before another start (it takes about 1.4 s:
 Ray stops its processes one after the other, each given up to 1 s to leave)."""
@@ -97,8 +114,60 @@ class _Slot:
     name: str
     created: float
     ready: Any = None  # the reference of its setup call until it answered
+    given: bool = False  # it was given the job (its setup call sent)
     calls: deque[tuple[Any, int]] = field(default_factory=deque)
     since: float = 0.0  # when its oldest call could start (s, monotonic)
+
+
+def _refuse_if_connected(address: str) -> None:
+    """``local`` starts an instance of its own: not in a process joined to another one."""
+    if ray.is_initialized():
+        current = ray.get_runtime_context().gcs_address
+        raise ClusterUnavailableError(
+            address, f"this process is already connected to the Ray instance at {current}, "
+                     "which local would not start; use --ray auto to run on it, or disconnect "
+                     "(ray.shutdown()) first")
+
+
+def _send_the_token() -> None:
+    """Have this process send the token of ``~/.ray`` when it joins the local instance.
+
+    Ray (from 2.5x) turns token authentication on for a fresh local instance, whose start
+    wrote the token there, but a process joining by address sends it only in token mode, which
+    Ray reads when it is imported: this is what Ray's own ``ray.init`` does for an instance it
+    starts in-process (set the mode, re-read the configuration). A mode the user set is left
+    alone (the head process got the same); a Ray without token authentication needs nothing.
+    """
+    if os.environ.get(AUTH_VARIABLE):
+        return
+    try:
+        from ray._private.authentication.authentication_token_setup import _enable_token_auth
+    except ImportError:
+        return
+    _enable_token_auth()
+
+
+def _stop(disconnect: bool, head: LocalHead | None) -> None:
+    """Leave the instance (and, for ``local``, tell its process to stop it: it does so by
+    itself, and the next start waits for it, not the end of this process)."""
+    if disconnect:
+        ray.shutdown()
+    if head is not None:
+        head.close()
+
+
+def serve_local(num_cpus: int) -> int:
+    """Start a fresh local instance of ``num_cpus`` CPUs, announce its GCS address on standard
+    output (:data:`~usar_arm.workspace.local_head.ANNOUNCE`), and stop it when standard input
+    closes: the process that owns ``--ray local``'s instance (see :mod:`.local_head`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # (the command stops it: by closing stdin)
+    ray.init(address="local", include_dashboard=False, log_to_driver=False,
+             logging_level=logging.WARNING, num_cpus=num_cpus,
+             object_store_memory=LOCAL_OBJECT_STORE, _system_config=dict(LOCAL_SYSTEM_CONFIG))
+    print(ANNOUNCE + ray.get_runtime_context().gcs_address, flush=True)
+    sys.stdin.read()
+    ray.shutdown()
+    return 0
 
 
 def _host_port(address: str) -> tuple[str, int] | None:
@@ -127,9 +196,13 @@ class RayBackend:
     """
 
     stopping: ClassVar[threading.Thread | None] = None
-    """The shutdown of a local instance, under way in the background (it overlaps what the
-    caller does with the results; a later start waits for it, and so does the interpreter at
-    exit). One per process, as Ray's connection is."""
+    """Leaving the instance, under way in the background (it overlaps what the caller does with
+    the results; a later start waits for it, and so does the interpreter at exit). One per
+    process, as Ray's connection is."""
+    leaving: ClassVar[LocalHead | None] = None
+    """The process of the last local instance, stopping it: a later start waits for it (two
+    instances would share this machine's CPUs), the end of this process does not (it stops
+    its instance by itself)."""
 
     def __init__(self, address: str = "auto", workers: int | None = None,
                  timeout: float = 10.0, start_timeout: float = START_TIMEOUT,
@@ -144,6 +217,9 @@ class RayBackend:
         self.start_seconds = 0.0
         self.gcs_address = ""  # (the instance's, once connected)
         self.slots: list[_Slot] = []
+        self.head: LocalHead | None = None  # (local: the process starting the instance)
+        self.chunks_here = 0  # chunks a helper process ran while the actors started
+        self._begin = 0.0
         self._owns_ray = False
         self._started = self._counted = False
         self._actor_class: Any = None
@@ -168,12 +244,55 @@ class RayBackend:
         """
         if self._started:
             return False
-        begin = time.perf_counter()
+        self._begin = time.perf_counter()
         if RayBackend.stopping is not None:
             RayBackend.stopping.join(STOP_TIMEOUT)
             RayBackend.stopping = None
+        if RayBackend.leaving is not None:
+            RayBackend.leaving.wait_stopped()
+            RayBackend.leaving = None
+        self.chunks_here, self.gcs_address = 0, ""
+        if self.address == "local":
+            _refuse_if_connected(self.address)
+            cpus = self.requested or os.cpu_count() or 1
+            self.head = take_early(cpus, self.start_timeout) or LocalHead(cpus,
+                                                                          self.start_timeout)
+            self._started = True
+            self.start_seconds = time.perf_counter() - self._begin
+            return True  # (joined when the head announces its instance: :meth:`join`)
         self._owns_ray = self._connect()
         self._started = True
+        self._make_actors()
+        return True
+
+    @property
+    def joining(self) -> bool:
+        """A local instance is starting, not yet joined."""
+        return self.head is not None and not self.gcs_address
+
+    def join(self, wait: float) -> bool:
+        """Join the local instance when its process announced it (waiting at most ``wait`` s)
+        and create the actors; False while it is still starting.
+
+        Raises:
+            ClusterUnavailableError: the instance did not start.
+        """
+        assert self.head is not None
+        address = self.head.poll(wait)
+        if address is None:
+            return False
+        _send_the_token()
+        try:
+            ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            self.close()
+            raise ClusterUnavailableError(
+                self.address, f"the local instance at {address} did not answer: "
+                              f"{str(exc).splitlines()[0]}") from None
+        self._make_actors()
+        return True
+
+    def _make_actors(self) -> None:
         try:
             self.gcs_address = ray.get_runtime_context().gcs_address
             self._actor_class = ray.remote(num_cpus=1)(_ChunkActor)
@@ -182,20 +301,25 @@ class RayBackend:
         except BaseException:
             self.close()
             raise
-        self.start_seconds = time.perf_counter() - begin
-        return True
+        self.start_seconds = time.perf_counter() - self._begin
 
     def close(self) -> None:
-        """Kill the actors, and stop the Ray instance when this backend started it: in the
-        background (:attr:`stopping`), as Ray gives each of its processes up to 1 s to leave,
-        one after the other, while the caller has results to write."""
+        """Kill the actors and leave the instance in the background (:attr:`stopping`, while
+        the caller has results to write); a local instance's process is told to stop it, which
+        it does by itself (Ray gives each of its processes up to 1 s to leave, one after the
+        other): the next start waits for that (:attr:`leaving`), the end of this process
+        does not."""
         if ray.is_initialized():
             for slot in self.slots:
                 ray.kill(slot.actor)
         self.slots = []
-        if self._owns_ray:
-            RayBackend.stopping = threading.Thread(target=ray.shutdown, name="ray-shutdown")
+        head, joined = self.head, bool(self.gcs_address) and self.head is not None
+        if self._owns_ray or head is not None:
+            RayBackend.stopping = threading.Thread(
+                target=_stop, args=(self._owns_ray or joined, head), name="ray-shutdown")
             RayBackend.stopping.start()
+            RayBackend.leaving = head
+        self.head = None
         self._owns_ray = self._started = False
 
     def _connect(self) -> bool:
@@ -210,11 +334,6 @@ class RayBackend:
                                   f"{self.timeout:g} s ({exc.strerror or exc})") from None
         if ray.is_initialized():  # this process already joined a cluster: only that one
             current = ray.get_runtime_context().gcs_address
-            if self.address == "local":
-                raise ClusterUnavailableError(
-                    self.address, f"this process is already connected to the Ray instance at "
-                                  f"{current}, which local would not start; use --ray auto to "
-                                  "run on it, or disconnect (ray.shutdown()) first")
             if target is not None and current.rpartition(":")[2] != str(target[1]):
                 raise ClusterUnavailableError(
                     self.address, f"this process is already connected to the Ray cluster at "
@@ -222,11 +341,7 @@ class RayBackend:
             return False
         options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
                                    "logging_level": logging.WARNING}
-        if self.address == "local":
-            options.update(num_cpus=self.requested or os.cpu_count() or 1,
-                           object_store_memory=LOCAL_OBJECT_STORE,
-                           _system_config=dict(LOCAL_SYSTEM_CONFIG))
-        wait = WAIT_VARIABLE not in os.environ and self.address != "local"
+        wait = WAIT_VARIABLE not in os.environ
         if wait:  # Ray retries its GCS about once a second: bound the retries by the timeout
             os.environ[WAIT_VARIABLE] = str(max(1, math.ceil(self.timeout)))
         try:
@@ -274,7 +389,7 @@ class RayBackend:
         """A fresh actor in place of slot ``k`` (its old one killed), given the job."""
         ray.kill(self.slots[k].actor)
         slot = self.slots[k] = self._new_slot(k)
-        slot.ready = slot.actor.setup.remote(job.key, job.prepare, job.work)
+        slot.ready, slot.given = slot.actor.setup.remote(job.key, job.prepare, job.work), True
         return slot
 
 
@@ -286,19 +401,68 @@ class _Run:
         self.queue = deque(todo)
         self.failures: dict[int, list[str]] = {}
         self.start_failures: dict[int, list[str]] = {}
-        for slot in backend.slots:
-            slot.ready = slot.actor.setup.remote(job.key, job.prepare, job.work)
+        self.share = len(todo) // (max(1, backend.requested or os.cpu_count() or 1) + 1)
+        """Chunks a helper may run while a local instance starts: one worker's share."""
+        self.helper = WarmUpHelper(job)
+        self._give_job()
+
+    def _give_job(self) -> None:
+        for slot in self.backend.slots:
+            if not slot.given:
+                slot.ready = slot.actor.setup.remote(self.job.key, self.job.prepare,
+                                                     self.job.work)
+                slot.given = True
 
     def results(self) -> Iterator[tuple[int, Result]]:
-        while self.queue or any(s.calls for s in self.backend.slots):
-            self._feed()
-            slots = self.backend.slots
-            waiting = [s.ready for s in slots if s.ready is not None] + [
-                ref for s in slots for ref, _ in s.calls]
-            ready, _ = ray.wait(waiting, num_returns=1, timeout=POLL)
-            for ref in ready:
-                yield from self._collect(ref)
-            yield from self._check_deadlines()
+        backend = self.backend
+        try:
+            while self.queue or any(s.calls for s in backend.slots) or self.helper.busy:
+                if backend.joining and backend.join(0.0):
+                    self._give_job()
+                self._feed()
+                self._keep_helper_busy()
+                if self.helper.busy:
+                    yield from self._helper_result(HELPER_POLL)
+                elif backend.joining:  # nothing to do here but wait for the instance
+                    if backend.join(POLL):
+                        self._give_job()
+                    continue
+                slots = backend.slots
+                waiting = [s.ready for s in slots if s.ready is not None] + [
+                    ref for s in slots for ref, _ in s.calls]
+                if waiting:
+                    ready, _ = ray.wait(waiting, num_returns=1,
+                                        timeout=0.0 if self.helper.busy else POLL)
+                    for ref in ready:
+                        yield from self._collect(ref)
+                yield from self._check_deadlines()
+        finally:
+            self.helper.stop()
+
+    # ------------------------------------------------------------------ the helper
+    def _keep_helper_busy(self) -> None:
+        """While a local instance starts (until every actor is ready), the helper runs chunks
+        too, at most one worker's share; then it is stopped."""
+        b = self.backend
+        warming = b.head is not None and (b.joining or any(s.ready is not None
+                                                            for s in b.slots))
+        if self.helper.busy:
+            return
+        if warming and self.queue and self.helper.done < self.share:
+            self.helper.give(self.queue.popleft())
+        else:
+            self.helper.stop()
+
+    def _helper_result(self, timeout: float) -> Iterator[tuple[int, Result]]:
+        done = self.helper.result(timeout)
+        if done is None:
+            return
+        i, result = done
+        if isinstance(result, str):
+            self._failed(i, result)
+            return
+        self.backend.chunks_here = self.helper.done
+        yield i, result
 
     def _feed(self) -> None:
         """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup)."""
@@ -394,3 +558,7 @@ class _Run:
 def _reason(exc: BaseException) -> str:
     """The last line of a Ray error (the worker's exception), at most 300 characters."""
     return str(exc).strip().splitlines()[-1][:300]
+
+
+if __name__ == "__main__":
+    sys.exit(serve_local(int(sys.argv[1])))

@@ -1,0 +1,40 @@
+"""The ``usar-arm`` executable starts a fresh local Ray instance before loading the commands
+exactly when the command line will use one (``reach``/``place``/``batch`` with ``--ray
+local``), with the CPUs the backend will ask for."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from usar_arm.__main__ import local_ray_cpus
+
+CORES = os.cpu_count() or 1
+
+
+@pytest.mark.parametrize(("argv", "cpus"), [
+    (["reach", "--urdf", "a.urdf", "--ray", "local", "--out", "d"], CORES),
+    (["place", "--ray=local", "--targets", "t.yaml"], CORES),
+    (["batch", "p.jsonl", "--ray", "local", "--workers", "1"], 1),
+    (["reach", "--ray", "local", "--workers", "0"], CORES),  # (0 with --ray: one per CPU)
+    (["reach", "--ray"], None),  # auto: a running cluster, nothing to start
+    (["reach", "--ray", "10.0.0.1:6379"], None),
+    (["reach", "--workers", "2"], None),
+    (["plan", "--ray", "local"], None),  # (no such option there: its parser says so)
+    (["reach", "--ray", "local", "--workers", "two"], None),
+    ([], None),
+])
+def test_a_local_instance_is_started_first_only_for_the_commands_that_use_it(
+        argv: list[str], cpus: int | None) -> None:
+    assert local_ray_cpus(argv) == cpus
+
+
+def test_python_dash_m_usar_arm_is_the_executable() -> None:
+    done = subprocess.run([sys.executable, "-m", "usar_arm", "--version"], capture_output=True,
+                          text=True, timeout=60, check=False,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0 and done.stdout.startswith("usar-arm "), done.stderr

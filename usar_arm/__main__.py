@@ -1,0 +1,53 @@
+"""The ``usar-arm`` executable (and ``python -m usar_arm``): what must start before the
+command loads, then the command (:mod:`usar_arm.cli`).
+
+Loading the commands takes about 1.5 s (Pinocchio, FCL, OMPL, SciPy, the compiled kernels).
+A command that will run on a fresh local Ray instance (``reach``, ``place`` or ``batch`` with
+``--ray local``) has that instance's process started first, so that Ray's own start (2.4 to
+3.5 s) runs beside the loading instead of after it (:mod:`usar_arm.workspace.local_head`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+RAY_COMMANDS = ("reach", "place", "batch")
+"""The commands that run their work on a backend."""
+START_TIMEOUT = 120.0
+"""s the instance may take to start (the backend's own bound)."""
+
+
+def local_ray_cpus(argv: list[str]) -> int | None:
+    """The CPUs of the fresh local Ray instance this command line will start (``--ray local``,
+    ``--workers N`` or one per core), or None when it starts none."""
+    if not argv or argv[0] not in RAY_COMMANDS:
+        return None
+    parser = argparse.ArgumentParser(add_help=False, exit_on_error=False)
+    parser.add_argument("--ray", nargs="?", const="auto")
+    parser.add_argument("--workers", type=int)
+    try:
+        known, _ = parser.parse_known_args(argv[1:])
+    except (argparse.ArgumentError, ValueError):
+        return None  # (the command's own parser says what is wrong)
+    if known.ray != "local":
+        return None
+    return known.workers if known.workers and known.workers > 0 else os.cpu_count() or 1
+
+
+def main() -> int:
+    """Run ``usar-arm`` with this process's arguments."""
+    argv = sys.argv[1:]
+    cpus = local_ray_cpus(argv)
+    if cpus is not None:
+        from usar_arm.workspace.local_head import start_early
+
+        start_early(cpus, START_TIMEOUT)
+    from usar_arm.cli.main import main as run
+
+    return run(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
