@@ -181,6 +181,8 @@ def test_an_actor_that_cannot_start_is_named_within_its_timeout(
 def test_before_it_connects_the_backend_does_not_claim_zero_actors() -> None:
     assert "0 Ray" not in RayBackend("10.255.255.1:6379").describe()
     assert RayBackend("h:6379", 3).describe().startswith("3 Ray actors (at most one per")
+    assert RayBackend("local").describe() == ("Ray actors (one per free CPU) on a fresh local "
+                                              "Ray instance")
     with pytest.raises(ClusterUnavailableError, match="HOST:PORT"):
         RayBackend("nonsense")
 

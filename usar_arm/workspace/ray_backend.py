@@ -228,9 +228,9 @@ class RayBackend:
         where = "a fresh local Ray instance" if self.address == "local" else \
             f"the Ray cluster at {self.address}"
         if not self._counted:  # (before it connects, it does not know how many)
-            count = f"{self.requested} Ray actors (at most" if self.requested else \
-                "Ray actors ("
-            return f"{count} one per free CPU) on {where}"
+            count = f"{self.requested} Ray actors (at most one" if self.requested else \
+                "Ray actors (one"
+            return f"{count} per free CPU) on {where}"
         return f"{self.workers} Ray actor{'s' if self.workers != 1 else ''} on {where}"
 
     # ------------------------------------------------------------------ start and stop
