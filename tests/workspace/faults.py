@@ -58,3 +58,10 @@ def raises_once_on_chunk_3(folder: str, chunk: np.ndarray) -> Result:
     if 30 in chunk and _first_time(folder, "raised"):
         raise ValueError("a passing fault in chunk 3")
     return square(folder, chunk)
+
+
+def hangs_on_chunk_3(folder: str, chunk: np.ndarray) -> Result:
+    """The chunk holding 30 never ends (a worker stuck in a library call)."""
+    if 30 in chunk:
+        time.sleep(3600)
+    return square(folder, chunk)

@@ -454,7 +454,7 @@ class _Run:
             self.helper.stop()
 
     def _helper_result(self, timeout: float) -> Iterator[tuple[int, Result]]:
-        done = self.helper.result(timeout)
+        done = self.helper.result(timeout, self.backend.call_timeout)
         if done is None:
             return
         i, result = done

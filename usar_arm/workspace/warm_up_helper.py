@@ -11,6 +11,7 @@ died is not replaced (the actors take over).
 from __future__ import annotations
 
 import multiprocessing as mp
+import time
 from multiprocessing.connection import wait
 
 from usar_arm.workspace.engine import Job, Result
@@ -24,6 +25,7 @@ class WarmUpHelper:
         self.job = job
         self.worker: Worker | None = None
         self.done = 0
+        self.since = 0.0  # when its chunk was given (s, monotonic)
 
     @property
     def busy(self) -> bool:
@@ -35,16 +37,21 @@ class WarmUpHelper:
         assert not self.busy
         if self.worker is None:
             self.worker = start_worker(mp.get_context(start_method()), self.job)
-        self.worker.chunk = i
+        self.worker.chunk, self.since = i, time.monotonic()
         self.worker.conn.send((i, self.job.chunks[i]))
 
-    def result(self, timeout: float) -> tuple[int, Result | str] | None:
+    def result(self, timeout: float, limit: float) -> tuple[int, Result | str] | None:
         """(chunk, its result) when it finished within ``timeout`` s, (chunk, why it failed)
-        when it raised or the process died, None while it still runs."""
+        when it raised, the process died or the chunk ran ``limit`` s (then the process is
+        stopped), None while it still runs."""
         w = self.worker
         assert w is not None and w.chunk is not None
         if not wait([w.conn, w.process.sentinel], timeout):
-            return None
+            if time.monotonic() - self.since <= limit:
+                return None
+            i = w.chunk
+            self.stop()
+            return i, f"no answer from the helper process within {limit:g} s"
         i, w.chunk = w.chunk, None
         answer = reply(w)
         if answer is not None and answer[0] == "ok":
@@ -56,7 +63,9 @@ class WarmUpHelper:
         return i, str(answer[2])
 
     def stop(self) -> None:
-        """Stop the process (after its chunk, if it runs one: its result is dropped)."""
+        """Stop the process (killed at once when it runs a chunk: its result is not wanted)."""
         if self.worker is not None:
+            if self.worker.chunk is not None and self.worker.process.is_alive():
+                self.worker.process.kill()
             self.worker.stop()
             self.worker = None
