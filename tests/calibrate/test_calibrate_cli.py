@@ -12,7 +12,7 @@ import pytest
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
 from usar_arm.calibrate.measurement_writer import write_measurements
 from usar_arm.calibrate.measurements import Measurement, MeasurementSet
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.spatial import transform_from_xyz_rpy

@@ -14,7 +14,7 @@ from usar_arm.arm import Arm
 from usar_arm.calibrate.bounds import Bounds
 from usar_arm.calibrate.identify import CalibrationOptions
 from usar_arm.calibration import CalibrationSettings, cached_calibration
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.description import DescribeOptions
 from usar_arm.embedded import run_discovery
 from usar_arm.errors import EXIT_OK

@@ -14,7 +14,7 @@ import pytest
 from usar_arm.arm import Arm
 from usar_arm.calibration import FLIP, _fold_base, _usarsim_axes
 from usar_arm.calibration_tour import Recorder, drive_caps, tour_order
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.control.drive import DriveModel
 from usar_arm.embedded import accuracy_report
 from usar_arm.errors import EXIT_OK, InvalidInputError

@@ -15,7 +15,7 @@ import pytest
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings
 from usar_arm.calibrate.measurements import Measurement
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.spatial import transform_from_xyz_rpy

@@ -1,9 +1,11 @@
 """The ``usar-arm`` executable starts a fresh local Ray instance before loading the commands
 exactly when the command line will use one (``reach``/``place``/``batch`` with ``--ray
-local``), with the CPUs the backend will ask for."""
+local``), with the CPUs the backend will ask for; a command line loads its own command's
+module alone, and ``--help`` lists them all in order."""
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -12,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.__main__ import local_ray_cpus
+from usar_arm.cli.main import COMMANDS, build_parser
 
 CORES = os.cpu_count() or 1
 
@@ -38,3 +41,35 @@ def test_python_dash_m_usar_arm_is_the_executable() -> None:
                           text=True, timeout=60, check=False,
                           cwd=Path(__file__).resolve().parents[2])
     assert done.returncode == 0 and done.stdout.startswith("usar-arm "), done.stderr
+
+
+def _subcommands(parser: argparse.ArgumentParser) -> list[str]:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return list(action.choices)
+
+
+def test_the_command_table_is_what_the_modules_register_in_the_order_of_help() -> None:
+    assert _subcommands(build_parser()) == list(COMMANDS)
+    for command, module in COMMANDS.items():  # and one command loads its own module's only
+        own = [c for c, m in COMMANDS.items() if m == module]
+        assert _subcommands(build_parser(command)) == own
+
+
+ONE_COMMAND = """
+import sys
+from usar_arm.cli.main import main
+try:
+    main(["sim", "--help"])
+except SystemExit as exc:
+    assert exc.code == 0, exc.code
+loaded = [m for m in ("ompl", "scipy.stats", "usar_arm.cli.reach_cmd",
+                      "usar_arm.cli.calibrate_cmd") if m in sys.modules]
+print(",".join(loaded) or "none")
+"""
+
+
+def test_a_command_line_loads_only_its_command() -> None:
+    done = subprocess.run([sys.executable, "-c", ONE_COMMAND], capture_output=True, text=True,
+                          timeout=60, check=False, cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "none"

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.calibration import CalibrationSettings
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.description import DescribeOptions
 from usar_arm.embedded import run_discovery
 from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from usar_arm.cli import main
+from usar_arm.cli.main import main
 from usar_arm.description import DescribeOptions, Description, write_description
 from usar_arm.embedded import describe
 from usar_arm.errors import EXIT_OK
