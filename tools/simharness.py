@@ -68,7 +68,7 @@ class ServerProcess:
     def __init__(self, log_path: Path, speed: float = 1.0, extra_args: tuple[str, ...] = (),
                  start_timeout: float = 60.0):
         self.log_path = log_path
-        code = "import sys; from usar_arm.cli import main; sys.exit(main(sys.argv[1:]))"
+        code = "import sys; from usar_arm.cli.main import main; sys.exit(main(sys.argv[1:]))"
         cmd = [sys.executable, "-c", code, "sim", "--port", "0", "--speed", str(speed),
                *extra_args]
         self._log = open(log_path, "w")  # closed in stop()
