@@ -10,13 +10,10 @@ A command that will run on a fresh local Ray instance (``reach``, ``place`` or `
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 RAY_COMMANDS = ("reach", "place", "batch")
 """The commands that run their work on a backend."""
-START_TIMEOUT = 120.0
-"""s the instance may take to start (the backend's own bound)."""
 
 
 def local_ray_cpus(argv: list[str]) -> int | None:
@@ -33,7 +30,9 @@ def local_ray_cpus(argv: list[str]) -> int | None:
         return None  # (the command's own parser says what is wrong)
     if known.ray != "local":
         return None
-    return known.workers if known.workers and known.workers > 0 else os.cpu_count() or 1
+    from usar_arm.workspace.local_head import instance_cpus
+
+    return instance_cpus(known.workers)
 
 
 def main() -> int:
@@ -43,7 +42,7 @@ def main() -> int:
     if cpus is not None:
         from usar_arm.workspace.local_head import start_early
 
-        start_early(cpus, START_TIMEOUT)
+        start_early(cpus)
     from usar_arm.cli.main import main as run
 
     return run(argv)

@@ -17,6 +17,7 @@ This module does not import ``ray``: it starts and watches a process.
 
 from __future__ import annotations
 
+import math
 import os
 import select
 import signal
@@ -134,16 +135,23 @@ _EARLY: list[LocalHead] = []
 """The process :func:`start_early` began, until a backend takes it."""
 
 
-def start_early(num_cpus: int, timeout: float) -> None:
+def instance_cpus(workers: int | None) -> int:
+    """The CPUs of the instance ``--ray local`` starts for ``--workers`` (None or 0: one per
+    core of this machine): one actor each."""
+    return workers if workers and workers > 0 else os.cpu_count() or 1
+
+
+def start_early(num_cpus: int) -> None:
     """Start the instance's process now: the ``usar-arm`` executable does so for ``--ray
     local`` before it loads the rest of itself (about 1.5 s on which a core would otherwise
-    idle); the backend's start takes it (:func:`take_early`). Not taken, it stops its instance
-    when this process ends (its input closes)."""
-    _EARLY.append(LocalHead(num_cpus, timeout))
+    idle); the backend's start takes it (:func:`take_early`) and sets its time bound. Not
+    taken, it stops its instance when this process ends (its input closes)."""
+    _EARLY.append(LocalHead(num_cpus, timeout=math.inf))
 
 
 def take_early(num_cpus: int, timeout: float) -> LocalHead | None:
-    """The process :func:`start_early` began, if it is for ``num_cpus`` CPUs and running."""
+    """The process :func:`start_early` began, if it is for ``num_cpus`` CPUs and running
+    (bound from now on by ``timeout`` s from its start)."""
     while _EARLY:
         head = _EARLY.pop()
         if head.num_cpus == num_cpus and head.process.poll() is None:

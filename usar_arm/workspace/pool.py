@@ -69,6 +69,11 @@ class Worker:
     chunk: int | None = None
     closed: bool = field(default=False)
 
+    def send(self, i: int, job: Job) -> None:
+        """Give it chunk ``i`` of ``job`` (it must be idle)."""
+        self.chunk = i
+        self.conn.send((i, job.chunks[i]))
+
     def stop(self) -> None:
         if self.closed:
             return
@@ -136,20 +141,17 @@ class ProcessBackend:
     def describe(self) -> str:
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
 
-    def _start(self, context: Any, job: Job) -> Worker:
-        return start_worker(context, job)
-
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
         context = mp.get_context(start_method(self.start_method))
         queue = deque(todo)
         failures: dict[int, list[str]] = {}
         workers: list[Worker] = []
         try:
-            workers = [self._start(context, job) for _ in range(min(self.workers, len(queue)))]
+            workers = [start_worker(context, job) for _ in range(min(self.workers, len(queue)))]
             while queue or any(w.chunk is not None for w in workers):
                 for w in workers:
                     if w.chunk is None and queue:
-                        self._send(w, queue.popleft(), job)
+                        w.send(queue.popleft(), job)
                 busy = [w for w in workers if w.chunk is not None]
                 ready = set(wait([w.conn for w in busy] + [w.process.sentinel for w in busy]))
                 for k, w in enumerate(workers):
@@ -160,7 +162,7 @@ class ProcessBackend:
                     if answer is not None and answer[0] == "ok":
                         w.chunk = None
                         if queue:  # its next chunk first: the worker runs while this is saved
-                            self._send(w, queue.popleft(), job)
+                            w.send(queue.popleft(), job)
                         yield i, answer[2]
                         continue
                     reason = answer[2] if answer is not None else (
@@ -172,13 +174,8 @@ class ProcessBackend:
                     w.chunk = None
                     if answer is None:  # a dead worker is replaced by a fresh one
                         w.stop()
-                        workers[k] = self._start(context, job)
+                        workers[k] = start_worker(context, job)
         finally:
             for w in workers:
                 w.stop()
-
-    @staticmethod
-    def _send(w: Worker, i: int, job: Job) -> None:
-        w.chunk = i
-        w.conn.send((i, job.chunks[i]))
 

@@ -56,7 +56,13 @@ from usar_arm.workspace.engine import (
     Result,
     run_chunk,
 )
-from usar_arm.workspace.local_head import ANNOUNCE, AUTH_VARIABLE, LocalHead, take_early
+from usar_arm.workspace.local_head import (
+    ANNOUNCE,
+    AUTH_VARIABLE,
+    LocalHead,
+    instance_cpus,
+    take_early,
+)
 from usar_arm.workspace.warm_up_helper import WarmUpHelper
 
 log = logging.getLogger("usar_arm.workspace")
@@ -254,7 +260,7 @@ class RayBackend:
         self.chunks_here, self.gcs_address = 0, ""
         if self.address == "local":
             _refuse_if_connected(self.address)
-            cpus = self.requested or os.cpu_count() or 1
+            cpus = instance_cpus(self.requested)
             self.head = take_early(cpus, self.start_timeout) or LocalHead(cpus,
                                                                           self.start_timeout)
             self._started = True
@@ -401,7 +407,7 @@ class _Run:
         self.queue = deque(todo)
         self.failures: dict[int, list[str]] = {}
         self.start_failures: dict[int, list[str]] = {}
-        self.share = len(todo) // (max(1, backend.requested or os.cpu_count() or 1) + 1)
+        self.share = len(todo) // (backend.head.num_cpus + 1) if backend.head else 0
         """Chunks a helper may run while a local instance starts: one worker's share."""
         self.helper = WarmUpHelper(job)
         self._give_job()

@@ -37,8 +37,8 @@ class WarmUpHelper:
         assert not self.busy
         if self.worker is None:
             self.worker = start_worker(mp.get_context(start_method()), self.job)
-        self.worker.chunk, self.since = i, time.monotonic()
-        self.worker.conn.send((i, self.job.chunks[i]))
+        self.since = time.monotonic()
+        self.worker.send(i, self.job)
 
     def result(self, timeout: float, limit: float) -> tuple[int, Result | str] | None:
         """(chunk, its result) when it finished within ``timeout`` s, (chunk, why it failed)
