@@ -1,12 +1,27 @@
-"""Shared fixtures: simulators on free loopback ports."""
+"""Shared fixtures: simulators on free loopback ports, and a description cache of each test
+module's own."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 from usar_arm.sim.server import SimOptions, SimServer
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _own_description_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """Every test module starts from an empty description cache (``USAR_ARM_CACHE``), so that
+    no result depends on what the machine's cache holds (an arm calibrated there comes
+    calibrated to every ``Arm.connect``), nor on the modules run before it; a test that needs
+    another cache still sets its own."""
+    path = tmp_path_factory.mktemp("usar-arm-cache")
+    patch = pytest.MonkeyPatch()
+    patch.setenv("USAR_ARM_CACHE", str(path))
+    yield path
+    patch.undo()
 
 
 @pytest.fixture(scope="module")

@@ -12,13 +12,14 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "usar_arm"
 
 # Layer of each module (the first path component below usar_arm, or the module itself).
-UTILITIES = {"errors", "spatial", "yamlio", "fileio", "version"}
+UTILITIES = {"errors", "spatial", "yamlio", "fileio", "version", "precision"}
 ALLOWED: dict[str, set[str]] = {
     "errors": set(),
     "spatial": set(),
     "yamlio": {"errors"},
     "fileio": set(),
     "version": set(),
+    "precision": set(),
     "model": {"spatial"},
     "usarsim": {"errors"},
     "sim": {"usarsim", "model"} | UTILITIES,

@@ -29,6 +29,7 @@ from usar_arm.fileio import write_tree_atomic
 from usar_arm.model import KinematicChain
 from usar_arm.planning.acm import AcmResult, compute_acm
 from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.precision import with_precision
 from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
@@ -108,7 +109,8 @@ class Description:
         name = self.chain.name
         return {f"{name}.urdf": self.urdf, f"{name}.srdf": self.srdf,
                 f"{name}.joint_limits.yaml": self.joint_limits,
-                f"{name}.discovery.json": json.dumps(self.discovery, indent=2) + "\n"}
+                f"{name}.discovery.json":
+                    json.dumps(with_precision(self.discovery), indent=2) + "\n"}
 
 
 def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Description:

@@ -38,8 +38,11 @@ def test_a_ptp_motion_is_tracked_and_settles_on_its_goal(arm: Arm) -> None:
     assert report.tip is not None
     tip = report.tip.as_json()
     assert tip["tip_source"].startswith("GroundTruth sensor")
-    # Without correction the UDK-learnt model is off by about a millimetre at the tool.
-    assert tip["true_tip_error_m"] < 2.5e-3 and tip["true_tip_error_rad"] < 2e-3
+    # As learnt (the module's description cache is empty, so nothing is calibrated) and
+    # without correction, the UDK-learnt model is off at the tool by what its printed precision
+    # leaves: measured 2.30-2.42 mm and 0.17-0.30 mrad at this goal over repeated runs (3.1 mm at
+    # worst over the benchmark's goals, bench/results/execution.json).
+    assert tip["true_tip_error_m"] < 3.5e-3 and tip["true_tip_error_rad"] < 0.6e-3
     keys = report.as_json()
     assert {"final_joint_error_rad", "max_tracking_error_rad", "tip_error_m", "tip_error_rad",
             "rate_hz", "jitter_p99_ms"} <= set(keys)

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -209,3 +211,41 @@ def test_semantic_checks_catch_what_check_urdf_does_not() -> None:
     problems = "\n".join(semantic_problems(grey))
     assert "link base_link: visible geometry needs a <material>" in problems
     assert "'flange' (flange) must not carry geometry" in problems
+
+
+KERNEL_SETS = ("Sandybridge", "Haswell", "Prescott", "Zen", "SkylakeX")
+"""OpenBLAS kernel sets (OPENBLAS_CORETYPE) that stand for other CPUs: before the numbers of
+discovery.json were written with the precision they mean, each of the first three regenerated
+the calibrated KR60's fitted parameters differently in their 11th-12th significant digit."""
+
+
+def _assert_regenerated(robot: str, coretype: str, tmp_path: Path) -> None:
+    """`usar-arm urdf --readings` in a fresh process under the kernel set ``coretype`` writes
+    robots/generated's files byte for byte."""
+    out = tmp_path / coretype
+    env = {**os.environ, "OPENBLAS_CORETYPE": coretype,
+           "USAR_ARM_CACHE": str(tmp_path / f"cache-{coretype}")}
+    subprocess.run([sys.executable, "-m", "usar_arm", "urdf", "--robot", robot, "--readings",
+                    str(CALIBRATED / f"{robot}.readings.csv"), "--out-dir", str(out), "-q"],
+                   env=env, check=True, capture_output=True, timeout=300)
+    for name in sorted(p.name for p in out.iterdir()):
+        assert (out / name).read_bytes() == (CALIBRATED / name).read_bytes(), \
+            f"{name} differs from robots/generated/{name} with OPENBLAS_CORETYPE={coretype}"
+
+
+@pytest.mark.parametrize(("robot", "coretype"), [("KR60", "Sandybridge"),
+                                                  ("Fanuc_M16iB20", "Haswell")])
+def test_the_calibrated_description_is_the_same_with_another_cpus_blas_kernels(
+        robot: str, coretype: str, tmp_path: Path) -> None:
+    """What `usar-arm urdf --readings` writes does not depend on the CPU: the golden files
+    were written on one machine, and another CPU's BLAS kernels (stood for here by an OpenBLAS
+    kernel set) regenerate them byte for byte."""
+    _assert_regenerated(robot, coretype, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", ["KR60", "Fanuc_M16iB20"])
+@pytest.mark.parametrize("coretype", KERNEL_SETS)
+def test_every_kernel_set_regenerates_the_calibrated_descriptions(
+        robot: str, coretype: str, tmp_path: Path) -> None:
+    _assert_regenerated(robot, coretype, tmp_path)

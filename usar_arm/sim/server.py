@@ -77,12 +77,13 @@ class SimOptions:
 @dataclass(frozen=True)
 class ClientInfo:
     """A connected client: the server's key, its address, whether it has spawned a robot,
-    and how many bytes of replies wait in its socket's buffer."""
+    how many bytes of replies wait in its socket's buffer, and how many bytes it has sent."""
 
     key: str
     peer: str
     has_robot: bool
     queued_bytes: int
+    received_bytes: int = 0
 
 
 class SimServer:
@@ -229,7 +230,8 @@ class SimServer:
                 if session is None:
                     continue
                 queued = transport.get_write_buffer_size() if transport is not None else 0
-                out.append(ClientInfo(key, session.peer, session.robot is not None, queued))
+                out.append(ClientInfo(key, session.peer, session.robot is not None, queued,
+                                      session.rejections.bytes_in))
             return out
 
     def truth(self, peer_port: int) -> Truth | None:
