@@ -34,9 +34,9 @@ from common import Context, peerio
 from judge_reading import JudgedRobot
 from verify import Kinematics
 
-from usar_arm.calibration import calibrate_description
-from usar_arm.description import DescribeOptions, write_description
-from usar_arm.embedded import describe
+from usar_arm.arm.tour_calibration import calibrate_description
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions, write_description
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.truth import tool0_by_spec
 

@@ -29,7 +29,7 @@ from scenes import from_json as scene_from_json
 from tesseract_config import with_tesseract
 from verify import Judge
 
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 
 BATCH = 100
 """Configurations per ``in_collision_many`` call (an edge of ~1 rad at 0.01 rad steps)."""

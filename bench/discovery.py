@@ -1,6 +1,6 @@
-"""Discovery + URDF stage: how long ``usar_arm.embedded.describe`` takes to learn an arm from the
-embedded simulator over TCP and build its validated description (URDF, SRDF, joint limits,
-collision matrix from 10,000 samples), and how accurate that description is against the
+"""Discovery + URDF stage: how long ``usar_arm.description.embedded.describe`` takes to learn an
+arm from the embedded simulator over TCP and build its validated description (URDF, SRDF, joint
+limits, collision matrix from 10,000 samples), and how accurate that description is against the
 simulator's own model. No peer does this; our figures only.
 
 As a solver (its own process)::
@@ -24,10 +24,10 @@ from typing import Any
 import common
 from common import Context, peerio
 
-from usar_arm.description import DescribeOptions, write_description
-from usar_arm.embedded import describe_discovered, run_discovery
+from usar_arm.description.cache import robot_from_description
+from usar_arm.description.embedded import describe_discovered, run_discovery
+from usar_arm.description.pipeline import DescribeOptions, write_description
 from usar_arm.planning.acm import compute_acm
-from usar_arm.robot import robot_from_description
 
 REPEATS = {("quick", "udk"): 1, ("full", "udk"): 3, ("full", "full"): 1}
 """Runs per (mode, wire precision): the full-precision run is for its accuracy figures."""

@@ -1,4 +1,4 @@
-"""Execution stage: the pick-and-place cycle of ``usar_arm.cycle`` on the embedded simulator
+"""Execution stage: the pick-and-place cycle of ``usar_arm.arm.cycle`` on the embedded simulator
 (KR60, ``table`` scene), planned, streamed at 100 Hz and measured move by move. No peer runs on
 USARSim; our figures only.
 
@@ -25,9 +25,9 @@ import common
 from common import Context, peerio
 
 from usar_arm import Arm
-from usar_arm.calibration import ensure_calibrated
-from usar_arm.cycle import pick_and_place, run_cycle
-from usar_arm.description import DescribeOptions
+from usar_arm.arm.cycle import pick_and_place, run_cycle
+from usar_arm.arm.tour_calibration import ensure_calibrated
+from usar_arm.description.pipeline import DescribeOptions
 
 VARIANTS = {"quick": [("udk", True, 1, False)],
             "full": [("udk", False, 7, False), ("udk", True, 7, False), ("full", False, 7, False),

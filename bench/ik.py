@@ -28,8 +28,8 @@ import verify
 from common import Context, peerio
 from judge_reading import JudgedRobot
 
-from usar_arm.errors import IKError
-from usar_arm.robot import robot_from_files
+from usar_arm.core.errors import IKError
+from usar_arm.planning.robot import robot_from_files
 
 BATCH = 1000
 """Poses per ``solve_batch`` call (at most; the per-pose cost levels off near 1,000)."""

@@ -40,10 +40,10 @@ from tesseract_config import with_tesseract
 
 from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits
-from usar_arm.errors import UsarArmError
+from usar_arm.core.errors import UsarArmError
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import PtpPlan, plan_to_joints
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 
 CASES = (("KR60", "plan_KR60"), ("Fanuc_M16iB20", "plan_Fanuc_M16iB20"),
          ("boxes", "plan_KR60_boxes"))

@@ -23,11 +23,11 @@ from typing import Any
 import numpy as np
 from scenes import from_json as scene_from_json
 
-from usar_arm.errors import UsarArmError
+from usar_arm.core.errors import UsarArmError
 from usar_arm.planning import bounds, collision
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import plan_to_joints
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 
 STAGES = ("state checks", "edge walk (compiled)", "edge exact (python-fcl)")
 

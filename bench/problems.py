@@ -40,11 +40,11 @@ from judge_reading import JudgedRobot, read_scene
 from verify import Judge, densify
 
 from usar_arm.control.trajectory import MotionLimits
+from usar_arm.core.spatial import Array, quat_from_matrix
 from usar_arm.planning.ompl_adapter import OmplOptions, edge_configurations
 from usar_arm.planning.ptp import plan_to_joints
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene import Scene
-from usar_arm.robot import Robot, robot_from_files
-from usar_arm.spatial import Array, quat_from_matrix
 
 SEED = 20_260_421
 KR60 = "KR60"
@@ -89,8 +89,8 @@ def robot_paths(name: str, out: Path) -> tuple[Path, Path]:
     else:
         d = out / "robots" / name
         if not (d / f"{name}.urdf").is_file():
-            from usar_arm.description import DescribeOptions, write_description
-            from usar_arm.embedded import describe
+            from usar_arm.description.embedded import describe
+            from usar_arm.description.pipeline import DescribeOptions, write_description
 
             common.log(f"describing {name} from the embedded simulator into {d}")
             write_description(describe(DescribeOptions(robot=name, accuracy_samples=0)), d)

@@ -12,9 +12,9 @@ from typing import Any
 import common
 import numpy as np
 
+from usar_arm.core.spatial import Array, matrix_from_quat, quat_from_matrix
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.spatial import Array, matrix_from_quat, quat_from_matrix
 
 BOX_COUNTS = (1, 10, 100, 1000)
 BOX_EDGE = 0.1

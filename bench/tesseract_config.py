@@ -8,8 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.robot import robot_from_files
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.planning.robot import robot_from_files
 from usar_arm.urdf.tesseract import tesseract_config
 
 

@@ -31,7 +31,7 @@ from scenes import from_json
 
 from usar_arm.control.timing import DEFAULT_RATE_HZ, blended, stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 
 
 def solver_main(argv: list[str] | None = None) -> int:

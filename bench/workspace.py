@@ -140,9 +140,9 @@ def judge_map(path: Path, witnesses: int, seed: int = 3) -> dict[str, Any]:
 def cycle_main(argv: list[str]) -> int:
     """Solver: the best base of a placement record, verified by a cycle on the simulator."""
     from usar_arm import Arm
-    from usar_arm.cycle import run_cycle, through
+    from usar_arm.arm.cycle import run_cycle, through
+    from usar_arm.core.spatial import invert
     from usar_arm.planning.scene_file import load_scene
-    from usar_arm.spatial import invert
     from usar_arm.workspace.placement import moved
     from usar_arm.workspace.targets import load_targets
 

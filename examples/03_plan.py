@@ -10,7 +10,7 @@ from tempfile import mkdtemp
 import numpy as np
 
 from usar_arm import Arm
-from usar_arm.spatial import rpy_to_matrix, transform
+from usar_arm.core.spatial import rpy_to_matrix, transform
 
 HERE = Path(__file__).resolve().parent
 arm = Arm.from_files(HERE.parent / "robots" / "generated" / "KR60.urdf")

@@ -7,8 +7,8 @@ The first execution learns each drive's response (a 2 s swing) for feedforward.
 import numpy as np
 
 from usar_arm import Arm
-from usar_arm.errors import ExecutionAbortedError
-from usar_arm.spatial import rpy_to_matrix, transform
+from usar_arm.core.errors import ExecutionAbortedError
+from usar_arm.core.spatial import rpy_to_matrix, transform
 
 target = transform(rpy_to_matrix((0.0, np.pi, 0.0)), (1.3, 0.2, 1.2))
 

@@ -7,7 +7,7 @@ from pathlib import Path
 from tempfile import mkdtemp
 
 from usar_arm import Arm
-from usar_arm.cycle import pick_and_place, run_cycle
+from usar_arm.arm.cycle import pick_and_place, run_cycle
 from usar_arm.export.bag import write_bag
 from usar_arm.export.render import render_arm, tool_path
 from usar_arm.planning.scene_file import load_scene

@@ -18,7 +18,7 @@ from usar_arm.calibrate.measurement_writer import write_measurements
 from usar_arm.calibrate.measurements import Measurement, MeasurementSet
 from usar_arm.calibrate.observability import select_poses
 from usar_arm.cli.main import main
-from usar_arm.spatial import matrix_to_rpy
+from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.usarsim.numbers import truncated_midpoint
 
 POSES = 25

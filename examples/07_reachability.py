@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm import Arm, jobs
+from usar_arm import Arm
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.workspace import PlaceSettings, ReachSettings, load_targets
+from usar_arm.workspace import PlaceSettings, ReachSettings, jobs, load_targets
 
 HERE = Path(__file__).resolve().parent
 

@@ -16,7 +16,7 @@ import atheris
 from _harness import run
 
 with atheris.instrument_imports(include=["usar_arm"]):
-    from usar_arm.errors import ProtocolError
+    from usar_arm.core.errors import ProtocolError
     from usar_arm.usarsim import messages as m
     from usar_arm.usarsim.codec import format_message, parse_line
     from usar_arm.usarsim.numbers import FULL, UDK

@@ -1,5 +1,5 @@
 """Fuzz the ``--velocity-limits`` file reader (usar_arm.discover.limits.load_limits_file, with
-usar_arm.yamlio and PyYAML), for a 6-joint arm named joint_a1..joint_a6.
+usar_arm.core.yamlio and PyYAML), for a 6-joint arm named joint_a1..joint_a6.
 
 Contract: any file content gives one dict of positive finite limits per joint, or raises
 InvalidInputError (FileFormatError naming the file); nothing else escapes.
@@ -15,8 +15,8 @@ import atheris
 from _harness import run, scratch_file
 
 with atheris.instrument_imports(include=["usar_arm", "yaml"]):
+    from usar_arm.core.errors import InvalidInputError
     from usar_arm.discover.limits import load_limits_file
-    from usar_arm.errors import InvalidInputError
 
 FILE = scratch_file("limits.yaml")
 NAMES = [f"joint_a{i}" for i in range(1, 7)]

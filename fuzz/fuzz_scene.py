@@ -1,4 +1,4 @@
-"""Fuzz the scene loader (usar_arm.planning.scene_file, with usar_arm.yamlio and PyYAML).
+"""Fuzz the scene loader (usar_arm.planning.scene_file, with usar_arm.core.yamlio and PyYAML).
 
 Contract: any file content given to ``load_scene`` gives a Scene or raises InvalidInputError
 (FileFormatError naming the file, and the line and field where known); nothing else escapes.
@@ -18,7 +18,7 @@ import atheris
 from _harness import run, scratch_file
 
 with atheris.instrument_imports(include=["usar_arm", "yaml"]):
-    from usar_arm.errors import InvalidInputError
+    from usar_arm.core.errors import InvalidInputError
     from usar_arm.planning.scene import Scene
     from usar_arm.planning.scene_file import load_scene
 

@@ -17,7 +17,7 @@ from _harness import run, scratch_file
 
 with atheris.instrument_imports(include=["usar_arm"]):
     from usar_arm.control.trajectory import Trajectory, load_with_executed
-    from usar_arm.errors import InvalidInputError
+    from usar_arm.core.errors import InvalidInputError
 
 FILE = scratch_file("trajectory.json")
 

@@ -4,6 +4,7 @@ every module's imports."""
 from __future__ import annotations
 
 import ast
+import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -11,32 +12,27 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "usar_arm"
 
-# Layer of each module (the first path component below usar_arm, or the module itself).
-UTILITIES = {"errors", "spatial", "yamlio", "fileio", "version", "precision"}
+# Layer of each module: the first path component below usar_arm (docs/architecture.md draws
+# the same table). A layer may import itself and the layers named here, nothing else.
+LOWER = {"usarsim", "sim", "discover", "urdf", "planning", "control", "export", "calibrate",
+         "workspace", "description"}
 ALLOWED: dict[str, set[str]] = {
-    "errors": set(),
-    "spatial": set(),
-    "yamlio": {"errors"},
-    "fileio": set(),
-    "version": set(),
-    "precision": set(),
-    "model": {"spatial"},
-    "usarsim": {"errors"},
-    "sim": {"usarsim", "model"} | UTILITIES,
-    "discover": {"usarsim", "model"} | UTILITIES,
-    "urdf": {"model"} | UTILITIES,
-    "planning": {"urdf", "model"} | UTILITIES,
-    "control": {"usarsim", "planning", "model"} | UTILITIES,
-    "export": {"control", "planning", "urdf", "model"} | UTILITIES,
-    "calibrate": {"discover", "planning", "control", "urdf", "model"} | UTILITIES,
-    "workspace": {"planning", "model"} | UTILITIES,
+    "core": set(),
+    "usarsim": {"core"},
+    "sim": {"usarsim", "core"},
+    "discover": {"usarsim", "core"},
+    "urdf": {"core"},
+    "planning": {"urdf", "core"},
+    "control": {"usarsim", "planning", "core"},
+    "export": {"control", "planning", "urdf", "core"},
+    "calibrate": {"discover", "planning", "control", "urdf", "core"},
+    "workspace": {"planning", "control", "core"},
+    "description": {"discover", "urdf", "planning", "sim", "usarsim", "core"},
+    "arm": LOWER | {"core"},
 }
-# orchestration
-FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "calibration",
-           "jobs", "batch", "calibration_tour",
-           "__init__",
-           "__main__"}
-THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
+# The command line and the package's entry points string every layer together.
+ENTRY_POINTS = {"cli", "__init__", "__main__"}
+THIRD_PARTY_LIMITS = {"numpy", "yaml"}  # core: numpy, and PyYAML in yamlio
 HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1}
 
 
@@ -69,7 +65,7 @@ def _layer(module: str) -> str:
 @pytest.mark.parametrize(("module", "path"), _modules(), ids=lambda v: str(v))
 def test_internal_imports_follow_the_dependency_arrows(module: str, path: Path) -> None:
     layer = _layer(module)
-    if layer in FACADES:
+    if layer in ENTRY_POINTS:
         return
     assert layer in ALLOWED, f"{module}: layer '{layer}' has no dependency rule in this test"
     for name in _imports(path):
@@ -82,12 +78,10 @@ def test_internal_imports_follow_the_dependency_arrows(module: str, path: Path) 
             f"{module} imports {name}: {layer} may not depend on {target}"
 
 
-@pytest.mark.parametrize("module", ["errors", "spatial", "model"])
-def test_the_core_modules_use_numpy_only(module: str) -> None:
-    third = {n.split(".")[0] for n in _imports(PACKAGE / f"{module}.py")
-             if not n.startswith("usar_arm")}
-    stdlib = {"__future__", "collections", "dataclasses", "enum", "typing", "math"}
-    assert third - stdlib <= THIRD_PARTY_LIMITS | {"numpy"}
+@pytest.mark.parametrize("path", sorted((PACKAGE / "core").glob("*.py")), ids=lambda p: p.stem)
+def test_the_core_modules_use_numpy_and_the_standard_library_only(path: Path) -> None:
+    third = {n.split(".")[0] for n in _imports(path) if not n.startswith("usar_arm")}
+    assert third - set(sys.stdlib_module_names) <= THIRD_PARTY_LIMITS
 
 
 def test_each_heavy_library_is_imported_by_exactly_one_module() -> None:
@@ -101,10 +95,18 @@ def test_each_heavy_library_is_imported_by_exactly_one_module() -> None:
         assert len(set(users[lib])) == 1, f"{lib} is imported by {sorted(set(users[lib]))}"
 
 
-def test_discovery_never_imports_the_simulator() -> None:
-    for module, path in _modules():
-        if _layer(module) == "discover":
-            assert not any(n.startswith("usar_arm.sim") for n in _imports(path))
+def test_only_the_description_layer_starts_the_simulator_to_learn_an_arm() -> None:
+    """The embedded simulator is a sink: besides its own package, only
+    ``description.embedded`` (learning an arm) and the ``sim`` command import it."""
+    users = {module for module, path in _modules() if _layer(module) != "sim"
+             for name in _imports(path) if name.startswith("usar_arm.sim")}
+    assert users == {"description.embedded", "description.accuracy", "cli.sim_cmd"}
+
+
+def test_every_module_belongs_to_a_layer_with_a_rule() -> None:
+    """No loose module at the package's root besides its entry points."""
+    loose = {m for m, _ in _modules() if _layer(m) not in ALLOWED and _layer(m) not in ENTRY_POINTS}
+    assert loose == set()
 
 
 OFFLINE_PLAN = """

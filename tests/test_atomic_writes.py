@@ -59,22 +59,22 @@ def _tree_content(version: int) -> dict[str, str]:
 
 
 def prepare_write_atomic(folder: Path) -> Callable[[int, Path], None]:
-    from usar_arm.fileio import write_atomic
+    from usar_arm.core.fileio import write_atomic
 
     docs = [json.dumps({"version": v, "data": list(range(150_000 * (v + 1)))}) for v in (0, 1)]
     return lambda v, target: write_atomic(target, docs[v])
 
 
 def prepare_write_tree_atomic(folder: Path) -> Callable[[int, Path], None]:
-    from usar_arm.fileio import write_tree_atomic
+    from usar_arm.core.fileio import write_tree_atomic
 
     trees = [_tree_content(v) for v in (0, 1)]
     return lambda v, target: write_tree_atomic(target, trees[v]) and None
 
 
 def _kr60_description() -> Any:
-    from usar_arm.description import DescribeOptions
-    from usar_arm.embedded import describe
+    from usar_arm.description.embedded import describe
+    from usar_arm.description.pipeline import DescribeOptions
 
     return describe(DescribeOptions(accuracy_samples=0))
 
@@ -82,7 +82,7 @@ def _kr60_description() -> Any:
 def prepare_description(folder: Path) -> Callable[[int, Path], None]:
     from dataclasses import replace
 
-    from usar_arm.description import write_description
+    from usar_arm.description.pipeline import write_description
 
     a = _kr60_description()
     b = replace(a, urdf=a.urdf.replace("</robot>", "  <!-- version 2 -->\n</robot>"),
@@ -94,8 +94,8 @@ def prepare_description(folder: Path) -> Callable[[int, Path], None]:
 
 
 def _plans() -> tuple[Any, list[Any]]:
-    from usar_arm.motion import plan_motion
-    from usar_arm.robot import robot_from_files
+    from usar_arm.control.motion import plan_motion
+    from usar_arm.planning.robot import robot_from_files
 
     robot = robot_from_files(Path(__file__).resolve().parents[1] / "robots/generated/KR60.urdf")
     world = robot.collision_world()

@@ -7,7 +7,7 @@ import math
 from hypothesis import given
 from hypothesis import strategies as st
 
-from usar_arm.precision import DECIMALS, meaningful, with_precision
+from usar_arm.core.precision import DECIMALS, meaningful, with_precision
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
 

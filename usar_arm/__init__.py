@@ -2,26 +2,26 @@
 
 The library's front door is :class:`usar_arm.Arm` (see ``examples/``). Importing it loads the
 planning stack but never the embedded simulator (MuJoCo, the TCP server): that is started only
-by ``Arm.connect()`` without a host, through :mod:`usar_arm.embedded`. ``Arm`` is imported on
-first use, so a process that needs one layer (a workspace worker, ``usar-arm --help``) does
-not pay for the others.
+by ``Arm.connect()`` without a host, through :mod:`usar_arm.description.embedded`. ``Arm`` is
+imported on first use, so a process that needs one layer (a workspace worker, ``usar-arm
+--help``) does not pay for the others.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from usar_arm.version import __version__
+from usar_arm.core.version import __version__
 
 if TYPE_CHECKING:
-    from usar_arm.arm import Arm
+    from usar_arm.arm.facade import Arm
 
 __all__ = ["Arm", "__version__"]
 
 
 def __getattr__(name: str) -> Any:
     if name == "Arm":
-        from usar_arm.arm import Arm
+        from usar_arm.arm.facade import Arm
 
         return Arm
     raise AttributeError(f"module 'usar_arm' has no attribute {name!r}")

@@ -99,7 +99,7 @@ def test_the_judge_agrees_with_usar_arm_on_random_configurations(scene: str,
                                                                  tmp_path: Path) -> None:
     import scenes
 
-    from usar_arm.robot import robot_from_files
+    from usar_arm.planning.robot import robot_from_files
 
     urdf, srdf = ROOT / "robots/generated/KR60.urdf", ROOT / "robots/generated/KR60.srdf"
     robot = robot_from_files(urdf, srdf)

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from usar_arm.calibrate.measurements import Measurement
+from usar_arm.core.spatial import Array, matrix_to_rpy
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import Array, matrix_to_rpy
 
 KR60 = (Path(__file__).resolve().parents[2] / "robots/generated/KR60.urdf").read_text()
 

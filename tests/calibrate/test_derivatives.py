@@ -12,8 +12,8 @@ from tests.calibrate.test_identify import _on_a_rail
 from usar_arm.calibrate import derivatives
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.core.spatial import FLIP_X, transform, transform_from_xyz_rpy
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import FLIP_X, transform, transform_from_xyz_rpy
 
 BASE = transform(FLIP_X) @ transform_from_xyz_rpy([0.3, 0.2, 0.01], [0.01, -0.02, 0.4])
 

@@ -10,15 +10,20 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
+from usar_arm.arm.tour_calibration import CalibrationSettings, cached_calibration
 from usar_arm.calibrate.bounds import Bounds
 from usar_arm.calibrate.identify import CalibrationOptions
-from usar_arm.calibration import CalibrationSettings, cached_calibration
 from usar_arm.cli.main import main
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import run_discovery
-from usar_arm.errors import EXIT_OK
-from usar_arm.robot import cache_folder, calibrated_folder, latest_calibrated, store_calibrated
+from usar_arm.core.errors import EXIT_OK
+from usar_arm.description.cache import (
+    cache_folder,
+    calibrated_folder,
+    latest_calibrated,
+    store_calibrated,
+)
+from usar_arm.description.embedded import run_discovery
+from usar_arm.description.pipeline import DescribeOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 GOLDEN = ROOT / "robots" / "generated"
@@ -59,7 +64,7 @@ def test_a_description_made_by_an_older_generator_is_not_taken_from_the_cache(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The entry's key covers the generator's version: a description cached by a generator
     that wrote other files is made again, not served."""
-    import usar_arm.robot as robot_module
+    import usar_arm.description.cache as robot_module
 
     options = DescribeOptions(robot="KR60")
     record = run_discovery(options)
@@ -95,7 +100,7 @@ def test_the_second_urdf_takes_the_cached_calibration_without_touring(
     def no_tour(*args: object, **kwargs: object) -> None:
         raise AssertionError("toured although the cache holds the calibration")
 
-    monkeypatch.setattr("usar_arm.calibration.collect", no_tour)
+    monkeypatch.setattr("usar_arm.arm.tour_calibration.collect", no_tour)
     options = DescribeOptions()
     entry = cache_folder(run_discovery(options), options)
     _store(entry, CalibrationSettings(), "2024-01-01T00:00:00+00:00")

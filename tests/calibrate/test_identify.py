@@ -12,9 +12,9 @@ import pytest
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
 from usar_arm.calibrate.identify import AUTO_MODEL, CalibrationOptions, identify
 from usar_arm.calibrate.measurements import Measurement
-from usar_arm.errors import CalibrationError
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import FLIP_X, transform, transform_from_xyz_rpy
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import FLIP_X, transform, transform_from_xyz_rpy
 
 NOMINAL = KinematicModel(KR60)
 TRACKER_BASE = transform_from_xyz_rpy([0.002, -0.001, 0.0015], [0.003, -0.002, 0.004])

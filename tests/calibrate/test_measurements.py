@@ -15,7 +15,7 @@ from usar_arm.calibrate.measurements import (
     MeasurementSet,
     read_measurements,
 )
-from usar_arm.errors import FileFormatError
+from usar_arm.core.errors import FileFormatError
 
 JOINTS = ("joint_a1", "joint_a2", "rail")
 PRISMATIC = (False, False, True)

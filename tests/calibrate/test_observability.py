@@ -12,8 +12,8 @@ from usar_arm.calibrate.observability import (
 )
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.solver import preference, select_identifiable
+from usar_arm.core.spatial import Array
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import Array
 
 FRAME = "KR60ArmTipTruth"
 NOMINAL = KinematicModel(KR60)

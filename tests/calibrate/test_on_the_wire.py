@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.arm import Arm
-from usar_arm.calibration import FLIP, _fold_base, _usarsim_axes
-from usar_arm.calibration_tour import Recorder, drive_caps, tour_order
+from usar_arm.arm.facade import Arm
+from usar_arm.arm.tour import Recorder, drive_caps, tour_order
+from usar_arm.arm.tour_calibration import FLIP, _fold_base, _usarsim_axes
 from usar_arm.cli.main import main
 from usar_arm.control.drive import DriveModel
-from usar_arm.embedded import accuracy_report
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.description.accuracy import accuracy_report
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.urdf.reader import parse_urdf
 from usar_arm.usarsim.codec import parse_line
@@ -110,7 +110,7 @@ def test_the_base_correction_moves_the_whole_arm_and_nothing_else() -> None:
 def test_too_few_poses_is_refused_before_the_arm_moves() -> None:
     with Arm.connect("KR60") as arm:
         before = arm.joints()
-        from usar_arm.calibration import calibrate_arm
+        from usar_arm.arm.tour_calibration import calibrate_arm
 
         with pytest.raises(InvalidInputError, match="at least 3 poses"):
             calibrate_arm(arm, poses=2)

@@ -8,8 +8,8 @@ from hypothesis import strategies as st
 
 from tests.calibrate.synthetic import KR60, random_q
 from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.core.spatial import FLIP_X, transform
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import FLIP_X, transform
 
 MODEL = ErrorModel.from_urdf(KR60, "tool0")
 NOMINAL = KinematicModel(KR60)

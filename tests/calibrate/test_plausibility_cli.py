@@ -16,9 +16,9 @@ import pytest
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK
+from usar_arm.core.spatial import transform_from_xyz_rpy
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import transform_from_xyz_rpy
 
 NOMINAL = KinematicModel(KR60)
 BASE = transform_from_xyz_rpy([0.002, -0.001, 0.0015], [0.003, -0.002, 0.004])

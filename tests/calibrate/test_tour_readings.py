@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from usar_arm.arm.tour_calibration import fit_tour
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.tour_readings import TourReadings, read_tour
-from usar_arm.calibration import fit_tour
-from usar_arm.errors import CalibrationError, FileFormatError
+from usar_arm.core.errors import CalibrationError, FileFormatError
 from usar_arm.urdf.reader import parse_urdf
 
 ROOT = Path(__file__).resolve().parents[2]

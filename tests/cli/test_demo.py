@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK
 
 MOVES = ["approach", "pick", "lift", "transfer", "place", "retreat", "home"]
 

@@ -13,7 +13,7 @@ from matplotlib.image import imread
 
 from usar_arm.cli.main import main
 from usar_arm.control.trajectory import load_with_executed
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK
 
 REPO = Path(__file__).resolve().parents[2]
 URDF = str(REPO / "robots" / "generated" / "KR60.urdf")

@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO
 
 

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm.calibration import CalibrationSettings
+from usar_arm.arm.tour_calibration import CalibrationSettings
 from usar_arm.cli.main import main
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import run_discovery
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
-from usar_arm.robot import cache_folder, calibrated_folder, store_calibrated
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_USAGE
+from usar_arm.description.cache import cache_folder, calibrated_folder, store_calibrated
+from usar_arm.description.embedded import run_discovery
+from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.urdf.tesseract_package import package_problem, suggest_package_name
 
 GENERATED = Path(__file__).resolve().parents[2] / "robots" / "generated"

@@ -15,7 +15,7 @@ import pytest
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.tour_readings import read_tour
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.urdf.reader import parse_urdf
@@ -74,7 +74,7 @@ def test_a_failed_calibration_writes_the_as_learnt_description_and_says_why(
     def contradicting_tour(*args: Any, **kwargs: Any) -> list[Measurement]:
         return _moved_tour_readings()
 
-    monkeypatch.setattr("usar_arm.calibration.collect", contradicting_tour)
+    monkeypatch.setattr("usar_arm.arm.tour_calibration.collect", contradicting_tour)
     out = tmp_path / "out"
     assert main(["urdf", "--robot", "KR60", "--out-dir", str(out), "--json"]) == EXIT_OK
     captured = capsys.readouterr()

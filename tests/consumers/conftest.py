@@ -10,8 +10,8 @@ from typing import Any
 
 import pytest
 
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene_file import BUILTIN
-from usar_arm.robot import Robot, robot_from_files
 from usar_arm.urdf.tesseract import TesseractConfig, tesseract_config
 
 ROOT = Path(__file__).resolve().parents[2]

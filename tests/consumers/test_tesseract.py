@@ -41,11 +41,11 @@ from tests.consumers.conftest import (
     configure,
     run_driver,
 )
-from usar_arm.errors import NoPathError
+from usar_arm.core.errors import NoPathError
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import plan_to_joints
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
 from usar_arm.urdf.tesseract import KDL_SOLVER, OPW_SOLVER, TesseractConfig
 
 SCENE_FILES = Path(__file__).resolve().parents[2] / "usar_arm" / "data" / "scenes"

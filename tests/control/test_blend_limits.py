@@ -18,7 +18,7 @@ import pytest
 from tests.planning.recheck import finite_difference_violations
 from usar_arm.control.timing import blended
 from usar_arm.control.trajectory import MotionLimits
-from usar_arm.robot import Robot, robot_from_files
+from usar_arm.planning.robot import Robot, robot_from_files
 
 ROOT = Path(__file__).resolve().parents[2]
 

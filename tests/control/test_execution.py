@@ -13,8 +13,8 @@ import pytest
 
 from usar_arm import Arm
 from usar_arm.control.executor import ExecutionOptions, Executor
-from usar_arm.errors import ExecutionAbortedError, InvalidInputError
-from usar_arm.spatial import rpy_to_matrix, transform
+from usar_arm.core.errors import ExecutionAbortedError, InvalidInputError
+from usar_arm.core.spatial import rpy_to_matrix, transform
 
 REPO = Path(__file__).resolve().parents[2]
 DOWN = rpy_to_matrix((0.0, np.pi, 0.0))

@@ -16,7 +16,7 @@ from usar_arm.control.tip_correction import (
     dither_pose,
     model_tolerance,
 )
-from usar_arm.spatial import log_so3, matrix_to_rpy, rpy_to_matrix, transform
+from usar_arm.core.spatial import log_so3, matrix_to_rpy, rpy_to_matrix, transform
 
 angles = st.floats(-3.0, 3.0)
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import accuracy_report, describe
+from usar_arm.description.accuracy import accuracy_report
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.sim.robot_spec import builtin_robots
 
 ROBOTS = ("KR60", "Fanuc_M16iB20")

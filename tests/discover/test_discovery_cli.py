@@ -13,10 +13,10 @@ import pytest
 
 from tests.discover.fake_usarsim import CONF, GEO, fake_usarsim
 from tests.usarsim.fake_server import FakeServer, read_line
-from usar_arm import errors
 from usar_arm.cli.main import main
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import describe
+from usar_arm.core import errors
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions
 
 
 def test_a_general_arm_with_a_rotated_mount_a_slide_and_a_tip(tmp_path: Path) -> None:

@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import describe
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions
 
 # (type, offset p, Direction (roll, pitch, yaw)) of the seven joints, copied from the spec.
 SPEC = [

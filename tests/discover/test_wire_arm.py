@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from usar_arm.core.errors import DescriptionError
 from usar_arm.discover.frames import accumulate, to_frame
 from usar_arm.discover.wire_arm import arm_from_replies, printed_resolution, serial_order
-from usar_arm.errors import DescriptionError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import parse_line
 

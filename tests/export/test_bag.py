@@ -17,12 +17,12 @@ from rosbags.interfaces import ConnectionExtRosbag2, QosDurability
 from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from usar_arm.control.motion import plan_motion
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.spatial import matrix_from_quat, transform
 from usar_arm.export.bag import BagSummary, ExecutedSamples, write_bag
-from usar_arm.motion import plan_motion
-from usar_arm.robot import Robot, robot_from_files
-from usar_arm.spatial import matrix_from_quat, transform
+from usar_arm.planning.robot import Robot, robot_from_files
 
 KR60_URDF = Path(__file__).resolve().parents[2] / "robots" / "generated" / "KR60.urdf"
 GOAL = np.array([0.5, -0.5, 0.5, 0.5, 0.5, 0.5])

@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from usar_arm.control.motion import MotionPlan, plan_motion
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
 from usar_arm.export.plot import jerk_samples, plot_trajectory
 from usar_arm.export.render import render_arm, tool_path
-from usar_arm.motion import MotionPlan, plan_motion
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene import Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot, robot_from_files
 
 KR60_URDF = Path(__file__).resolve().parents[2] / "robots" / "generated" / "KR60.urdf"
 HOME = np.zeros(6)

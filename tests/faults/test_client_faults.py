@@ -35,7 +35,7 @@ from tests.faults import faults as f
 from tests.faults.proxy import Fault, FaultProxy, Link, closed_port
 from tests.faults.runner import Run, run_cli
 from usar_arm.cli.main import main
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     EXIT_BAD_DESCRIPTION,
     EXIT_CONNECTION_LOST,
     EXIT_EXECUTION_ABORTED,

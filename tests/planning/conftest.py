@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import describe
-from usar_arm.robot import Robot, robot_from_description
+from usar_arm.description.cache import robot_from_description
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions
+from usar_arm.planning.robot import Robot
 
 
 @pytest.fixture(scope="session")

@@ -20,11 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from usar_arm.control.motion import MotionPlan
 from usar_arm.control.trajectory import LimitReport, check_limits
-from usar_arm.motion import MotionPlan
+from usar_arm.core.spatial import Array, rotation_distance
 from usar_arm.planning.collision import CollisionWorld
-from usar_arm.robot import Robot
-from usar_arm.spatial import Array, rotation_distance
+from usar_arm.planning.robot import Robot
 
 RATE_HZ = 1000.0
 LIMIT_TOLERANCE = 1e-6

@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from usar_arm.planning import bounds
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import BUILTIN, load_scene
-from usar_arm.robot import Robot
 
 CLEAR, CONTACT, UNDECIDED = bounds.CLEAR, bounds.CONTACT, bounds.UNDECIDED
 

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.errors import FileFormatError
+from usar_arm.core.errors import FileFormatError
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box, Mesh
 from usar_arm.planning.scene_file import BUILTIN, load_scene
-from usar_arm.robot import Robot
 
 SCENES = list(BUILTIN)
 

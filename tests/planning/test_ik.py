@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from usar_arm.errors import AllSolutionsInCollisionError, JointLimitError, UnreachableError
+from usar_arm.core.errors import AllSolutionsInCollisionError, JointLimitError, UnreachableError
+from usar_arm.core.spatial import rotation_distance, transform
 from usar_arm.planning.ik import IKOptions
 from usar_arm.planning.poe import PoeChain
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
-from usar_arm.spatial import rotation_distance, transform
 
 
 def _reached(robot: Robot, q: np.ndarray, target: np.ndarray, tol: float = 1e-5) -> bool:

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from usar_arm.planning import ik_kernel
 from usar_arm.planning.poe import PoeModel
-from usar_arm.robot import Robot
+from usar_arm.planning.robot import Robot
 
 
 @pytest.fixture(scope="module")

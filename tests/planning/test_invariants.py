@@ -28,7 +28,8 @@ import numpy as np
 import pytest
 
 from tests.planning.recheck import finite_difference_violations, recheck
-from usar_arm.errors import (
+from usar_arm.control.motion import MotionOptions, plan_motion
+from usar_arm.core.errors import (
     GoalInCollisionError,
     IKError,
     InvalidInputError,
@@ -38,12 +39,11 @@ from usar_arm.errors import (
     StartInCollisionError,
     TimingError,
 )
-from usar_arm.motion import MotionOptions, plan_motion
+from usar_arm.core.spatial import Array, exp_so3, transform
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ompl_adapter import OmplOptions, edge_configurations
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import BUILTIN, load_scene
-from usar_arm.robot import Robot
-from usar_arm.spatial import Array, exp_so3, transform
 
 TYPED: tuple[type[Exception], ...] = (
     InvalidInputError, OutOfLimitsError, StartInCollisionError, GoalInCollisionError, IKError,

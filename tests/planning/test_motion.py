@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from tests.planning.recheck import assert_rechecked
+from usar_arm.control.motion import MotionOptions, plan_motion
 from usar_arm.control.timing import blended, stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     FileFormatError,
     GoalInCollisionError,
     IKError,
@@ -24,12 +25,11 @@ from usar_arm.errors import (
     OutOfLimitsError,
     StartInCollisionError,
 )
-from usar_arm.motion import MotionOptions, plan_motion
+from usar_arm.core.spatial import transform
 from usar_arm.planning.ompl_adapter import OmplOptions, edge_configurations
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
-from usar_arm.spatial import transform
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # tool0 pointing down
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from tests.planning.test_bounds import _agree, _pose
 from usar_arm.planning import scene_tree
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
-from usar_arm.robot import Robot
 
 
 def _crowd(rng: np.random.Generator, count: int) -> Scene:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.sim.connection import MAX_WRITE_BUFFER, fast_act
 from usar_arm.sim.robot_session import LOG_FIRST
 from usar_arm.sim.server import SimServer

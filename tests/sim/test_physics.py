@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from usar_arm.errors import ConnectionLostError
+from usar_arm.core.errors import ConnectionLostError
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import builtin_robots, joint_frames, tip_pose
 from usar_arm.sim.server import MAX_CONNECTIONS, SimOptions, SimServer

@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from usar_arm.errors import UnknownComponentError, UnknownRobotError
+from usar_arm.core.errors import UnknownComponentError, UnknownRobotError
 from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.sim.truth import tool0_by_spec

@@ -12,10 +12,18 @@ import pytest
 import yaml
 
 from usar_arm.cli.main import main
-from usar_arm.description import DescribeOptions, Description, write_description
-from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK
-from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
+from usar_arm.core.errors import EXIT_OK
+from usar_arm.core.model import (
+    Cylinder,
+    Joint,
+    JointLimits,
+    JointType,
+    KinematicChain,
+    Link,
+    Origin,
+)
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions, Description, write_description
 from usar_arm.planning.acm import adjacent_pairs
 from usar_arm.urdf.moveit import moveit_files
 from usar_arm.urdf.validate import find_check_urdf, semantic_problems

@@ -14,11 +14,11 @@ import pytest
 import yaml
 from ompl import geometric as og
 
-from usar_arm.description import DescribeOptions, Description
-from usar_arm.embedded import describe
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.description.cache import robot_from_description
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions, Description
 from usar_arm.planning.ompl_adapter import PROJECTED
-from usar_arm.robot import robot_from_description
 from usar_arm.urdf.moveit import moveit_files
 from usar_arm.urdf.moveit_planning import (
     CANDIDATES,

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.robot import robot_from_files
+from usar_arm.planning.robot import robot_from_files
 from usar_arm.urdf.opw_fit import NotOpwError, fit_opw, opw_forward
 from usar_arm.urdf.reader import parse_urdf
 from usar_arm.urdf.tesseract import TesseractOptions, choose_solver

@@ -10,7 +10,7 @@ from collections.abc import Callable
 import pytest
 
 from tests.usarsim.fake_server import FakeServer, read_line
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     EXIT_BAD_DESCRIPTION,
     ConnectionFailedError,
     ConnectionLostError,

@@ -38,7 +38,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from tests.usarsim import strategies as S
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import format_message, parse_line
 from usar_arm.usarsim.numbers import FULL, UDK, udk_float_string

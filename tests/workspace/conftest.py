@@ -6,11 +6,12 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm import jobs
-from usar_arm.description import DescribeOptions
-from usar_arm.embedded import describe
+from usar_arm.description.cache import robot_from_description
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene import EMPTY
-from usar_arm.robot import Robot, robot_from_description, robot_from_files
+from usar_arm.workspace import jobs
 from usar_arm.workspace.reach import ReachSettings
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm import batch
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, ResumeMismatchError
-from usar_arm.jobs import CHUNKS, backend_for
-from usar_arm.robot import Robot
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, ResumeMismatchError
+from usar_arm.planning.robot import Robot
+from usar_arm.workspace import batch_job as batch
 from usar_arm.workspace.batch_file import parse_problems
+from usar_arm.workspace.jobs import CHUNKS, backend_for
 
 REPO = Path(__file__).resolve().parents[2]
 URDF = str(REPO / "robots" / "generated" / "KR60.urdf")

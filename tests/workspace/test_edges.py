@@ -6,10 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from usar_arm import jobs
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import EMPTY
-from usar_arm.robot import Robot
-from usar_arm.workspace import edge_kernel
+from usar_arm.workspace import edge_kernel, jobs
 from usar_arm.workspace.cell_sampling import sample_cells
 from usar_arm.workspace.grid import VoxelGrid, grid_for, reach_bound
 from usar_arm.workspace.reach import ReachSettings

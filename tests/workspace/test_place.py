@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm import jobs
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
+from usar_arm.workspace import jobs
 from usar_arm.workspace.placement import PlaceSettings
 from usar_arm.workspace.targets import load_targets
 

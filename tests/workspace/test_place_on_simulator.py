@@ -9,11 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm import Arm, jobs
-from usar_arm.cycle import run_cycle, through
+from usar_arm import Arm
+from usar_arm.arm.cycle import run_cycle, through
+from usar_arm.core.spatial import invert
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
-from usar_arm.spatial import invert
+from usar_arm.workspace import jobs
 from usar_arm.workspace.placement import PlaceSettings, moved
 from usar_arm.workspace.targets import load_targets
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
 from usar_arm.workspace.orientations import orientation_set
 from usar_arm.workspace.query import judge
 from usar_arm.workspace.solver import AllSolutions

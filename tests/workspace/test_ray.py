@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm import jobs
-from usar_arm.errors import EXIT_UNAVAILABLE, ChunkFailedError, ClusterUnavailableError
+from usar_arm.core.errors import EXIT_UNAVAILABLE, ChunkFailedError, ClusterUnavailableError
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
+from usar_arm.workspace import jobs
 from usar_arm.workspace.engine import Job, run_job
 from usar_arm.workspace.reach import ReachSettings
 

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm import jobs
 from usar_arm.planning.collision import CollisionWorld
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
+from usar_arm.workspace import jobs
 from usar_arm.workspace.grid import reach_bound
 from usar_arm.workspace.orientations import quaternions_to_matrices
 from usar_arm.workspace.reach import ReachSettings

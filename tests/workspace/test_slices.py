@@ -14,10 +14,10 @@ from matplotlib.figure import Figure
 
 from usar_arm.cli import reach_cmd
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK
 from usar_arm.export import reach_plot
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
 
 REPO = Path(__file__).resolve().parents[2]
 URDF = str(REPO / "robots" / "generated" / "KR60.urdf")

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from usar_arm.planning.ik import IKOptions
-from usar_arm.robot import Robot
+from usar_arm.planning.robot import Robot
 from usar_arm.workspace.solver import AllSolutions
 
 

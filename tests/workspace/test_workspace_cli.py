@@ -16,7 +16,7 @@ import pytest
 from matplotlib.image import imread
 
 from usar_arm.cli.main import main
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_NO_IK, EXIT_OK, EXIT_UNAVAILABLE
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_NO_IK, EXIT_OK, EXIT_UNAVAILABLE
 
 REPO = Path(__file__).resolve().parents[2]
 URDF = str(REPO / "robots" / "generated" / "KR60.urdf")

@@ -17,8 +17,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from usar_arm.calibrate.parameters import ErrorModel
-from usar_arm.errors import CalibrationError
-from usar_arm.spatial import Array
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import f as f_dist
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 ALPHA = 0.01
 """Family-wise false-alarm bound of the test over all splits and both groups."""

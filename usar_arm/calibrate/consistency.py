@@ -21,7 +21,7 @@ from usar_arm.calibrate.changepoint import ChangePoint, change_point
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.result import CalibrationOptions
 from usar_arm.calibrate.solver import jacobian
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

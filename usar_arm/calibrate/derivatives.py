@@ -23,8 +23,8 @@ import numpy as np
 
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.parameters import ErrorModel, corrected, correction
-from usar_arm.model import JointType
-from usar_arm.spatial import Array
+from usar_arm.core.model import JointType
+from usar_arm.core.spatial import Array
 
 
 def _skew(v: Array) -> Array:

@@ -41,8 +41,8 @@ from usar_arm.calibrate.solver import (
     select_identifiable,
     structural_columns,
 )
-from usar_arm.errors import CalibrationError
-from usar_arm.spatial import Array
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import Array
 
 __all__ = ["AUTO_MODEL", "Calibration", "CalibrationOptions", "ParameterEstimate", "identify"]
 
@@ -70,7 +70,7 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
 
     ``base_guess``: M_from_base_link (4x4) known before the fit, or None when the readings'
     frame is unknown (a tracker in its own frame: the guess is registered from the readings).
-    Raises :class:`~usar_arm.errors.CalibrationError` for too few readings, readings far from
+    Raises :class:`~usar_arm.core.errors.CalibrationError` for too few readings, readings far from
     the nominal description, or corrections beyond ``options.bounds``.
     """
     start = time.perf_counter()

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import log_ndtr
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 EDGE_FLOOR = 0.05
 """Smallest blur of an interval's edges, as a fraction of the interval's 1-sigma (2h/sqrt(12)):

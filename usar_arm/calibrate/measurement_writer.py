@@ -16,7 +16,7 @@ from usar_arm.calibrate.measurements import (
     POSITION,
     MeasurementSet,
 )
-from usar_arm.fileio import write_atomic
+from usar_arm.core.fileio import write_atomic
 
 
 def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "rad",

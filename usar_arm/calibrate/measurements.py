@@ -20,7 +20,7 @@ the header row are kept in :attr:`MeasurementSet.header`.) YAML::
     measurements:
       - {q: [..], position: [x, y, z], rpy: [r, p, y], sigma_position: 0.05, label: a}
 
-Errors name the file, the line and the column (:class:`usar_arm.errors.FileFormatError`).
+Errors name the file, the line and the column (:class:`usar_arm.core.errors.FileFormatError`).
 """
 
 from __future__ import annotations
@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array
-from usar_arm.yamlio import line_of, load_yaml
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import Array
+from usar_arm.core.yamlio import line_of, load_yaml
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
 ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180}

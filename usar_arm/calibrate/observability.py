@@ -19,9 +19,9 @@ import numpy as np
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.quantised import log_many
 from usar_arm.calibrate.solver import RANK_TOL, preference, select_identifiable
-from usar_arm.errors import CalibrationError
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import Array
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import Array
 
 STEP = 1e-6
 

@@ -27,8 +27,8 @@ from usar_arm.calibrate.bounds import Bounds
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.quantised import log_many, rpy_many
-from usar_arm.errors import CalibrationError
-from usar_arm.spatial import Array, log_so3, rpy_to_matrix
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import Array, log_so3, rpy_to_matrix
 from usar_arm.urdf.reader import parse_urdf
 
 MATCH_M, MATCH_RAD = 0.01, 0.02
@@ -76,7 +76,7 @@ def check_readings(urdf: str, model: ErrorModel, meas: Sequence[Measurement], q:
                    base_guess: Array | None, bounds: Bounds) -> Registration:
     """The base the fit starts from, after checking every reading lies within ``bounds``'
     reading offsets of the nominal description there; else a
-    :class:`~usar_arm.errors.CalibrationError` naming the worst readings and the likely cause
+    :class:`~usar_arm.core.errors.CalibrationError` naming the worst readings and the likely cause
     (see the module). ``base_guess`` None: the readings' frame is unknown (registered)."""
     nominal = model.poses(np.zeros(model.size), q, np.eye(4))
     pos = np.array([m.position for m in meas], float)

@@ -31,7 +31,7 @@ import numpy as np
 from usar_arm.calibrate import likelihood
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.control.tip_bias import interval, wrap
-from usar_arm.spatial import Array, log_so3, rpy_to_matrix
+from usar_arm.core.spatial import Array, log_so3, rpy_to_matrix
 
 MODELS = ("midpoint", "set-membership", "likelihood")
 GIMBAL = 0.05  # |cos pitch| below this: printed roll and yaw are not smooth in the rotation

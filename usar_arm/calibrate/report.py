@@ -10,8 +10,9 @@ from typing import Any
 from usar_arm.calibrate.bounds import largest
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.result import Calibration
-from usar_arm.errors import CalibrationError
-from usar_arm.precision import with_precision
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.precision import with_precision
+
 
 def compact_names(names: Sequence[str]) -> str:
     """Parameter names grouped by frame, e.g. ``joint_a1.origin.{x,y,z}, base.{x,yaw}``."""
@@ -26,8 +27,8 @@ def compact_names(names: Sequence[str]) -> str:
 def calibration_dict(cal: Calibration, validation: Residuals | None,
                      notes: tuple[str, ...] = (), tool_point: str = "") -> dict[str, Any]:
     """The report (units: m and rad, in the keys; numbers with the precision they mean, see
-    :mod:`usar_arm.precision`; the fit's duration, which varies from run to run, is left out). ``tool_point``:
-    which source fixes the tool point."""
+    :mod:`usar_arm.core.precision`; the fit's duration, which varies from run to run, is left
+    out). ``tool_point``: which source fixes the tool point."""
     change = cal.change
     return with_precision({
         "measured_frame": cal.measured_frame,

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usar_arm.calibrate.quantised import Targets, log_many
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

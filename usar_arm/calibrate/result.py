@@ -13,7 +13,7 @@ from usar_arm.calibrate.changepoint import ALPHA, ChangePoint
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

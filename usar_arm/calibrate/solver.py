@@ -13,7 +13,7 @@ from usar_arm.calibrate import derivatives
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 RANK_TOL = 1e-6         # |R_kk| / |R_00| below this: the column adds nothing (scaled Jacobian)
 

@@ -31,8 +31,8 @@ import numpy as np
 
 from usar_arm.calibrate.measurement_writer import csv_text
 from usar_arm.calibrate.measurements import Measurement, MeasurementSet, read_measurements
-from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array, matrix_to_rpy, rpy_to_matrix, transform
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import Array, matrix_to_rpy, rpy_to_matrix, transform
 
 WORLD = "the server's world (USARSim: x forward, y right, z down)"
 _TOUR = re.compile(r"^(\d+) poses, ([0-9.]+) s$")
@@ -89,7 +89,7 @@ A readings file of another arm is still refused by its joint names."""
 def read_tour(path: str | Path, joint_names: Sequence[str], prismatic: Sequence[bool],
               lower: Array, upper: Array) -> TourReadings:
     """The readings of a tour file for an arm with these joints (errors name the file and
-    line: :class:`~usar_arm.errors.FileFormatError`)."""
+    line: :class:`~usar_arm.core.errors.FileFormatError`)."""
     p = str(path)
     data = read_measurements(p, joint_names, prismatic=prismatic, lower=lower - LIMIT_SLACK,
                              upper=upper + LIMIT_SLACK)

@@ -11,9 +11,9 @@ from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.residuals import Residuals, distances
-from usar_arm.errors import CalibrationError
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import Array
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.spatial import Array
 
 if TYPE_CHECKING:
     from usar_arm.calibrate.identify import Calibration
@@ -49,7 +49,7 @@ def split_held_out(readings: Sequence[Measurement]
                    ) -> tuple[list[Measurement], list[Measurement]]:
     """(fit, held out): the readings cut into :data:`BLOCKS` contiguous blocks in reading
     order (sizes differing by at most one), blocks :data:`HELD_OUT_BLOCKS` held out and never
-    fitted; deterministic. Raises :class:`~usar_arm.errors.CalibrationError` when fewer than
+    fitted; deterministic. Raises :class:`~usar_arm.core.errors.CalibrationError` when fewer than
     :data:`MIN_HELD_OUT` readings would be held out."""
     n = len(readings)
     block = np.arange(n) * BLOCKS // max(n, 1)

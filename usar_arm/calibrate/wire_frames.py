@@ -1,4 +1,4 @@
-"""The frame bookkeeping around a fit of a tour's readings (:mod:`usar_arm.calibration`).
+"""The frame bookkeeping around a fit of a tour's readings (:mod:`usar_arm.arm.tour_calibration`).
 
 The tip sensor's readings are its pose in USARSim's z-down world with USARSim's axes, so the
 fit runs on the URDF with the sensor's frame turned by pi about x (:func:`usarsim_axes`, done
@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from usar_arm.calibrate.parameters import replace_origin
-from usar_arm.errors import CalibrationError
-from usar_arm.spatial import FLIP_X, Array, transform
+from usar_arm.core.errors import CalibrationError
+from usar_arm.core.spatial import FLIP_X, Array, transform
 from usar_arm.urdf.reader import parse_urdf
 
 FLIP = transform(FLIP_X)

@@ -7,7 +7,6 @@ import json
 from collections import Counter
 from typing import Any
 
-from usar_arm import batch
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.job_args import (
     add_job_args,
@@ -18,9 +17,10 @@ from usar_arm.cli.job_args import (
     write_outputs,
 )
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
-from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.motion import MotionOptions
+from usar_arm.control.motion import MotionOptions
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.ompl_adapter import OmplOptions
+from usar_arm.workspace import batch_job as batch
 from usar_arm.workspace.batch_file import read_problems
 
 

@@ -27,9 +27,9 @@ from usar_arm.cli.common import (
     setup_logging,
     verbosity,
 )
-from usar_arm.errors import EXIT_OK, FileFormatError, InvalidInputError
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.model import JointType
+from usar_arm.core.errors import EXIT_OK, FileFormatError, InvalidInputError
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.core.model import JointType
 from usar_arm.urdf.reader import parse_urdf
 
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)

@@ -7,8 +7,8 @@ import argparse
 from collections.abc import Callable
 from pathlib import Path
 
+from usar_arm.arm.tour_calibration import WireCalibration, calibrate_description
 from usar_arm.calibrate.identify import CalibrationOptions
-from usar_arm.calibration import WireCalibration, calibrate_description
 from usar_arm.cli.calibrate_cmd import (
     calibration_options,
     identifiability_line,
@@ -16,10 +16,10 @@ from usar_arm.cli.calibrate_cmd import (
     warn_lost,
 )
 from usar_arm.cli.common import err, out, print_json
-from usar_arm.description import DescribeOptions, Description, write_description
-from usar_arm.embedded import describe
-from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.fileio import write_atomic
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.description.embedded import describe
+from usar_arm.description.pipeline import DescribeOptions, Description, write_description
 
 
 def _mm(x: float) -> str:

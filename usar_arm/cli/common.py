@@ -10,7 +10,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from usar_arm import errors
+from usar_arm.core import errors
 
 Handler = Callable[[argparse.Namespace], int]
 

@@ -16,15 +16,16 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from usar_arm.calibration import CalibrationSettings, cached_calibration
+from usar_arm.arm.tour_calibration import CalibrationSettings, cached_calibration
 from usar_arm.cli.calibrate_cmd import POSES
 from usar_arm.cli.calibrate_robot import calibrate, check_poses, has_tip_sensor
 from usar_arm.cli.common import err, out
 from usar_arm.cli.robot_args import options_from
-from usar_arm.description import DescribeOptions, Description
-from usar_arm.embedded import describe_discovered, run_discovery
-from usar_arm.errors import CalibrationError, ExecutionAbortedError
-from usar_arm.robot import Robot, cache_folder, robot_from_texts
+from usar_arm.core.errors import CalibrationError, ExecutionAbortedError
+from usar_arm.description.cache import cache_folder
+from usar_arm.description.embedded import describe_discovered, run_discovery
+from usar_arm.description.pipeline import DescribeOptions, Description
+from usar_arm.planning.robot import Robot, robot_from_texts
 
 Say = Callable[[str], None]
 

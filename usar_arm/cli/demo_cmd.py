@@ -12,15 +12,15 @@ import time
 from pathlib import Path
 from typing import Any
 
-from usar_arm.arm import Arm
-from usar_arm.calibration import ensure_calibrated, is_calibrated
+from usar_arm.arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
+from usar_arm.arm.facade import Arm
+from usar_arm.arm.tour_calibration import ensure_calibrated, is_calibrated
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import execution_options
-from usar_arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
-from usar_arm.description import DescribeOptions
-from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.fileio import write_atomic
-from usar_arm.motion import MotionOptions
+from usar_arm.control.motion import MotionOptions
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.scene_file import load_scene
 

@@ -17,7 +17,7 @@ from usar_arm.cli.execution_args import (
 from usar_arm.cli.plan_cmd import open_arm
 from usar_arm.cli.robot_args import add_server_args
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

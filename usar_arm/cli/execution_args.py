@@ -9,11 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
 from usar_arm.cli.common import out
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
 from usar_arm.export.bag import write_bag
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from usar_arm.cli.common import add_verbosity, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.cli.units import UNITS, pose_from_args
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.ik import IKOptions
 from usar_arm.planning.scene_file import load_scene
 

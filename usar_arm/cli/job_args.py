@@ -10,11 +10,11 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, TypeVar
 
-from usar_arm import jobs
 from usar_arm.cli.common import err, verbosity
 from usar_arm.cli.progress_bar import ProgressBar
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import write_tree_atomic
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.workspace import jobs
 from usar_arm.workspace.engine import Backend, Progress, RunStats
 
 T = TypeVar("T")

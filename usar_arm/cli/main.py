@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 from usar_arm.cli.common import EXIT_CODES_HELP, report_error
-from usar_arm.version import __version__
+from usar_arm.core.version import __version__
 
 COMMANDS: dict[str, str] = {
     "demo": "demo_cmd", "sim": "sim_cmd", "urdf": "urdf_cmd", "moveit-config": "urdf_cmd",

@@ -3,10 +3,10 @@
 
 The rules: the folder is absent, empty, or a package usar-arm wrote before (its ``package.xml``
 says so). Then the files the command writes replace theirs atomically, one by one
-(:func:`usar_arm.fileio.write_tree_atomic`), and any other file in it is kept and listed: it may
-be the user's, so usar-arm never deletes it. A path that is a file, lies under a file, cannot be
-written, or names a folder holding other things is refused before anything is discovered or
-written.
+(:func:`usar_arm.core.fileio.write_tree_atomic`), and any other file in it is kept and listed:
+it may be the user's, so usar-arm never deletes it. A path that is a file, lies under a file,
+cannot be written, or names a folder holding other things is refused before anything is
+discovered or written.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
 
 MARKER = "usar-arm"
 """What a ``package.xml`` usar-arm wrote says (its description and maintainer)."""

@@ -9,10 +9,10 @@ import numpy as np
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

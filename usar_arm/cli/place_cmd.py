@@ -10,7 +10,6 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm import jobs
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.job_args import (
     add_job_args,
@@ -21,11 +20,12 @@ from usar_arm.cli.job_args import (
     write_outputs,
 )
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.export.placement_plot import placement_png
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.spatial import matrix_to_rpy
+from usar_arm.workspace import jobs
 from usar_arm.workspace.placement import PlaceSettings
 from usar_arm.workspace.targets import load_targets
 

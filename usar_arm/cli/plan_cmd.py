@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import (
     add_execution_args,
@@ -18,8 +18,8 @@ from usar_arm.cli.execution_args import (
 from usar_arm.cli.robot_args import add_server_args
 from usar_arm.cli.units import UNITS, pose_from_args
 from usar_arm.control.executor import ExecutionOptions
-from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.motion import MotionOptions
+from usar_arm.control.motion import MotionOptions
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.lin import LinOptions
 from usar_arm.planning.ompl_adapter import PLANNERS, OmplOptions
 

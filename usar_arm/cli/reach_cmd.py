@@ -9,7 +9,6 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm import jobs
 from usar_arm.cli.common import (
     add_verbosity,
     err,
@@ -28,10 +27,11 @@ from usar_arm.cli.job_args import (
     write_outputs,
 )
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
-from usar_arm.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.export.reach_plot import reach_slice_png, shoulder
 from usar_arm.planning.scene import EMPTY
 from usar_arm.planning.scene_file import load_scene
+from usar_arm.workspace import jobs
 from usar_arm.workspace.edges import EdgeResult
 from usar_arm.workspace.reach import ReachSettings
 

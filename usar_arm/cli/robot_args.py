@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-from usar_arm.description import FRAMES, DescribeOptions
+from usar_arm.description.cache import robot_from_record
+from usar_arm.description.embedded import run_discovery
+from usar_arm.description.pipeline import FRAMES, DescribeOptions
 from usar_arm.discover.naming import SCHEMES
-from usar_arm.embedded import run_discovery
-from usar_arm.robot import Robot, robot_from_files, robot_from_record
+from usar_arm.planning.robot import Robot, robot_from_files
 
 
 def add_server_args(p: argparse.ArgumentParser) -> None:

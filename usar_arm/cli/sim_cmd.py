@@ -8,7 +8,7 @@ import logging
 import signal
 
 from usar_arm.cli.common import add_verbosity, setup_logging, verbosity
-from usar_arm.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE
 from usar_arm.sim.server import SimOptions, SimServer
 
 log = logging.getLogger("usar_arm.sim")

@@ -9,9 +9,9 @@ from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_loggi
 from usar_arm.cli.default_calibration import add_calibration_args, config_description
 from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
 from usar_arm.cli.robot_args import add_description_args, add_server_args
-from usar_arm.errors import EXIT_OK, FileFormatError
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.robot import Robot, robot_from_files
+from usar_arm.core.errors import EXIT_OK, FileFormatError
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.urdf.tesseract import TesseractOptions, tesseract_config
 from usar_arm.urdf.tesseract_package import check_package_name
 

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from usar_arm.errors import InvalidInputError
-from usar_arm.spatial import Array, matrix_to_rpy, rpy_to_matrix, transform
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.spatial import Array, matrix_to_rpy, rpy_to_matrix, transform
 
 UNITS = ("m-rad", "mm-deg", "kuka")
 

@@ -13,9 +13,9 @@ from usar_arm.cli.default_calibration import (
 )
 from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
-from usar_arm.description import Description, write_description
-from usar_arm.errors import EXIT_OK, InvalidInputError
-from usar_arm.fileio import write_atomic, write_tree_atomic
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.fileio import write_atomic, write_tree_atomic
+from usar_arm.description.pipeline import Description, write_description
 from usar_arm.urdf.moveit import moveit_files, package_name
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 

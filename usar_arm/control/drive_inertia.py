@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 LAG_RANGE = (1e-3, 3.0)
 """Lags (s) the grid spans."""

@@ -12,7 +12,7 @@
   finite), a line from the server that is not USARSim, a dropped connection or Ctrl-C stop the
   motion: the arm is told to hold where it is (when the connection still allows: at its measured
   position, or, when the feedback cannot be trusted, where the plan says it is now) and
-  :class:`~usar_arm.errors.ExecutionAbortedError` says what happened, which joint, by how much,
+  :class:`~usar_arm.core.errors.ExecutionAbortedError` says what happened, which joint, by how much,
   and when. Every wait for feedback is bounded by ``feedback_timeout``.
 """
 
@@ -30,14 +30,14 @@ import numpy as np
 from usar_arm.control.drive import DriveModel, excitation, fit
 from usar_arm.control.tool_accuracy import ToolAccuracy
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     ConnectionLostError,
     ExecutionAbortedError,
     ProtocolError,
     ResponseTimeoutError,
     UsarArmError,
 )
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import Received, UsarClient
 

@@ -13,7 +13,7 @@ from itertools import pairwise
 import numpy as np
 
 from usar_arm.control.trajectory import ExecutedSamples, MotionLimits, Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
 
 
 def join_trajectories(pieces: Sequence[tuple[float, Trajectory]], rate: float = 250.0

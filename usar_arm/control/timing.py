@@ -32,8 +32,8 @@ from ruckig import InputParameter, Result, Ruckig, Synchronization
 from ruckig import Trajectory as RuckigTrajectory
 
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import TimingError
-from usar_arm.spatial import Array
+from usar_arm.core.errors import TimingError
+from usar_arm.core.spatial import Array
 
 DEFAULT_RATE_HZ = 500.0
 """Sample rate of the trajectories the planner returns (>= 250 Hz)."""

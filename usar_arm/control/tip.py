@@ -13,15 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.errors import ResponseTimeoutError
-from usar_arm.spatial import (
-    FLIP_X,
-    Array,
-    invert,
-    log_so3,
-    rpy_to_matrix,
-    transform,
-)
+from usar_arm.core.errors import ResponseTimeoutError
+from usar_arm.core.spatial import FLIP_X, Array, invert, log_so3, rpy_to_matrix, transform
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.numbers import truncated_midpoint

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix
+from usar_arm.core.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix
 
 
 @dataclass(frozen=True)

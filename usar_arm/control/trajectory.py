@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
-from usar_arm.fileio import write_atomic
-from usar_arm.model import KinematicChain
-from usar_arm.spatial import Array
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

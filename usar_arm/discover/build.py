@@ -11,12 +11,20 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from usar_arm.core.model import (
+    Cylinder,
+    Joint,
+    JointLimits,
+    JointType,
+    KinematicChain,
+    Link,
+    Origin,
+)
+from usar_arm.core.spatial import Array, matrix_to_rpy, transform
 from usar_arm.discover.frames import ArmFrames
 from usar_arm.discover.limits import MotionLimits
 from usar_arm.discover.naming import Naming
 from usar_arm.discover.wire_arm import WireArm
-from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
-from usar_arm.spatial import Array, matrix_to_rpy, transform
 
 KUKA_ORANGE = (246 / 255, 120 / 255, 40 / 255, 1.0)
 BASE_GREY = (0.30, 0.30, 0.32, 1.0)

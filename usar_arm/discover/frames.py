@@ -16,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.discover.wire_arm import WireArm
-from usar_arm.spatial import (
+from usar_arm.core.spatial import (
     FLIP_X,
     Array,
     angle_between,
@@ -27,6 +26,7 @@ from usar_arm.spatial import (
     zdown_to_zup_point,
     zdown_to_zup_rotation,
 )
+from usar_arm.discover.wire_arm import WireArm
 
 SNAP_FACTOR = 2.5
 """Snap tolerance as a multiple of the printed orientation resolution: each relative rotation

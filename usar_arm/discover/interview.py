@@ -15,8 +15,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from usar_arm.core.errors import ConnectionLostError, DescriptionError, UnknownStartError
 from usar_arm.discover.wire_arm import WireArm, arm_from_replies
-from usar_arm.errors import ConnectionLostError, DescriptionError, UnknownStartError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.codec import format_message

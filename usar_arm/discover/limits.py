@@ -16,9 +16,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.yamlio import line_of, load_yaml
 from usar_arm.discover.wire_arm import WireArm
-from usar_arm.errors import FileFormatError
-from usar_arm.yamlio import line_of, load_yaml
 
 log = logging.getLogger("usar_arm.discover")
 

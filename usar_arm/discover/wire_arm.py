@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from usar_arm.errors import DescriptionError
+from usar_arm.core.errors import DescriptionError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import printed_resolution
 

@@ -62,10 +62,10 @@ from rosbags.typesys import Stores, get_typestore
 # ExecutedSamples (t: (m,) s since the trajectory's start, q: (m, n) in its joint order) is the
 # executor's result type; re-exported here so that it passes straight into write_bag.
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import exchange, remove_leftovers, temporary_prefix
-from usar_arm.model import KinematicChain
-from usar_arm.spatial import Array, quat_from_matrix
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import exchange, remove_leftovers, temporary_prefix
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array, quat_from_matrix
 
 # distro -> (typestore, rosbag2 metadata version rosbags should write)
 DISTROS: dict[str, tuple[Stores, Literal[8, 9]]] = {

@@ -12,9 +12,9 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from usar_arm.core.spatial import Array
 from usar_arm.export.reach_plot import outline, place_labels
 from usar_arm.planning.scene import Scene
-from usar_arm.spatial import Array
 
 
 def placement_png(x: Array, y: Array, yaw: Array, score: Array, best: int, step: float,

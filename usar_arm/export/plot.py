@@ -20,9 +20,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import write_atomic
-from usar_arm.spatial import Array
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.spatial import Array
 
 log = logging.getLogger("usar_arm.export.plot")
 

@@ -27,11 +27,11 @@ from matplotlib.lines import Line2D
 from matplotlib.transforms import Bbox
 from numpy.typing import NDArray
 
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import write_atomic
-from usar_arm.model import JointType, KinematicChain
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.model import JointType, KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
-from usar_arm.spatial import Array
 
 PLANES = {"xz": (0, 2, 1), "xy": (0, 1, 2), "yz": (1, 2, 0)}
 """Plane -> (horizontal axis, vertical axis, the axis the slice is taken across)."""

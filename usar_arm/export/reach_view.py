@@ -11,9 +11,9 @@ import numpy as np
 from matplotlib import colormaps
 from numpy.typing import NDArray
 
+from usar_arm.core.spatial import Array
 from usar_arm.export.view import ReplayServer, _add_obstacles, _load_urdf, _quiet, _viser
 from usar_arm.planning.scene import Scene
-from usar_arm.spatial import Array
 
 log = logging.getLogger("usar_arm.export.view")
 

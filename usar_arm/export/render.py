@@ -26,12 +26,12 @@ from mpl_toolkits.mplot3d import Axes3D, proj3d
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.export.surfaces import Faces, cylinder, outline, shape_faces
-from usar_arm.fileio import write_atomic
-from usar_arm.model import KinematicChain
 from usar_arm.planning.scene import Scene
-from usar_arm.spatial import Array
 
 log = logging.getLogger("usar_arm.export.render")
 

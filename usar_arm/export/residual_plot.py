@@ -13,8 +13,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from usar_arm.fileio import write_atomic
-from usar_arm.spatial import Array
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.spatial import Array
 
 BEFORE = "#e4572e"
 AFTER = "#1f4fbf"

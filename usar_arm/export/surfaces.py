@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning.scene import Box, CylinderShape, Shape, Sphere
-from usar_arm.spatial import Array
 
 PIECE = 0.2
 """Longest edge (m) of a face piece: short pieces keep the painter's algorithm honest."""

@@ -24,10 +24,10 @@ from typing import Any
 import numpy as np
 
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import write_atomic
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.spatial import Array, quat_from_matrix
 from usar_arm.planning.scene import Box, CylinderShape, Scene, Sphere
-from usar_arm.spatial import Array, quat_from_matrix
 
 log = logging.getLogger("usar_arm.export.view")
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld, Pair, pair
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.urdf.srdf import DisabledPair

@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning import scene_tree
 from usar_arm.planning.jit import kernel
-from usar_arm.spatial import Array
 
 IndexArray = np.ndarray[Any, np.dtype[np.int64]]
 """Integer arrays (pair indices, kinds)."""

@@ -18,12 +18,12 @@ import fcl
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.model import Cylinder, KinematicChain
+from usar_arm.core.model import Cylinder, KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import EMPTY, Box, CylinderShape, Mesh, Scene, Sphere
-from usar_arm.spatial import Array
 
 Pair = tuple[str, str]
 

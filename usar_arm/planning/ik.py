@@ -23,19 +23,19 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg.lapack import dgesv
 
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     AllSolutionsInCollisionError,
     IKError,
     JointLimitError,
     UnreachableError,
 )
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning import ik_kernel
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.opw import NotOrthoParallel, OrthoParallelArm
 from usar_arm.planning.poe import PoeChain, PoeModel
-from usar_arm.spatial import Array
 
 log = logging.getLogger("usar_arm.planning")
 TWO_PI = 2.0 * math.pi

@@ -20,9 +20,9 @@ import math
 
 import numpy as np
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning.jit import kernel
 from usar_arm.planning.opw import OrthoParallelArm
-from usar_arm.spatial import Array
 
 SOLVED, FALLBACK = 0, 1
 """Statuses of :func:`nearest`."""

@@ -2,7 +2,7 @@
 
 This is the only module that imports ``pinocchio``. Configurations are numpy arrays in the order
 of the URDF's actuated joints from the root outwards (the order of
-:attr:`usar_arm.model.KinematicChain.joint_names`); lengths in m, angles in rad.
+:attr:`usar_arm.core.model.KinematicChain.joint_names`); lengths in m, angles in rad.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from usar_arm.errors import ValidationError
-from usar_arm.spatial import Array
+from usar_arm.core.errors import ValidationError
+from usar_arm.core.spatial import Array
 
 
 class KinematicModel:

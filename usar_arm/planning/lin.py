@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.errors import IKError, LinBlockedError
+from usar_arm.core.errors import IKError, LinBlockedError
+from usar_arm.core.spatial import Array, exp_so3, log_so3, transform
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKSolver
 from usar_arm.planning.ompl_adapter import edge_configurations, edge_steps
-from usar_arm.spatial import Array, exp_so3, log_so3, transform
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from usar_arm.errors import InvalidInputError, NoPathError
-from usar_arm.spatial import Array
+from usar_arm.core.errors import InvalidInputError, NoPathError
+from usar_arm.core.spatial import Array
 
 log = logging.getLogger("usar_arm.planning")
 

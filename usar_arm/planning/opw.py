@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 V = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi

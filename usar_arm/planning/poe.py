@@ -13,8 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from usar_arm.model import KinematicChain
-from usar_arm.spatial import Array
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 
 
 def _rodrigues(w: Array, angle: Array) -> Array:

@@ -8,12 +8,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     GoalInCollisionError,
     NoPathError,
     OutOfLimitsError,
     StartInCollisionError,
 )
+from usar_arm.core.spatial import Array
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKSolver
 from usar_arm.planning.ompl_adapter import (
@@ -22,7 +23,6 @@ from usar_arm.planning.ompl_adapter import (
     edge_steps,
     plan_path,
 )
-from usar_arm.spatial import Array
 
 log = logging.getLogger("usar_arm.planning")
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

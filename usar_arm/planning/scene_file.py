@@ -37,10 +37,10 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import transform_from_xyz_rpy
+from usar_arm.core.yamlio import line_of, load_yaml
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Shape, Sphere
-from usar_arm.spatial import transform_from_xyz_rpy
-from usar_arm.yamlio import line_of, load_yaml
 
 SHAPES = ("box", "cylinder", "sphere", "mesh")
 KEYS = {"name", "xyz", "rpy", "allow", *SHAPES}
@@ -135,7 +135,7 @@ def _shape(ctx: _Ctx, obj: dict[str, Any], kind: str, field: str, base: Path) ->
 
 
 def parse_scene(data: Any, path: str, base: Path) -> Scene:
-    """A Scene from parsed YAML (as :func:`usar_arm.yamlio.load_yaml` returns it)."""
+    """A Scene from parsed YAML (as :func:`usar_arm.core.yamlio.load_yaml` returns it)."""
     ctx = _Ctx(path)
     if not isinstance(data, dict):
         raise FileFormatError(path, "expected a mapping with 'name' and 'objects'",

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 IndexArray = np.ndarray[Any, np.dtype[np.int64]]
 

@@ -23,7 +23,7 @@ import time
 from collections import deque
 from typing import Protocol
 
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.sim.robot_session import Session
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import MAX_LINE_BYTES, format_message, parse_line

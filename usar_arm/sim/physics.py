@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from usar_arm.core.spatial import Array, invert, quat_from_matrix, rpy_to_matrix, transform
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
-from usar_arm.spatial import Array, invert, quat_from_matrix, rpy_to_matrix, transform
 
 GRAVITY = 9.81
 """Gravitational acceleration (m/s²), along +z of the z-down world."""

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from usar_arm.core.spatial import matrix_to_rpy, rpy_to_matrix
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
-from usar_arm.spatial import matrix_to_rpy, rpy_to_matrix
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import NumberStyle
 

@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.sim import replies
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
 from usar_arm.sim.world_spec import WorldSpec
-from usar_arm.spatial import matrix_to_rpy
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import NumberStyle
 

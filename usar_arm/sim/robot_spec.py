@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array, Vector, exp_so3, invert, rpy_to_matrix, transform
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import Array, Vector, exp_so3, invert, rpy_to_matrix, transform
 
 Vec3 = tuple[float, float, float]
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from usar_arm.core.spatial import FLIP_X, Array, invert, transform
 from usar_arm.sim.robot_spec import ActuatorSpec, joint_frames, tip_pose
-from usar_arm.spatial import FLIP_X, Array, invert, transform
 
 _FLIP = transform(FLIP_X)
 """USARSim (z down) <-> REP-103 (z up): the same 4x4 both ways."""

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import yaml
 
-from usar_arm.errors import FileFormatError
+from usar_arm.core.errors import FileFormatError
 from usar_arm.usarsim.messages import StartPose
 
 

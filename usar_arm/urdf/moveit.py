@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.version import __version__
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, check_distro, planning_files
 from usar_arm.urdf.srdf import GROUP
 from usar_arm.urdf.writer import num
-from usar_arm.version import __version__
 
 LAUNCHES = ("demo", "move_group", "moveit_rviz", "rsp", "setup_assistant",
             "spawn_controllers", "static_virtual_joint_tfs", "warehouse_db")

@@ -20,8 +20,8 @@ adapters are those of MoveIt's own defaults for each (``moveit_configs_utils``).
 
 from __future__ import annotations
 
-from usar_arm.errors import InvalidInputError
-from usar_arm.model import KinematicChain
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.model import KinematicChain
 from usar_arm.urdf.srdf import GROUP
 
 EDGE_RESOLUTION_RAD = 0.01
@@ -61,7 +61,7 @@ def segment_fraction(chain: KinematicChain, resolution: float = EDGE_RESOLUTION_
 
 
 def check_distro(distro: str) -> None:
-    """Raise :class:`~usar_arm.errors.InvalidInputError` for a distribution not in
+    """Raise :class:`~usar_arm.core.errors.InvalidInputError` for a distribution not in
     :data:`ROS_DISTROS`."""
     if distro not in ROS_DISTROS:
         raise InvalidInputError(f"unknown ROS 2 distribution '{distro}': the package is written "

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.model import JointType, KinematicChain
-from usar_arm.spatial import Array, Vector, invert
+from usar_arm.core.model import JointType, KinematicChain
+from usar_arm.core.spatial import Array, Vector, invert
 
 
 class NotOpwError(ValueError):

@@ -13,9 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
-from usar_arm.model import Cylinder, Joint, JointLimits, JointType, KinematicChain, Link, Origin
-from usar_arm.yamlio import load_yaml, loads_yaml
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.model import (
+    Cylinder,
+    Joint,
+    JointLimits,
+    JointType,
+    KinematicChain,
+    Link,
+    Origin,
+)
+from usar_arm.core.yamlio import load_yaml, loads_yaml
 
 Pair = tuple[str, str]
 

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
 from usar_arm.urdf.writer import comment_block, num
 
 GROUP = "manipulator"

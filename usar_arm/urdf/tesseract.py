@@ -25,9 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.errors import InvalidInputError, ValidationError
-from usar_arm.model import KinematicChain
-from usar_arm.spatial import matrix_to_rpy
+from usar_arm.core.errors import InvalidInputError, ValidationError
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import matrix_to_rpy
+from usar_arm.core.version import __version__
 from usar_arm.urdf.opw_fit import NotOpwError, OpwFit, fit_opw
 from usar_arm.urdf.srdf import GROUP
 from usar_arm.urdf.tesseract_composer import PIPELINES, task_composer_yaml
@@ -35,7 +36,6 @@ from usar_arm.urdf.tesseract_example import example_script
 from usar_arm.urdf.tesseract_package import check_package_name
 from usar_arm.urdf.tesseract_readme import readme
 from usar_arm.urdf.writer import num, nums
-from usar_arm.version import __version__
 
 OPW_SOLVER = "OPWInvKin"
 KDL_SOLVER = "KDLInvKinChainLMA"

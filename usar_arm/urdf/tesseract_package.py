@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
 
 _NAME = re.compile(r"[a-z]([a-z0-9_]?[a-z0-9]+)*")
 
@@ -48,7 +48,7 @@ def suggest_package_name(name: str, robot: str = "robot") -> str:
 
 
 def check_package_name(name: str, robot: str = "robot") -> None:
-    """Raise :class:`~usar_arm.errors.InvalidInputError` naming the broken rule and a valid
+    """Raise :class:`~usar_arm.core.errors.InvalidInputError` naming the broken rule and a valid
     name when the folder name ``name`` cannot be a ROS package name."""
     problem = package_problem(name)
     if problem is not None:

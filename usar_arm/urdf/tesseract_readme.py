@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from usar_arm.version import __version__
+from usar_arm.core.version import __version__
 
 
 def readme(robot: str, package: str, files: Sequence[str], solver: str, reason: str,

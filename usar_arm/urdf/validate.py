@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm.errors import ValidationError
-from usar_arm.model import KinematicChain
+from usar_arm.core.errors import ValidationError
+from usar_arm.core.model import KinematicChain
 
 REQUIRED_FRAMES = ("base_link", "base", "flange", "tool0")
 

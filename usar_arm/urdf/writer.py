@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from xml.sax.saxutils import escape, quoteattr
 
-from usar_arm.model import Cylinder, Joint, JointType, KinematicChain, Link, Origin
+from usar_arm.core.model import Cylinder, Joint, JointType, KinematicChain, Link, Origin
 
 
 def num(value: float) -> str:

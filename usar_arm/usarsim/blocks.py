@@ -2,7 +2,7 @@
 
 :func:`split_line` checks the grammar and cuts a line into its command word and blocks;
 :class:`BlockReader` reads typed values from them, raising
-:class:`~usar_arm.errors.ProtocolError` with the column of the offending block; :func:`block`
+:class:`~usar_arm.core.errors.ProtocolError` with the column of the offending block; :func:`block`
 and :func:`line` print them. Message-level meaning lives in :mod:`.codec` and :mod:`.compound`.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.usarsim import messages as m
 
 CRLF = "\r\n"

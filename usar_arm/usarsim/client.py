@@ -24,11 +24,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Mapping, Sequence
 
-from usar_arm.errors import (
-    ConnectionLostError,
-    ResponseTimeoutError,
-    UnknownRobotError,
-)
+from usar_arm.core.errors import ConnectionLostError, ResponseTimeoutError, UnknownRobotError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.exchange import DEFAULT_TIMEOUT_S, Exchange, in_context
 from usar_arm.usarsim.inbox import STATUS_HEADS, Received, Subscriber

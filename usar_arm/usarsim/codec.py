@@ -11,7 +11,7 @@ prints them, and they would poison joint values and limits downstream).
 :data:`SPECS` holds every message's wire form once: its command word and either its keyed fields
 (key, attribute, kind, required or not; both directions are generated from them) or, for the
 five messages with a richer structure, the parse and format pair in :mod:`.compound`.
-:func:`parse_line` raises :class:`~usar_arm.errors.ProtocolError` quoting the line and the
+:func:`parse_line` raises :class:`~usar_arm.core.errors.ProtocolError` quoting the line and the
 column of the problem. :func:`format_message` prints numbers in a :class:`NumberStyle` (default:
 full float64 precision, so ``parse_line(format_message(m)) == m``).
 """

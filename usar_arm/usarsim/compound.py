@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.blocks import CRLF, BlockReader, RawBlock, block, blocks, line
 from usar_arm.usarsim.numbers import NumberStyle

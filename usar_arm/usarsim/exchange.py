@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     ConnectionLostError,
     ProtocolError,
     ResponseTimeoutError,

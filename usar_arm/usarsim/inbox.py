@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-from usar_arm.errors import ProtocolError
+from usar_arm.core.errors import ProtocolError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.codec import parse_line
 from usar_arm.usarsim.lines import BadLine

@@ -16,7 +16,7 @@ import socket
 import threading
 from collections.abc import Callable
 
-from usar_arm.errors import ConnectionFailedError, ConnectionLostError, ProtocolError
+from usar_arm.core.errors import ConnectionFailedError, ConnectionLostError, ProtocolError
 from usar_arm.usarsim.lines import BadLine, LineSplitter, decode_line
 
 log = logging.getLogger("usar_arm.usarsim")

@@ -18,9 +18,10 @@ A layer above :mod:`usar_arm.planning` (docs/workspace.md). Its modules:
   Ctrl-C and resume;
 * :mod:`.arm_model`: what a job needs of an arm, and how a worker rebuilds it from text.
 
-On a described arm (a :class:`usar_arm.robot.Robot`, e.g. ``Arm.from_files(...).robot``), the
-facade :mod:`usar_arm.jobs` runs them: ``jobs.reach_map(robot, scene, ReachSettings(...),
-jobs.backend_for(workers=2))``, ``jobs.place(...)``; :mod:`usar_arm.batch` runs batch jobs.
+On a described arm (a :class:`usar_arm.planning.robot.Robot`, e.g.
+``Arm.from_files(...).robot``), :mod:`.jobs` runs them: ``jobs.reach_map(robot, scene,
+ReachSettings(...), jobs.backend_for(workers=2))``, ``jobs.place(...)``; :mod:`.batch_job` runs
+batch jobs.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """What a workspace job needs of an arm, and how a worker gets one.
 
 The workspace layer never builds a robot itself (that is the facades' job,
-:func:`usar_arm.robot.robot_from_texts`): a job carries a picklable ``build`` callable (a
+:func:`usar_arm.planning.robot.robot_from_texts`): a job carries a picklable ``build`` callable (a
 module-level function and the description's text, by value) that each worker calls once.
 """
 
@@ -14,7 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.scene import (
@@ -27,7 +27,8 @@ from usar_arm.planning.scene import (
 
 
 class ArmModel(Protocol):
-    """An arm ready for IK and collision checking (:class:`usar_arm.robot.Robot` is one)."""
+    """An arm ready for IK and collision checking (:class:`usar_arm.planning.robot.Robot` is
+    one)."""
 
     chain: KinematicChain
 

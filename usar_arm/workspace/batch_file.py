@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array, rpy_to_matrix, transform
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import Array, rpy_to_matrix, transform
 
 KINDS = ("ik", "plan")
 MOTIONS = ("ptp", "lin")

@@ -16,9 +16,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning import ik_kernel
 from usar_arm.planning.jit import kernel
-from usar_arm.spatial import Array
 
 IndexArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning.collision import CollisionWorld
-from usar_arm.spatial import Array
 from usar_arm.workspace import edge_kernel
 from usar_arm.workspace.cell_sampling import CellSamples, sample_cells
 from usar_arm.workspace.grid import VoxelGrid

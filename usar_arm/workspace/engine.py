@@ -10,7 +10,7 @@ the backend and worker count.
 
 Finished chunks go to a :class:`ChunkStore` (one file each, written atomically), so an
 interrupted run keeps them and ``resume`` continues; a chunk whose worker dies or raises is
-retried once, then the run stops with :class:`~usar_arm.errors.ChunkFailedError`.
+retried once, then the run stops with :class:`~usar_arm.core.errors.ChunkFailedError`.
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from usar_arm.errors import ChunkFailedError, ResumeMismatchError
-from usar_arm.fileio import write_atomic
+from usar_arm.core.errors import ChunkFailedError, ResumeMismatchError
+from usar_arm.core.fileio import write_atomic
 
 log = logging.getLogger("usar_arm.workspace")
 

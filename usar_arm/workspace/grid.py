@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.errors import MapTooLargeError
-from usar_arm.model import Joint, JointType, KinematicChain
-from usar_arm.spatial import Array
+from usar_arm.core.errors import MapTooLargeError
+from usar_arm.core.model import Joint, JointType, KinematicChain
+from usar_arm.core.spatial import Array
 
 
 @dataclass(frozen=True)

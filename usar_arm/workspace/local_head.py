@@ -26,7 +26,7 @@ import sys
 import tempfile
 import time
 
-from usar_arm.errors import ClusterUnavailableError
+from usar_arm.core.errors import ClusterUnavailableError
 
 ANNOUNCE = "usar-arm local ray at "
 """The line (then the GCS address) by which the process says its instance is ready."""

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 
 PHI = math.sqrt(2.0)
 PSI = 1.533751168755204288118041

@@ -21,11 +21,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.errors import UnreachableTargetError
-from usar_arm.model import KinematicChain
+from usar_arm.core.errors import UnreachableTargetError
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array, invert, rot_z, transform
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.scene import Scene, SceneObject
-from usar_arm.spatial import Array, invert, rot_z, transform
 from usar_arm.workspace.arm_model import ArmBuilder, scene_fingerprint
 from usar_arm.workspace.engine import Job, Result, digest
 from usar_arm.workspace.grid import reach_bound

@@ -7,7 +7,7 @@ simulator: forking a threaded process can deadlock the child). It builds the job
 once and then runs one chunk at a time, sent over its own pipe. The parent watches every pipe
 and every process at once (:func:`multiprocessing.connection.wait`), so it always knows which
 chunk a worker was running when it died: that chunk is retried once on a fresh worker, and a
-second failure stops the run (:class:`~usar_arm.errors.ChunkFailedError`). Workers ignore
+second failure stops the run (:class:`~usar_arm.core.errors.ChunkFailedError`). Workers ignore
 Ctrl-C; the parent terminates them when it is interrupted, or when it stops for any other
 reason.
 """
@@ -25,7 +25,7 @@ from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
 from typing import Any
 
-from usar_arm.errors import ChunkFailedError
+from usar_arm.core.errors import ChunkFailedError
 from usar_arm.workspace.engine import (
     ATTEMPTS,
     Job,

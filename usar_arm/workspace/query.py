@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from usar_arm.core.spatial import Array
 from usar_arm.planning.collision import CollisionWorld
-from usar_arm.spatial import Array
 from usar_arm.workspace.solver import AllSolutions, Candidates
 
 

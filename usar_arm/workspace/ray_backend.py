@@ -49,7 +49,7 @@ from typing import Any, ClassVar
 
 import ray
 
-from usar_arm.errors import ChunkFailedError, ClusterUnavailableError
+from usar_arm.core.errors import ChunkFailedError, ClusterUnavailableError
 from usar_arm.workspace.engine import (
     ATTEMPTS,
     Job,

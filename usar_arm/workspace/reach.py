@@ -17,10 +17,10 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.scene import Scene
-from usar_arm.spatial import Array
 from usar_arm.workspace.arm_model import ArmBuilder, ArmModel, scene_fingerprint
 from usar_arm.workspace.edges import EdgeResult, EdgeSearch, EdgeSettings
 from usar_arm.workspace.engine import Job, Result, digest

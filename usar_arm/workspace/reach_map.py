@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.errors import FileFormatError
-from usar_arm.fileio import write_atomic
-from usar_arm.spatial import Array
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.fileio import write_atomic
+from usar_arm.core.spatial import Array
 
 ARRAYS = ("index", "manipulability", "margin", "best_q", "best_orientation", "reachable",
           "origin", "resolution", "orientations", "joint_names", "edge")

@@ -12,11 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.model import KinematicChain
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning import ik_kernel
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.poe import PoeModel
-from usar_arm.spatial import Array
 from usar_arm.workspace import kernels
 
 NUMERIC_SEEDS = 12

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import FileFormatError
-from usar_arm.spatial import Array, rpy_to_matrix, transform
-from usar_arm.yamlio import line_of, load_yaml
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.spatial import Array, rpy_to_matrix, transform
+from usar_arm.core.yamlio import line_of, load_yaml
 
 UNITS = {"m-rad": (1.0, 1.0), "mm-deg": (1e-3, math.pi / 180.0)}
 

@@ -1,5 +1,5 @@
 """Calibrating a live arm: a tour reading the arm's tip GroundTruth sensor
-(:mod:`usar_arm.calibration_tour`), the fit, validation on held-out readings, and the calibrated
+(:mod:`usar_arm.arm.tour`), the fit, validation on held-out readings, and the calibrated
 description. The fit depends on the as-learnt description and the tour's readings alone
 (:class:`~usar_arm.calibrate.tour_readings.TourReadings`), so a description calibrated from a
 readings file is the same byte for byte as the one calibrated on the tour that recorded them.
@@ -28,7 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
+from usar_arm.arm.tour import Progress, choose_configurations, collect
 from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
 from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.residuals import Residuals
@@ -42,11 +43,15 @@ from usar_arm.calibrate.wire_frames import (
     tip_onto_sensor,
     usarsim_axes,
 )
-from usar_arm.calibration_tour import Progress, choose_configurations, collect
-from usar_arm.description import DescribeOptions, Description
-from usar_arm.errors import CalibrationError, InvalidInputError
-from usar_arm.model import JointType
-from usar_arm.robot import CachedCalibration, calibrated_folder, load_calibrated, store_calibrated
+from usar_arm.core.errors import CalibrationError, InvalidInputError
+from usar_arm.core.model import JointType
+from usar_arm.description.cache import (
+    CachedCalibration,
+    calibrated_folder,
+    load_calibrated,
+    store_calibrated,
+)
+from usar_arm.description.pipeline import DescribeOptions, Description
 
 log = logging.getLogger(__name__)
 _usarsim_axes, _fold_base = usarsim_axes, fold_base  # the names the tests knew them by
@@ -94,7 +99,7 @@ def fit_tour(urdf: str, tour: TourReadings, tip_step: float,
              options: CalibrationOptions | None = None) -> WireCalibration:
     """Fit ``urdf`` (as learnt) to a tour's readings, validate on the held-out ones and build
     the calibrated URDF (see the module; ``tip_step``: the Tip's printed step, m). Raises
-    :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
+    :class:`~usar_arm.core.errors.CalibrationError` when the readings are inconsistent or the fit
     does not hold on the held-out readings."""
     frame = tour.sensor
     mount = mount_joint(urdf, frame)
@@ -117,7 +122,7 @@ def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
                   seed: int = 0, progress: Progress | None = None,
                   options: CalibrationOptions | None = None) -> WireCalibration:
     """Calibrate ``arm`` on its server: tour it, then :func:`fit_tour`. Raises
-    :class:`~usar_arm.errors.CalibrationError` when the readings are inconsistent or the fit
+    :class:`~usar_arm.core.errors.CalibrationError` when the readings are inconsistent or the fit
     does not hold on the held-out readings; nothing is changed then."""
     sensor = arm.tip_sensor()
     if sensor is None:
@@ -190,7 +195,7 @@ def _calibrated(desc: Description, options: DescribeOptions, result: WireCalibra
     discovery = {**desc.discovery, "calibration": calibration_dict(
         result.calibration, result.validation, notes, result.tool_point)}
     if "accuracy_vs_simulator" in desc.discovery and options.host is None:
-        from usar_arm.embedded import urdf_accuracy
+        from usar_arm.description.accuracy import urdf_accuracy
 
         discovery["calibration"]["as_learnt_accuracy_vs_simulator"] = \
             desc.discovery["accuracy_vs_simulator"]
@@ -237,7 +242,7 @@ def ensure_calibrated(options: DescribeOptions, poses: int = 14,
                      velocity_limits=options.velocity_limits) as arm:
         if is_calibrated(arm) or arm.tip_sensor() is None:
             return None
-    from usar_arm.embedded import describe
+    from usar_arm.description.embedded import describe
 
     _, result = calibrate_description(describe(options), options, poses, None, 0, progress)
     return result

@@ -11,7 +11,7 @@ from typing import Any
 
 import yaml
 
-from usar_arm.errors import FileFormatError
+from usar_arm.core.errors import FileFormatError
 
 
 class LineDict(dict):  # type: ignore[type-arg]

@@ -5,8 +5,9 @@ discover (wire) -> WireArm -> frames (snap, z-up) -> KinematicChain -> URDF -> c
 joint_limits.yaml and discovery.json. Nothing is written until every check has passed.
 
 This module never starts or imports the embedded simulator: talking to a server (embedded or
-remote) and checking against the simulator's own model is :mod:`usar_arm.embedded`'s job, so
-offline work (``Arm.from_files``, planning from files) stays free of MuJoCo and the TCP server.
+remote) and checking against the simulator's own model is :mod:`usar_arm.description.embedded`'s
+job, so offline work (``Arm.from_files``, planning from files) stays free of MuJoCo and the TCP
+server.
 """
 
 from __future__ import annotations
@@ -18,29 +19,29 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.precision import with_precision
+from usar_arm.core.version import __version__
 from usar_arm.discover.build import build_chain
 from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
 from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.discover.limits import home_state, load_limits_file, resolve
 from usar_arm.discover.naming import Naming
 from usar_arm.discover.wire_arm import WireArm
-from usar_arm.errors import InvalidInputError
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.model import KinematicChain
 from usar_arm.planning.acm import AcmResult, compute_acm
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.precision import with_precision
 from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
-from usar_arm.version import __version__
 
 GENERATOR = 1
 """The version of what discovery writes from the same CONF/GEO lines and options; part of the
 description cache's key, so a description cached by a generator that wrote something else is
 made again (bump it when the geometry, the collision matrix or the files change)."""
 
-log = logging.getLogger("usar_arm.description")
+log = logging.getLogger("usar_arm.description.pipeline")
 
 FRAMES = ("z-up", "z-down")
 

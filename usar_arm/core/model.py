@@ -14,7 +14,7 @@ from enum import Enum
 
 import numpy as np
 
-from usar_arm.spatial import Array, Vector, exp_so3, transform, transform_from_xyz_rpy
+from usar_arm.core.spatial import Array, Vector, exp_so3, transform, transform_from_xyz_rpy
 
 Vec3 = tuple[float, float, float]
 

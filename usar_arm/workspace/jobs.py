@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm.errors import ClusterUnavailableError, IKError, UnreachableTargetError
+from usar_arm.core.errors import ClusterUnavailableError, IKError, UnreachableTargetError
+from usar_arm.core.spatial import Array
+from usar_arm.core.version import __version__
+from usar_arm.planning.robot import Robot, robot_from_texts
 from usar_arm.planning.scene import Scene
-from usar_arm.robot import Robot, robot_from_texts
-from usar_arm.spatial import Array
-from usar_arm.version import __version__
 from usar_arm.workspace.arm_model import ArmBuilder, scene_fingerprint
 from usar_arm.workspace.edges import EdgeResult
 from usar_arm.workspace.engine import (

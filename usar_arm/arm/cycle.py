@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport
+from usar_arm.control.motion import MotionOptions, MotionPlan
 from usar_arm.control.splice import join_executed, join_trajectories
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.motion import MotionOptions, MotionPlan
-from usar_arm.spatial import Array, rpy_to_matrix, transform
+from usar_arm.core.spatial import Array, rpy_to_matrix, transform
 
 TOOL_DOWN = rpy_to_matrix((0.0, np.pi, 0.0))
 """tool0's orientation with its z axis pointing down (REP-103 base_link)."""
@@ -125,8 +125,8 @@ def run_cycle(arm: Arm, moves: list[Move], scene: str = "table",
     :meth:`Arm.execute`).
 
     Raises:
-        the planning errors of :func:`usar_arm.motion.plan_motion` and
-        :class:`~usar_arm.errors.ExecutionAbortedError`, naming the move in a note.
+        the planning errors of :func:`usar_arm.control.motion.plan_motion` and
+        :class:`~usar_arm.core.errors.ExecutionAbortedError`, naming the move in a note.
     """
     result = CycleResult()
     for i, move in enumerate(moves):

@@ -19,15 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.errors import InvalidInputError, UsarArmError
-from usar_arm.jobs import CHUNKS, arm_builder, description_text
-from usar_arm.motion import MotionOptions, plan_motion
+from usar_arm.control.motion import MotionOptions, plan_motion
+from usar_arm.core.errors import InvalidInputError, UsarArmError
+from usar_arm.core.version import __version__
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ompl_adapter import reseed
+from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot
-from usar_arm.version import __version__
 from usar_arm.workspace.arm_model import ArmBuilder, scene_fingerprint
 from usar_arm.workspace.batch_file import BadLine, Problem
 from usar_arm.workspace.engine import (
@@ -40,6 +39,7 @@ from usar_arm.workspace.engine import (
     digest,
     run_job,
 )
+from usar_arm.workspace.jobs import CHUNKS, arm_builder, description_text
 
 COST_US = {"ik": 40, "plan": 1000}
 """Typical microseconds one problem of each kind costs a worker (KR60, one core of the 2-core

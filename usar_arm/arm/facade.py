@@ -24,25 +24,26 @@ from typing import Any, Protocol
 import numpy as np
 
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
+from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.control.tip import TipSensor, platform_sensor_name, pose_error
 from usar_arm.control.tip_correction import correct_tip
 from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
 from usar_arm.control.trajectory import Trajectory
-from usar_arm.description import DescribeOptions
+from usar_arm.core.errors import ConnectionLostError, InvalidInputError
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.core.spatial import Array
+from usar_arm.description.cache import cache_folder, robot_from_record
+from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.discover.interview import discover
-from usar_arm.errors import ConnectionLostError, InvalidInputError
-from usar_arm.fileio import write_tree_atomic
-from usar_arm.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
+from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
-from usar_arm.robot import Robot, cache_folder, robot_from_files, robot_from_record
-from usar_arm.spatial import Array
 from usar_arm.usarsim.client import UsarClient
 
-log = logging.getLogger("usar_arm.arm")
+log = logging.getLogger("usar_arm.arm.facade")
 
 
 class TruthReading(Protocol):
@@ -106,7 +107,7 @@ class Arm:
         known: tuple[str, ...] = ()
         if host is None:
             # Imported here, not at the top: offline arms (from_files) never load the simulator.
-            from usar_arm.embedded import known_classes, start_simulator
+            from usar_arm.description.embedded import known_classes, start_simulator
 
             # Load the compiled collision kernels first: linking them from numba's cache makes
             # thousands of short calls that, beside the simulator's busy thread, each wait for

@@ -22,13 +22,13 @@ from usar_arm.control.timing import (
     stop_at_waypoints,
 )
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import InvalidInputError
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.spatial import Array, rotation_distance
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.lin import LinOptions, plan_lin
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import check_state, plan_to_joints, plan_to_pose
-from usar_arm.robot import Robot
-from usar_arm.spatial import Array, rotation_distance
+from usar_arm.planning.robot import Robot
 
 MOTIONS = ("ptp", "lin")
 

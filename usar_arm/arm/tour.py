@@ -26,24 +26,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from usar_arm.arm import Arm
+from usar_arm.arm.facade import Arm
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.observability import select_poses
 from usar_arm.control.drive import DriveModel
 from usar_arm.control.timing import stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits, Trajectory
-from usar_arm.errors import (
+from usar_arm.core.errors import (
     CalibrationError,
     ExecutionAbortedError,
     InvalidInputError,
     ResponseTimeoutError,
 )
-from usar_arm.spatial import Array
+from usar_arm.core.spatial import Array
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
 from usar_arm.usarsim.numbers import ROUNDED_SCALARS
 
-log = logging.getLogger("usar_arm.calibration")
+log = logging.getLogger("usar_arm.arm.tour")
 
 SPEED_SCALES = (1.0, 0.5, 0.25)
 """Fractions of the (drive-capped) limits the tour tries, slower after an aborted attempt: how

@@ -1,0 +1,141 @@
+"""A described arm, ready for IK, collision checking and planning: :class:`Robot`, built from
+a description's files (:func:`robot_from_files`, :func:`robot_from_texts`). A freshly learnt
+arm becomes one through :func:`usar_arm.description.cache.robot_from_record`."""
+
+from __future__ import annotations
+
+import json
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from usar_arm.core.errors import FileFormatError
+from usar_arm.core.model import KinematicChain
+from usar_arm.planning.collision import CollisionWorld, Pair
+from usar_arm.planning.ik import IKOptions, IKSolver
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.scene import EMPTY, Scene
+from usar_arm.planning.scene_file import validate_allow
+from usar_arm.urdf.reader import apply_joint_limits_text, parse_srdf, parse_urdf
+
+log = logging.getLogger("usar_arm.planning.robot")
+
+
+@dataclass
+class Robot:
+    """An arm's description and the solvers built on it.
+
+    Attributes:
+        chain: the kinematic chain (limits with acceleration and jerk when known).
+        urdf: its URDF text. disabled: the SRDF's disabled collision pairs.
+        states: the SRDF's named states (``home``...), joint name -> value.
+        actuator: the USARSim actuator that moves it (for ACT), when known.
+        source: where the description came from (for messages).
+    """
+
+    chain: KinematicChain
+    urdf: str
+    disabled: set[Pair] = field(default_factory=set)
+    states: dict[str, dict[str, float]] = field(default_factory=dict)
+    actuator: str | None = None
+    source: str = ""
+    wire_links: tuple[int, ...] = ()
+    """USARSim link number (1-based, as in ASTA) of each joint, in joint order."""
+    tip_sensor: str | None = None
+    """Name of the server's tip GroundTruth sensor (and of its URDF frame), when it has one."""
+    files: dict[str, str] = field(default_factory=dict)
+    """The description's files (name -> text: URDF, SRDF, joint limits, discovery notes)."""
+    _kinematics: KinematicModel | None = None
+    _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
+
+    @property
+    def kinematics(self) -> KinematicModel:
+        """The Pinocchio model (built on first use)."""
+        if self._kinematics is None:
+            self._kinematics = KinematicModel(self.urdf, self.chain.joint_names)
+        return self._kinematics
+
+    def ik_solver(self, options: IKOptions | None = None, frame: str = "tool0") -> IKSolver:
+        """An IK solver of ``frame`` (cached per options)."""
+        key = (frame, options or IKOptions())
+        if key not in self._ik:
+            self._ik[key] = IKSolver(self.chain, self.kinematics, frame, key[1])
+        return self._ik[key]
+
+    def collision_world(self, scene: Scene = EMPTY, padding: float = 0.0) -> CollisionWorld:
+        """A collision world of this arm in ``scene``."""
+        validate_allow(scene, {lk.name for lk in self.chain.links})
+        return CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding)
+
+    def named_state(self, name: str) -> list[float]:
+        """A named state (``home``) in joint order."""
+        if name not in self.states:
+            raise KeyError(f"no state '{name}'; states: {', '.join(self.states) or 'none'}")
+        values = self.states[name]
+        return [values[j] for j in self.chain.joint_names]
+
+
+def wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
+    """The USARSim link number of each joint and the tip sensor's name, from discovery.json."""
+    chain = discovery.get("chain", {})
+    links = tuple(int(j["usarsim_link"]) for j in chain.get("joints", []))
+    return links, chain.get("tip_sensor")
+
+
+def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
+                     joint_limits: str | Path | None = None) -> Robot:
+    """A Robot from a URDF (and SRDF, joint_limits.yaml; found beside the URDF when not given,
+    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``, with ``<Robot>.discovery.json``)."""
+    path = Path(urdf)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise FileFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    stem = path.name.removesuffix(".urdf")
+    srdf_path = Path(srdf) if srdf else path.with_name(f"{stem}.srdf")
+    if srdf and not srdf_path.exists():
+        raise FileFormatError(str(srdf_path), "no such SRDF file")
+    limits_path = Path(joint_limits) if joint_limits else path.with_name(
+        f"{stem}.joint_limits.yaml")
+    info = path.with_name(f"{stem}.discovery.json")
+    roles = {f"{stem}.srdf": srdf_path, f"{stem}.joint_limits.yaml": limits_path,
+             f"{stem}.discovery.json": info}
+    files = {path.name: text, **{name: p.read_text() for name, p in roles.items()
+                                 if p.exists()}}
+    return robot_from_texts(files, path.name, str(path))
+
+
+def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
+                     source: str = "") -> Robot:
+    """A Robot from a description's files given as text (name -> text): ``X.urdf`` and, when
+    present, ``X.srdf``, ``X.joint_limits.yaml`` and ``X.discovery.json``. What a worker
+    process builds its arm from (the files travel by value; the solvers do not pickle)."""
+    if urdf_name is None:
+        names = [n for n in files if n.endswith(".urdf")]
+        if len(names) != 1:
+            raise FileFormatError(source or "<description>",
+                                  f"expected one .urdf file, got {names or 'none'}")
+        urdf_name = names[0]
+    stem = urdf_name.removesuffix(".urdf")
+    where = source or urdf_name
+    text = files[urdf_name]
+    chain, notes = parse_urdf(text, where)
+    for note in notes:
+        log.warning("%s: %s", where, note)
+    disabled: set[Pair] = set()
+    states: dict[str, dict[str, float]] = {}
+    if f"{stem}.srdf" in files:
+        disabled, states = parse_srdf(files[f"{stem}.srdf"], f"{stem}.srdf")
+    if f"{stem}.joint_limits.yaml" in files:
+        chain = apply_joint_limits_text(chain, files[f"{stem}.joint_limits.yaml"],
+                                        f"{stem}.joint_limits.yaml")
+    actuator, links, tip_sensor = None, tuple(range(1, chain.dof + 1)), None
+    if f"{stem}.discovery.json" in files:
+        doc = json.loads(files[f"{stem}.discovery.json"])
+        roles = doc.get("chain", {}).get("frames", {})
+        chain = KinematicChain(chain.name, chain.links, chain.joints,
+                               {**chain.frames, **roles}, chain.notes)
+        actuator = doc.get("robot", {}).get("actuator")
+        links, tip_sensor = wire_facts(doc)
+    return Robot(chain, text, disabled, states, actuator, where, links, tip_sensor,
+                 dict(files))
