@@ -4,6 +4,7 @@ stage writes a well-formed results file, the README table and its plots."""
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -18,6 +19,12 @@ PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"},
          "timing": {"toppra", "roboplan"},
          "discovery": set(), "execution": set(), "calibrate": set()}
 PNG = b"\x89PNG\r\n\x1a\n"
+VENVS = ROOT / "bench" / ".venvs"
+
+
+def _venv_of(peer: str) -> str:
+    """The venv (bench/peers/venvs.py) a peer solver runs in."""
+    return peer.split()[0]
 
 
 @pytest.fixture(scope="module")
@@ -42,12 +49,22 @@ def test_every_stage_writes_its_results_with_machine_versions_and_raw_figures(
     assert doc["cases"], "no case"
     for t in doc["targets"]:
         assert isinstance(t["pass"], bool) and t["target"]
+        # the verdict follows from its own figures (a target judged on a missing peer's
+        # ratio, NaN, cannot pass)
+        measured, bound = t["measured"], t["threshold"]
+        holds = (isinstance(measured, (int, float)) and math.isfinite(measured)
+                 and (measured <= bound if t["better"] == "<=" else measured >= bound))
+        assert t["pass"] == holds, t
     for name, case in doc["cases"].items():
         ours = case["solvers"]["usar-arm"]
         assert "summary" in ours and ours["raw"], f"{name}: our solver has no figures"
         for solver, s in case["solvers"].items():
             if "skipped" in s:  # a missing peer venv is reported, never silent
                 assert s["kind"] == "peer" and s["skipped"].strip(), (name, solver)
+                # make test-slow creates every peer's venv first: a peer whose venv is there
+                # and still skipped is a broken comparison, not a missing one
+                assert not (VENVS / _venv_of(solver)).is_dir(), \
+                    f"{name}/{solver} skipped though its venv exists: {s['skipped']}"
                 continue
             lengths = {len(v) for v in s["raw"].values()}
             assert len(lengths) == 1, f"{name}/{solver}: ragged raw columns"

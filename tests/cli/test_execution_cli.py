@@ -39,9 +39,10 @@ def test_plan_execute_prints_the_report_keys_and_writes_trajectory_and_bag(
     for key in ("planning_seconds", "duration", "final_joint_error_rad", "max_tracking_error_rad",
                 "tip_error_m", "tip_error_rad", "rate_hz", "jitter_p99_ms"):
         assert isinstance(doc[key], float), key
-    # timing figures are benchmarked on an idle machine (bench/results/execution.json); beside
-    # other test workers the in-process simulator lags, so only their order is checked here
-    assert doc["max_tracking_error_rad"] < 0.05 and doc["rate_hz"] > 90
+    # The tracking target (10 mrad): 2.8 mrad on an idle machine (bench/results/execution.json),
+    # 3.3-4.9 mrad measured beside a load of 6 on two cores (the in-process simulator lags);
+    # the rate, 99.95-100 Hz there.
+    assert doc["max_tracking_error_rad"] < 0.010 and doc["rate_hz"] > 90
     _, executed = load_with_executed(out)
     assert executed is not None and len(executed.t) >= 15 and np.all(executed.t >= 0)
     assert (bag / "metadata.yaml").exists()

@@ -47,7 +47,9 @@ def test_gravity_leaves_a_small_steady_state_error_on_the_shoulder() -> None:
     world.set_joint_values("r", act.name, target)
     world.step(3000)
     err = np.abs(world.joint_values("r", act.name) - target)
-    assert 1e-4 < err[1] < 0.02  # stiffness-only drive against gravity: a few mrad
+    # A stiffness-only drive against the arm's weight: 4.79 mrad measured (deterministic
+    # physics, 3,000 steps); the window is half to twice that.
+    assert 2.4e-3 < err[1] < 9.6e-3
     world_off = PhysicsWorld(gravity=False)
     world_off.add_robot("r", ROBOTS["USARBot.KR60"], (0, 0, 0), (0, 0, 0))
     world_off.set_joint_values("r", act.name, target)
