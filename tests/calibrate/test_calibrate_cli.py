@@ -102,3 +102,74 @@ def test_readings_where_a_joint_never_moves_warn_which_parameters_they_cannot_id
     assert ("warning: these readings cannot identify joint_a2.origin.{x,y,roll,pitch}"
             in captured.err)
     assert "only validated over the configurations sampled" in captured.err
+
+
+def _in_base_link(tmp_path: Path, data: list[Measurement]) -> tuple[Path, Path]:
+    urdf = tmp_path / "KR60.urdf"
+    urdf.write_text(KR60)
+    path = tmp_path / "tracker.csv"
+    write_measurements(path, MeasurementSet(tuple(data), "tool0",
+                                            joint_names=NOMINAL.joint_names,
+                                            measured_in="base_link"), "mm", "deg")
+    return urdf, path
+
+
+def test_readings_in_base_link_give_a_urdf_that_reproduces_them_as_written(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Every joint origin off by up to 1 mm / 3 mrad, tool0 measured in base_link: the base
+    correction is folded into the first joint, so the URDF file itself (read back, no
+    registration) puts tool0 where the truth has it at configurations never measured."""
+    truth = perturbed(KR60, 21, metres=1e-3, radians=3e-3)
+    data = readings(truth, "tool0", np.eye(4), random_q(NOMINAL, 50, 5), 6, sigma_m=2e-5,
+                    sigma_rad=2e-5)
+    urdf, path = _in_base_link(tmp_path, data)
+    assert "# measured in: base_link" in path.read_text()
+    out = tmp_path / "out"
+    assert main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
+                 str(out)]) == EXIT_OK
+    text = capsys.readouterr().out
+    assert "KR60.urdf reproduces the held-out readings within" in text and "in base_link" in text
+    assert sorted(p.name for p in out.iterdir()) == ["KR60.calibration.json", "KR60.urdf"]
+    written = (out / "KR60.urdf").read_text()
+    before = tool_errors(truth, np.eye(4), KR60, np.eye(4), "tool0", random_q(NOMINAL, 100, 7))
+    after = tool_errors(truth, np.eye(4), written, np.eye(4), "tool0", random_q(NOMINAL, 100, 7))
+    assert before[0] > 2e-3  # what the readings correct: millimetres
+    assert after[0] < 5e-5 and after[1] < 5e-5
+    report = json.loads((out / "KR60.calibration.json").read_text())
+    assert report["measured_in"] == "base_link"
+    assert report["written_urdf_vs_held_out"]["max_m"] <= \
+        report["validation"]["summary"]["max_after_m"] + 1e-6
+
+
+def test_readings_in_the_trackers_frame_write_the_registration_beside_the_urdf(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    truth = perturbed(KR60, 22)
+    data = readings(truth, "tool0", BASE, random_q(NOMINAL, 50, 8), 9, sigma_m=2e-5,
+                    sigma_rad=2e-5)
+    urdf, path = _files(tmp_path, data)
+    out = tmp_path / "out"
+    assert main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
+                 str(out), "--measured-in", "tracker"]) == EXIT_OK
+    assert "the URDF's base_link is the robot's own base" in capsys.readouterr().out
+    registration = np.array(json.loads((out / "KR60.registration.json").read_text())
+                            ["tracker_from_base_link"])
+    written = (out / "KR60.urdf").read_text()
+    err = tool_errors(truth, BASE, written, registration, "tool0", random_q(NOMINAL, 100, 10))
+    assert err[0] < 5e-5 and err[1] < 5e-5
+
+
+def test_a_command_line_frame_that_contradicts_the_file_writes_nothing(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = readings(KR60, "tool0", np.eye(4), random_q(NOMINAL, 30, 11), 12)
+    urdf, path = _in_base_link(tmp_path, data)
+    code = main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
+                 str(tmp_path / "out"), "--measured-in", "tracker"])
+    assert code == EXIT_INVALID_INPUT
+    assert "says its readings are measured in base_link" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    bad = tmp_path / "bad.csv"
+    bad.write_text(path.read_text().replace("# measured in: base_link", "# measured in: world"))
+    code = main(["calibrate", "--measurements", str(bad), "--urdf", str(urdf), "--out-dir",
+                 str(tmp_path / "out")])
+    assert code == EXIT_INVALID_INPUT
+    assert "measured in 'world': expected tracker or base_link" in capsys.readouterr().err

@@ -33,6 +33,8 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
     header += [name for name, _, _ in extra] + ["label"]
     buf = io.StringIO()
     buf.write(f"# frame: {data.frame}\n")
+    if data.measured_in != "tracker":
+        buf.write(f"# measured in: {data.measured_in}\n")
     for key, value in data.header:
         buf.write(f"# {key}: {value}\n")
     steps = {(m.step_q, m.q_rounded) for m in data.measurements}
@@ -96,6 +98,7 @@ def yaml_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "r
         return "[" + ", ".join(repr(float(v)) for v in values) + "]"
 
     lines = [f"frame: {json.dumps(data.frame)}",
+             *([f"measured_in: {data.measured_in}"] if data.measured_in != "tracker" else []),
              f"units: {{length: {length_unit}, angle: {angle_unit}}}",
              f"joints: [{', '.join(json.dumps(n) for n in data.joint_names)}]",
              "measurements:"]

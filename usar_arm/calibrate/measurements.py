@@ -81,6 +81,20 @@ class MeasurementSet:
     joint_names: tuple[str, ...] = field(default_factory=tuple)
     header: tuple[tuple[str, str], ...] = ()
     """Other ``# key: value`` lines of a CSV file, in order."""
+    measured_in: str = "tracker"
+    """The frame the poses are given in: ``tracker`` (the instrument's own, registered from the
+    readings) or ``base_link`` (the description's base, e.g. a tracker already registered)."""
+
+
+MEASURED_IN = ("tracker", "base_link")
+"""The frames a file's poses may be given in (``# measured in:`` / ``measured_in:``)."""
+
+
+def _measured_in(value: str, path: str, line: int | None) -> str:
+    if value not in MEASURED_IN:
+        raise FileFormatError(path, f"the readings are measured in '{value}': expected "
+                              f"{' or '.join(MEASURED_IN)}", line=line, field="measured in")
+    return value
 
 
 def _unit(name: str, table: dict[str, float], path: str, line: int | None, col: str,
@@ -135,7 +149,7 @@ def _split(col: str) -> tuple[str, str]:
 
 def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Sequence[bool],
               lower: Array | None, upper: Array | None) -> MeasurementSet:
-    frame, header_line, rows = "", 0, []
+    frame, header_line, rows, measured_in = "", 0, [], "tracker"
     comments: list[tuple[str, str]] = []
     step_q, rounded = 0.0, False
     lines = text.splitlines()
@@ -147,6 +161,8 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
             key, _, value = (part.strip() for part in s[1:].partition(":"))
             if key == "frame":
                 frame = value
+            elif key == "measured in":
+                measured_in = _measured_in(value, path, i)
             elif key == "joint step":
                 step_q = _number(value, path, i, "# joint step")
             elif key == "joint values":
@@ -219,7 +235,7 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
             vals.get("step_m", 0.0), vals.get("step_rad", 0.0),
             vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0), label, step_q, rounded))
     return MeasurementSet(tuple(rows), frame, units["length"], units["angle"], tuple(joint_names),
-                          tuple(comments))
+                          tuple(comments), measured_in)
 
 
 def _vector(item: Any, key: str, n: int, s: float, path: str, line: int | None) -> Array:
@@ -273,7 +289,10 @@ def _read_yaml(path: str, joint_names: Sequence[str], prismatic: Sequence[bool],
                                 vals.get("step_m", 0.0), vals.get("step_rad", 0.0),
                                 vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0),
                                 str(item.get("label", f"{Path(path).name} line {line}"))))
-    return MeasurementSet(tuple(rows), str(data["frame"]), lu, au, tuple(joint_names))
+    measured_in = _measured_in(str(data.get("measured_in", "tracker")), path,
+                               line_of(data, "measured_in") if "measured_in" in data else None)
+    return MeasurementSet(tuple(rows), str(data["frame"]), lu, au, tuple(joint_names),
+                          measured_in=measured_in)
 
 
 def read_measurements(path: str | Path, joint_names: Sequence[str], *,

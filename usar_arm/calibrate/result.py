@@ -11,7 +11,7 @@ import numpy as np
 from usar_arm.calibrate.bounds import Bounds, Correction
 from usar_arm.calibrate.changepoint import ALPHA, ChangePoint
 from usar_arm.calibrate.measurements import Measurement
-from usar_arm.calibrate.parameters import ErrorModel
+from usar_arm.calibrate.parameters import ErrorModel, replace_origin
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.core.spatial import Array
 
@@ -95,12 +95,23 @@ class Calibration:
     tool_sigma_m: tuple[float, float] = (0.0, 0.0)
     registered: bool = False          # the base guess was registered from the readings
 
-    def apply(self, urdf: str, tip_joint: str | None = None) -> str:
+    def apply(self, urdf: str, tip_joint: str | None = None, fold_base: bool = False) -> str:
         """The calibrated URDF text (joint origins and the measured frame's offset corrected;
         with ``tip_joint``, that fixed joint moved onto the measured frame: see
-        :meth:`ErrorModel.apply`)."""
+        :meth:`ErrorModel.apply`).
+
+        ``fold_base``: the readings were given in the description's own base_link, so the
+        fitted base pose (``base``: M_from_base_link, M being the nominal base_link) is a
+        correction of the description too: it is folded into the origin of the first joint
+        below base_link on the way to the measured frame (which the fit merges with it
+        anyway), and the written URDF then reproduces the readings without a registration."""
         model = ErrorModel.from_urdf(urdf, self.measured_frame, self.base_fitted, self.tool)
-        return model.apply(urdf, self.vector, tip_joint)
+        out = model.apply(urdf, self.vector, tip_joint)
+        if not fold_base:
+            return out
+        first = ErrorModel.from_urdf(out, self.measured_frame, self.base_fitted,
+                                     self.tool).path[0]
+        return replace_origin(out, first, self.base @ first.origin.matrix())
 
     def validate(self, urdf: str, measured_frame: str,
                  held_out: Sequence[Measurement]) -> Residuals:

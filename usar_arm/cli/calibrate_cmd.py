@@ -13,11 +13,14 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
+
 from usar_arm.calibrate.bounds import Bounds
 from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
-from usar_arm.calibrate.measurements import read_measurements
+from usar_arm.calibrate.measurements import MEASURED_IN, MeasurementSet, read_measurements
 from usar_arm.calibrate.report import calibration_dict, check_validated, compact_names
 from usar_arm.calibrate.validation import held_out_note, split_held_out
+from usar_arm.calibrate.written import check_written, written_check
 from usar_arm.cli.common import (
     add_verbosity,
     err,
@@ -30,6 +33,7 @@ from usar_arm.cli.common import (
 from usar_arm.core.errors import EXIT_OK, FileFormatError, InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
 from usar_arm.core.model import JointType
+from usar_arm.core.precision import with_precision
 from usar_arm.urdf.reader import parse_urdf
 
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
@@ -54,6 +58,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--measurements", metavar="FILE", help="measured poses (CSV or YAML)")
     p.add_argument("--urdf", metavar="X.urdf", help="the description to calibrate")
     p.add_argument("--frame", help="FILE mode: measured frame (default: the file's)")
+    p.add_argument("--measured-in", choices=MEASURED_IN, default=None,
+                   help="FILE mode: the frame the poses are given in: tracker (the "
+                        "instrument's own, registered from the readings; the default) or "
+                        "base_link (the base correction is then folded into the URDF); "
+                        "default: the file's '# measured in:' line")
     p.add_argument("--out-dir", "--out", dest="out", default="calibrated", metavar="DIR",
                    help="where to write (default ./calibrated; --out is the same)")
     p.add_argument("--quantisation", default="auto",
@@ -158,25 +167,38 @@ def run_file(args: argparse.Namespace) -> int:
                              prismatic=[j.type is JointType.PRISMATIC for j in joints],
                              lower=chain.lower(), upper=chain.upper())
     frame = args.frame or data.frame
+    measured_in = _measured_in(args, data)
+    in_base = measured_in == "base_link"
     options = calibration_options(args)
     readings = list(data.measurements)
     fit, held = split_held_out(readings)
-    progress(f"fitting {len(fit)} readings of {frame}; {len(held)} held out "
-             f"({held_out_note()}) for validation...")
-    cal = identify(urdf, frame, fit, None, options)
+    progress(f"fitting {len(fit)} readings of {frame} (measured in {measured_in}); "
+             f"{len(held)} held out ({held_out_note()}) for validation...")
+    cal = identify(urdf, frame, fit, np.eye(4) if in_base else None, options)
     validation = cal.validate(urdf, frame, held)
     warn_lost(cal)
     check_validated(cal, validation)
     source = (f"the measured frame {frame} is the tool point the tracker fixes; its offset is "
               "identified from these readings")
+    written = cal.apply(urdf, fold_base=in_base)
+    v = validation.summary()
+    check = written_check(written, frame, np.eye(4) if in_base else cal.base, held)
+    check_written(check, v["max_after_m"], v["max_after_rad"])
     report = calibration_dict(cal, validation, (
         f"file mode: {Path(args.measurements).name}, {len(fit)} readings fitted, {len(held)} "
-        f"held out ({held_out_note()})",), source)
+        f"held out ({held_out_note()})", _meaning(measured_in)), source)
+    report["measured_in"] = measured_in
+    report["written_urdf_vs_held_out"] = {"max_m": check.max_m, "max_rad": check.max_rad,
+                                          "readings": check.readings}
     stem = urdf_path.stem
-    paths = write_tree_atomic(args.out, {
-        f"{stem}.calibration.json": json.dumps(report, indent=2) + "\n",
-        f"{stem}.urdf": cal.apply(urdf)})
-    f, v = cal.fit.summary(), validation.summary()
+    files = {f"{stem}.calibration.json": json.dumps(report, indent=2) + "\n",
+             f"{stem}.urdf": written}
+    if not in_base:
+        files[f"{stem}.registration.json"] = json.dumps(
+            {"tracker_from_base_link": with_precision(cal.base.tolist()),
+             "meaning": _meaning(measured_in)}, indent=2) + "\n"
+    paths = write_tree_atomic(args.out, files)
+    f = cal.fit.summary()
     if args.json:
         print_json({"files": [str(p) for p in paths], "calibration": report})
         return EXIT_OK
@@ -189,12 +211,36 @@ def run_file(args: argparse.Namespace) -> int:
         f"{_milli(v['max_before_rad'])} -> {_milli(v['max_after_rad'])} mrad "
         f"({len(held)} readings)")
     out(tool_point_line(cal, source))
+    out(f"  written    {stem}.urdf reproduces the held-out readings within "
+        f"{_milli(check.max_m)} mm, {_milli(check.max_rad)} mrad "
+        f"({'in base_link' if in_base else 'through ' + stem + '.registration.json'})")
+    out(f"  frame      {_meaning(measured_in)}")
     out(f"  bounds     readings {_bound(options, 'reading')}, joint frames "
         f"{_bound(options, 'joint')}, tool {_bound(options, 'tool')}, base "
         f"{_bound(options, 'base')}")
     for p in paths:
         out(f"  wrote {p}")
     return EXIT_OK
+
+
+def _measured_in(args: argparse.Namespace, data: MeasurementSet) -> str:
+    """The readings' frame: the command line's, else the file's; both stated and different is
+    an error (which one is right cannot be guessed)."""
+    if args.measured_in and data.measured_in != "tracker" and args.measured_in != \
+            data.measured_in:
+        raise InvalidInputError(f"--measured-in {args.measured_in}, but {args.measurements} "
+                                f"says its readings are measured in {data.measured_in}")
+    return str(args.measured_in or data.measured_in)
+
+
+def _meaning(measured_in: str) -> str:
+    """What the written URDF's base_link is, for the output and the report."""
+    if measured_in == "base_link":
+        return ("the readings are in base_link: the fitted base correction is folded into the "
+                "first joint's origin, so the URDF reproduces the readings as they are")
+    return ("the readings are in the tracker's own frame: the URDF's base_link is the robot's "
+            "own base, and the tracker sees it through tracker_from_base_link "
+            "(registration.json), which is not part of the URDF")
 
 
 def _bound(options: CalibrationOptions, kind: str) -> str:
