@@ -29,6 +29,10 @@ ALLOWED: dict[str, set[str]] = {
     "export": {"control", "planning", "urdf", "model"} | UTILITIES,
     "calibrate": {"discover", "planning", "control", "urdf", "model"} | UTILITIES,
     "workspace": {"planning", "model"} | UTILITIES,
+    # The live ROS 2 node: built on the public facade (`from usar_arm import Arm`, as the CLI
+    # is) and the layers' own modules; never on the root facade modules (robot, motion...).
+    "ros": {"Arm", "usarsim", "control", "planning", "urdf", "model", "discover", "sim"}
+           | UTILITIES,
 }
 # orchestration
 FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", "calibration",
@@ -36,7 +40,13 @@ FACADES = {"cli", "arm", "cycle", "motion", "description", "embedded", "robot", 
            "__init__",
            "__main__"}
 THIRD_PARTY_LIMITS = {"numpy"}  # errors, spatial, model: numpy only
-HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1}
+HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1,
+         "rclpy": 1}
+ROS_MESSAGES = {"tf2_msgs", "control_msgs", "std_msgs", "sensor_msgs", "geometry_msgs",
+                "trajectory_msgs", "builtin_interfaces", "rosgraph_msgs", "action_msgs",
+                "unique_identifier_msgs", "nav_msgs", "visualization_msgs"}
+"""ROS 2 message packages (the wheels' and the two usar-arm builds): only rclpy's module
+imports them."""
 
 
 def _modules() -> list[tuple[str, Path]]:
@@ -98,6 +108,13 @@ def test_each_heavy_library_is_imported_by_exactly_one_module() -> None:
                 users[root].append(module)
     for lib in HEAVY:
         assert len(set(users[lib])) == 1, f"{lib} is imported by {sorted(set(users[lib]))}"
+
+
+def test_ros_messages_are_imported_only_where_rclpy_is() -> None:
+    """One module owns ROS 2: rclpy and every message package (usar_arm.ros.node)."""
+    users = {module for module, path in _modules() for name in _imports(path)
+             if name.split(".")[0] in ROS_MESSAGES | {"rclpy"}}
+    assert users == {"ros.node"}, f"ROS 2 is imported by {sorted(users)}"
 
 
 def test_discovery_never_imports_the_simulator() -> None:
