@@ -114,6 +114,18 @@ class Client:
         self.node.destroy_subscription(sub)
         return got
 
+    def collect_many(self, topics: dict[str, Any], seconds: float
+                     ) -> dict[str, list[tuple[float, Any]]]:
+        """Like :meth:`collect`, several topics (name -> type) at once."""
+        got: dict[str, list[tuple[float, Any]]] = {name: [] for name in topics}
+        subs = [self.node.create_subscription(
+            kind, name, lambda m, n=name: got[n].append((time.time(), m)), 100)
+            for name, kind in topics.items()]
+        time.sleep(seconds)
+        for sub in subs:
+            self.node.destroy_subscription(sub)
+        return got
+
     def description(self, topic: str = "robot_description",
                     timeout: float = STARTUP_TIMEOUT_S) -> str:
         got = self.collect(String, topic, timeout, LATCHED, until=lambda ms: bool(ms))
