@@ -137,6 +137,13 @@ def test_tf_is_complete_and_equals_forward_kinematics(
             assert np.max(np.abs(composed[:3, :3] - fk[:3, :3])) < 1e-9, frame
         checked += 1
     assert checked >= 10, f"only {checked} tf messages matched a joint state by stamp"
+    truth = [t for _, msg in moving for t in msg.transforms
+             if t.child_frame_id == "KR60ArmTipTruth_truth"]
+    assert len(truth) >= 10, "the tip GroundTruth sensor's frame, as the simulator reports it"
+    reported = _matrix(truth[-1])
+    modelled = model.frame_pose(np.array(states[-1][1].position), "KR60ArmTipTruth")
+    assert truth[-1].header.frame_id == "base_link"
+    assert np.max(np.abs(reported[:3, 3] - modelled[:3, 3])) < 0.011  # UDK prints cm
 
 
 def test_tf_advertises_ros2_jazzys_type_hash(session: tuple[Client, str, Path]) -> None:

@@ -11,7 +11,9 @@ tf2_msgs and control_msgs come from the cache :mod:`usar_arm.ros.build` fills). 
 * ``<controller>/follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory) and
   ``<controller>/joint_trajectory`` (trajectory_msgs/JointTrajectory): the two interfaces of
   joint_trajectory_controller, run by :class:`~usar_arm.ros.runner.GoalRunner`;
-* ``/clock`` (rosgraph_msgs/Clock) from the ASTA lines' simulated time with ``use_sim_time``.
+* ``/clock`` (rosgraph_msgs/Clock) from the ASTA lines' simulated time with ``use_sim_time``;
+* ``robot_description_semantic`` (the SRDF, transient local) for MoveIt, and on ``tf`` the tip
+  GroundTruth sensor's frame as the simulator reports it (``<sensor>_truth`` in base_link).
 
 Names are relative, so ``--ros-args -r __ns:=/robot1`` moves all of them (``tf`` included)
 under the namespace; ``frame_prefix`` prefixes the frame names for one shared tree.
@@ -171,6 +173,42 @@ class StateStreams:
         self.count += 1
 
 
+class TipTruth:
+    """Publishes the tip GroundTruth sensor's frame as the simulator reports it (child
+    ``<tip sensor>_truth`` of base_link on ``tf``), from a thread reading its SEN lines."""
+
+    def __init__(self, node: Node, arm: Arm, tree: TransformTree, streams: StateStreams):
+        self.node = node
+        self.sensor = arm.tip_sensor()
+        self.parent = tree.frame(arm.robot.chain.root)
+        self.child = tree.frame(f"{arm.robot.tip_sensor}_truth")
+        self.streams = streams
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="tip-truth", daemon=True)
+        if self.sensor is not None:
+            self.thread.start()
+
+    def _run(self) -> None:
+        assert self.sensor is not None
+        after: float | None = None
+        offset = np.linalg.inv(self.sensor.sensor_to_tool0)
+        while not self.stop.is_set():
+            try:
+                reading = self.sensor.read(after=after, timeout=1.0)
+            except Exception as exc:  # the connection is gone: nothing more to publish
+                log.warning("tip GroundTruth sensor: %s; its frame is no longer published", exc)
+                return
+            after = reading.time
+            stamp = _time(reading.time) if self.streams.use_sim_time \
+                else self.node.get_clock().now().to_msg()
+            edge = Edge(self.parent, self.child, reading.pose @ offset)
+            try:
+                self.streams.tf.publish(TFMessage(transforms=[_transform(edge, stamp)]))
+            except Exception as exc:  # the context is shutting down
+                log.debug("not published: %s", exc)
+                return
+
+
 class TrajectoryInterfaces:
     """The controller's action server and topic, on a :class:`GoalRunner`."""
 
@@ -301,6 +339,11 @@ def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> 
     stamp = node.get_clock().now().to_msg()
     static.publish(TFMessage(transforms=[_transform(e, stamp)
                                          for e in tree.static_edges(_world_from_root(arm))]))
+    semantic = [text for name, text in arm.robot.files.items() if name.endswith(".srdf")]
+    if semantic:
+        srdf = node.create_publisher(String, "robot_description_semantic", LATCHED)
+        srdf.publish(String(data=semantic[0]))
+    truth = TipTruth(node, arm, tree, streams)
     description = node.create_publisher(String, "robot_description", LATCHED)
     description.publish(String(data=arm.urdf))
     spin = MultiThreadedExecutor(num_threads=4)
@@ -316,6 +359,9 @@ def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> 
         runner.stopping = "the node is shutting down"
         runner.stop_active("the node is shutting down")
         runner.wait_idle()  # the running goal, if any, has stopped and the arm holds
+        truth.stop.set()
+        if truth.thread.is_alive():
+            truth.thread.join(2.0)
         unsubscribe()
         spin.shutdown(timeout_sec=2.0)
     return 0
