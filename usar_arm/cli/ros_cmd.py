@@ -39,6 +39,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="publish /clock from the simulator and stamp with it")
     p.add_argument("--frame-prefix", default="", metavar="PREFIX",
                    help="prepend PREFIX to every tf frame (two robots in one tree)")
+    p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
+                   help="number format of the embedded simulator: udk (UDK's, default) or "
+                        "full (every number exact; ignored with --host)")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="command rate of the executor (default 100 Hz)")
     add_verbosity(p)
@@ -68,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
     options = NodeOptions(robot_type=args.robot, host=args.host or "", port=args.port,
                           start=args.start_position or "", controller=args.controller or "",
                           use_sim_time=args.use_sim_time, frame_prefix=args.frame_prefix,
-                          rate_hz=args.rate, scene=args.scene or "")
+                          rate_hz=args.rate, scene=args.scene or "",
+                          wire_precision=args.wire_precision)
     code = run_node(options, list(args.ros_args))
     err("usar-arm ros: stopped; the arm held its position")
     return code

@@ -74,7 +74,8 @@ class NodeOptions:
             controller's name ('' = ``<actuator>_controller``, what ``moveit-config`` writes).
         use_sim_time: stamps and /clock from the simulator's time. frame_prefix: prepended to
             every frame. rate_hz: the executor's command rate. scene: goals whose motion
-            collides in it are refused ('' = none). node_name: the node's name.
+            collides in it are refused ('' = none). wire_precision: number format of the
+            embedded simulator (udk, full). node_name: the node's name.
     """
 
     robot_type: str = "KR60"
@@ -86,6 +87,7 @@ class NodeOptions:
     frame_prefix: str = ""
     rate_hz: float = 100.0
     scene: str = ""
+    wire_precision: str = "udk"
     node_name: str = "usar_arm"
 
 
@@ -378,7 +380,7 @@ def run(options: NodeOptions, ros_args: list[str] | None = None,
     try:
         chosen = _parameters(node, options)
         arm = Arm.connect(chosen.robot_type, host=chosen.host or None, port=chosen.port,
-                          start=chosen.start or None)
+                          start=chosen.start or None, wire_precision=chosen.wire_precision)
         return serve(node, arm, chosen, stop or threading.Event())
     except Exception:
         if not rclpy.ok():  # Ctrl-C/SIGTERM while starting: a clean stop
