@@ -4,8 +4,8 @@ The one module of usar-arm that imports rclpy and ROS message packages (the gene
 tf2_msgs and control_msgs come from the cache :mod:`usar_arm.ros.build` fills). It serves:
 
 * ``robot_description`` (std_msgs/String, reliable, transient local): the learnt URDF;
-* ``joint_states`` (sensor_msgs/JointState): one per ASTA line, published from the line's
-  arrival, URDF joint names, rad/m;
+* ``joint_states`` (sensor_msgs/JointState): one per ASTA line, published on the line's
+  arrival and stamped with it, URDF joint names, rad/m;
 * ``tf_static`` / ``tf`` (tf2_msgs/TFMessage): world -> base_link, every fixed joint, every
   moving joint per ASTA (what robot_state_publisher does with the joint states);
 * ``<controller>/follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory) and
@@ -24,6 +24,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -155,15 +156,18 @@ class StateStreams:
         if not (np.all(np.isfinite(q)) and math.isfinite(msg.time)):
             return
         try:
-            self.publish(q, float(msg.time))
+            # Stamped with the line's arrival (the system clock's reading of that moment).
+            self.publish(q, float(msg.time), time.time() - (time.monotonic() - rec.wall_time))
         except Exception as exc:  # a publisher of a context shutting down: never kill the reader
             log.debug("not published: %s", exc)
 
-    def publish(self, q: Array, sim_time: float) -> None:
-        """One JointState, one TFMessage (and one Clock) for joint values ``q``."""
+    def publish(self, q: Array, sim_time: float, arrived: float) -> None:
+        """One JointState, one TFMessage (and one Clock) for joint values ``q`` (rad/m),
+        stamped with the simulated time (s) with use_sim_time, else ``arrived`` (s since the
+        epoch)."""
         if self.clock is not None:
             self.clock.publish(Clock(clock=_time(sim_time)))
-        stamp = _time(sim_time) if self.use_sim_time else self.node.get_clock().now().to_msg()
+        stamp = _time(sim_time if self.use_sim_time else arrived)
         state = JointState(name=self.names, position=q.tolist())
         state.header.stamp = stamp
         if self._previous is not None and sim_time > self._previous[0]:
