@@ -155,6 +155,19 @@ def test_a_newer_goal_pre_empts_the_running_one(client: Client) -> None:
     assert np.max(np.abs(joints(client) - q_second)) < 0.002
 
 
+def test_of_goals_sent_back_to_back_the_newest_runs(client: Client) -> None:
+    q0 = joints(client)
+    first = client.send(ACTION, make_goal(NAMES, [(4.0, q0 + np.array([0.4, 0, 0, 0, 0, 0]))]))
+    time.sleep(1.0)
+    second = client.send(ACTION, make_goal(NAMES, [(3.0, q0 + np.array([0, 0, 0.3, 0, 0, 0]))]))
+    third = client.send(ACTION, make_goal(NAMES, [(2.0, q0)]))
+    outcomes = [client.result(h) for h in (first, second, third)]
+    assert [s for s, _ in outcomes] == [GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_ABORTED,
+                                       GoalStatus.STATUS_SUCCEEDED], outcomes
+    assert all("pre-empted" in r.error_string for _, r in outcomes[:2])
+    assert np.max(np.abs(joints(client) - q0)) < 0.002
+
+
 def test_a_cancelled_goal_stops_and_the_arm_holds(client: Client) -> None:
     q0 = joints(client)
     handle = client.send(ACTION, make_goal(NAMES, [(5.0, q0 + np.array([0, 0, 0, 0.8, 0, 0]))]))

@@ -86,6 +86,7 @@ class GoalRunner:
         self._lock = threading.Lock()
         self._guard = threading.Lock()
         self._active: Job | None = None
+        self._latest: Job | None = None
         self.stopping: str | None = None
         """Set when the node shuts down: the running goal stops with this reason."""
 
@@ -103,13 +104,19 @@ class GoalRunner:
         return True
 
     def run(self, job: Job) -> Outcome:
-        """Pre-empt the running job, then execute ``job`` and say how it ended."""
+        """Pre-empt the running job, then execute ``job`` and say how it ended. Of several
+        jobs waiting for the arm, only the newest runs; the others end pre-empted."""
+        with self._guard:
+            self._latest = job
         self.stop_active(f"pre-empted by a newer goal ({job.label})")
         if not self._lock.acquire(timeout=TAKE_OVER_TIMEOUT_S):
             return Outcome(False, PATH_TOLERANCE_VIOLATED, "the previous goal did not stop "
                            f"within {TAKE_OVER_TIMEOUT_S} s")
         try:
             with self._guard:
+                if self._latest is not job:
+                    return Outcome(False, SUCCESSFUL, "pre-empted by a newer goal before it "
+                                   "started")
                 self._active = job
             return self._run(job)
         finally:
@@ -135,6 +142,11 @@ class GoalRunner:
             return self._stopped(job, exc.reason, str(exc))
         except UsarArmError as exc:
             return Outcome(False, PATH_TOLERANCE_VIOLATED, str(exc))
+        except Exception as exc:  # never the node's end: the goal reports it
+            log.exception("goal failed")
+            self.executor.hold()
+            return Outcome(False, PATH_TOLERANCE_VIOLATED,
+                           f"the execution failed: {type(exc).__name__}: {exc}")
         finally:
             self.executor.monitor = None
         final = report.goal + 0.0
