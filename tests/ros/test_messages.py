@@ -103,3 +103,13 @@ def test_the_built_packages_load_in_a_fresh_process() -> None:
                           env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == JAZZY["tf2_msgs/msg/TFMessage"]
+
+
+def test_without_the_ros_extra_the_node_says_how_to_install_it() -> None:
+    code = ("import sys\nsys.modules['rclpy'] = None  # as if the extra were not installed\n"
+            "from usar_arm.cli.main import main\nsys.exit(main(['ros']))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=False, cwd=ROOT)
+    assert done.returncode == 69, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "pip install 'usar-arm[ros]'" in lines[0], done.stderr
