@@ -75,6 +75,7 @@ def test_tolerances_zero_means_default_negative_means_none() -> None:
     (goal([(0.1, (HERE + 1.0).tolist())]), INVALID_GOAL, "above its velocity limit"),
     (goal([(0.0, (HERE + 0.2).tolist())]), INVALID_GOAL, "but the arm is at"),
     (goal([(1.0, HERE.tolist())], stamp=10.0), OLD_HEADER_TIMESTAMP, "ago"),
+    (goal([(1.0, HERE.tolist())], accelerations=((0.0,),)), INVALID_GOAL, "6 accelerations"),
 ])
 def test_a_goal_breaking_a_rule_is_refused_with_its_code(g: TrajectoryGoal, code: int,
                                                          words: str) -> None:

@@ -184,6 +184,22 @@ def test_a_cancelled_goal_stops_and_the_arm_holds(client: Client) -> None:
     assert moved(client, held) < 0.001, "and holds there"
 
 
+def test_an_empty_joint_trajectory_message_stops_the_running_goal(client: Client) -> None:
+    q0 = joints(client)
+    handle = client.send(ACTION, make_goal(NAMES, [(4.0, q0 + np.array([0, 0, 0, 0, 0.5, 0]))]))
+    publisher = client.node.create_publisher(JointTrajectory,
+                                             "KR60Arm_controller/joint_trajectory", 10)
+    deadline = time.monotonic() + 10
+    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)
+    publisher.publish(JointTrajectory(joint_names=NAMES))
+    status, result = client.result(handle)
+    assert status == GoalStatus.STATUS_ABORTED and "empty" in result.error_string, \
+        result.error_string
+    client.node.destroy_publisher(publisher)
+
+
 def test_the_joint_trajectory_topic_moves_the_arm(client: Client) -> None:
     q0 = joints(client)
     publisher = client.node.create_publisher(JointTrajectory,

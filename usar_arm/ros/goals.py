@@ -8,7 +8,8 @@ Rules (each failure is a :class:`GoalRejected` with the controller's error code)
 
 * joint names: none missing, none unknown, none twice (INVALID_JOINTS);
 * points: at least one; per point as many positions as joints, velocities and accelerations
-  empty or as many; every number finite; times strictly increasing (INVALID_GOAL);
+  empty or as many (accelerations are checked, not followed); every number finite; times
+  strictly increasing (INVALID_GOAL);
 * the header stamp, when set, plus the last point's time lies in the future
   (OLD_HEADER_TIMESTAMP);
 * every position inside the joint limits, every velocity the trajectory needs within the
@@ -156,6 +157,7 @@ def check_goal(goal: TrajectoryGoal, chain: KinematicChain, current: Array, now:
     q = _matrix(goal.positions, "positions", k, n, optional=False)
     assert q is not None
     qd = _matrix(goal.velocities, "velocities", k, n, optional=True)
+    _matrix(goal.accelerations, "accelerations", k, n, optional=True)  # checked, not used
     q, qd = q[:, order], (np.zeros_like(q) if qd is None else qd[:, order])
     delay = 0.0
     if goal.stamp > 0:

@@ -295,6 +295,10 @@ class TrajectoryInterfaces:
         return send
 
     def _on_topic(self, msg: JointTrajectory) -> None:
+        if not msg.points:  # as joint_trajectory_controller: stop what runs and hold
+            self.runner.stop_active("an empty joint_trajectory message: hold")
+            log.info("joint_trajectory: an empty message; the arm holds")
+            return
         try:
             checked = self._check(goal_from_message(msg))
         except GoalRejected as exc:
