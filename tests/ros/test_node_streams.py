@@ -150,3 +150,24 @@ def test_tf_advertises_ros2_jazzys_type_hash(session: tuple[Client, str, Path]) 
     client, _, _ = session
     infos = client.node.get_publishers_info_by_topic("/tf")
     assert infos and {str(i.topic_type_hash) for i in infos} == {JAZZY_TF_HASH}
+
+
+def test_the_moveit_package_names_the_nodes_controller_and_action(
+        session: tuple[Client, str, Path]) -> None:
+    import os
+
+    import yaml
+    from rclpy.action import get_action_names_and_types
+
+    client, _, folder = session
+    done = subprocess.run([sys.executable, "-m", "usar_arm", "moveit-config", "--no-calibrate",
+                           "--out", str(folder / "moveit"), "-q"], capture_output=True,
+                          text=True, timeout=300, check=False, cwd=ROOT,
+                          env={**os.environ, "USAR_ARM_CACHE": str(folder / "cache")})
+    assert done.returncode == 0, done.stderr[-2000:]
+    config = yaml.safe_load((folder / "moveit" / "config" / "moveit_controllers.yaml")
+                            .read_text())["moveit_simple_controller_manager"]
+    (name,) = config["controller_names"]
+    wanted = f"/{name}/{config[name]['action_ns']}"
+    served = {n: t for n, t in get_action_names_and_types(client.node)}
+    assert served.get(wanted) == ["control_msgs/action/FollowJointTrajectory"], served
