@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm import Arm
+from usar_arm.errors import UsarArmError
 from usar_arm.ros.build import ensure_importable
 from usar_arm.ros.frames import Edge, TransformTree, quaternion, world_from_platform
 from usar_arm.ros.goals import GoalRejected, TrajectoryGoal, check_goal
@@ -328,13 +329,18 @@ def _world_from_root(arm: Arm) -> Array:
     sensor = arm.tip_sensor()
     if sensor is None:
         return np.eye(4)
-    sensor.read(timeout=2.0)
+    try:
+        sensor.read(timeout=2.0)
+    except UsarArmError as exc:
+        log.warning("no GroundTruth reading of the platform (%s): world -> base_link is the "
+                    "identity", exc)
+        return np.eye(4)
     return world_from_platform(sensor.platform_pose())
 
 
 def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> int:
-    """Publish and serve until ``stop`` is set or the ROS context shuts down (s-free loop
-    of the executor with 0.1 s waits); the arm holds when it returns."""
+    """Publish and serve until ``stop`` is set or the ROS context shuts down (Ctrl-C,
+    SIGTERM; checked every 0.1 s); the arm holds when it returns."""
     tree = TransformTree(arm.robot.chain, options.frame_prefix)
     assert arm.client is not None and arm.robot.actuator is not None
     executor = arm.executor()
