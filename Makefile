@@ -6,7 +6,7 @@ TEST_VENV := .venv-test
 WARM_UP := from usar_arm.planning.compiled import warm_up; warm_up(); \
 	from usar_arm.workspace.kernels import warm_up; warm_up()
 
-.PHONY: demo test test-all test-slow lint typecheck bench bench-quick load soak clean
+.PHONY: demo test test-all test-slow lint typecheck bench bench-quick load soak clean ros-setup
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -18,9 +18,16 @@ $(DEMO_VENV)/.installed: pyproject.toml
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
-	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray]"
+	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray,ros]"
 	$(TEST_VENV)/bin/python -c "$(WARM_UP)"
+	$(TEST_VENV)/bin/usar-arm ros --setup
 	touch $@
+
+# The ROS 2 message packages the package index lacks (tf2_msgs, control_msgs), built once into
+# ~/.cache/usar-arm/ros-interfaces for the test venv (about 40 s on 2 cores; needs a C++
+# compiler). `make test` does it; this target redoes it after the cache was cleared.
+ros-setup: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/usar-arm ros --setup
 
 demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo

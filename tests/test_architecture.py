@@ -29,11 +29,21 @@ ALLOWED: dict[str, set[str]] = {
     "workspace": {"planning", "control", "core"},
     "description": {"discover", "urdf", "planning", "sim", "usarsim", "core"},
     "arm": LOWER | {"core"},
+    # The live ROS 2 node: built on the public facade (`from usar_arm import Arm`, as the CLI
+    # is) and the layers below it; it never starts the simulator itself.
+    "ros": {"Arm", "arm", "description", "usarsim", "control", "planning", "urdf", "discover",
+            "core"},
 }
 # The command line and the package's entry points string every layer together.
 ENTRY_POINTS = {"cli", "__init__", "__main__"}
 THIRD_PARTY_LIMITS = {"numpy", "yaml"}  # core: numpy, and PyYAML in yamlio
-HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1}
+HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1,
+         "rclpy": 1}
+ROS_MESSAGES = {"tf2_msgs", "control_msgs", "std_msgs", "sensor_msgs", "geometry_msgs",
+                "trajectory_msgs", "builtin_interfaces", "rosgraph_msgs", "action_msgs",
+                "unique_identifier_msgs", "nav_msgs", "visualization_msgs"}
+"""ROS 2 message packages (the wheels' and the two usar-arm builds): only rclpy's module
+imports them."""
 
 
 def _modules() -> list[tuple[str, Path]]:
@@ -107,6 +117,13 @@ def test_every_module_belongs_to_a_layer_with_a_rule() -> None:
     """No loose module at the package's root besides its entry points."""
     loose = {m for m, _ in _modules() if _layer(m) not in ALLOWED and _layer(m) not in ENTRY_POINTS}
     assert loose == set()
+
+
+def test_ros_messages_are_imported_only_where_rclpy_is() -> None:
+    """One module owns ROS 2: rclpy and every message package (usar_arm.ros.node)."""
+    users = {module for module, path in _modules() for name in _imports(path)
+             if name.split(".")[0] in ROS_MESSAGES | {"rclpy"}}
+    assert users == {"ros.node"}, f"ROS 2 is imported by {sorted(users)}"
 
 
 OFFLINE_PLAN = """

@@ -20,7 +20,7 @@ COMMANDS: dict[str, str] = {
     "ik": "ik_cmd", "plan": "plan_cmd", "execute": "execute_cmd", "calibrate": "calibrate_cmd",
     "tesseract-config": "tesseract_cmd", "reach": "reach_cmd", "place": "place_cmd",
     "batch": "batch_cmd", "render": "picture_cmds", "plot": "picture_cmds",
-    "view": "picture_cmds"}
+    "view": "picture_cmds", "ros": "ros_cmd"}
 """Each command and the module of ``usar_arm.cli`` that defines it, in the order of --help (a
 test checks it against what the modules register)."""
 

@@ -22,6 +22,7 @@ import gc
 import logging
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -179,6 +180,11 @@ class Executor:
         """The client's count of non-USARSim lines when the current execution began."""
         self._t0 = 0.0
         """When the current execution began, then when its motion began (perf_counter s)."""
+        self.monitor: Callable[[float], str | None] | None = None
+        """Asked every command period and every settling step with the time (s) since the
+        motion began; a returned reason (a cancel, a path tolerance a caller checks) stops the
+        motion: the arm holds where it is measured and :class:`ExecutionAbortedError` carries
+        the reason."""
 
     # ------------------------------------------------------------------ low level
     def send(self, targets: Array) -> None:
@@ -240,6 +246,10 @@ class Executor:
         if problem is not None:
             self.hold(self._holding)
             raise ExecutionAbortedError(problem, at_time_s=now - t0)
+        reason = self.monitor(now - self._t0) if self.monitor is not None else None
+        if reason is not None:
+            self.hold()
+            raise ExecutionAbortedError(reason, at_time_s=now - self._t0)
 
     # ------------------------------------------------------------------ identification
     def identify(self, duration: float = 2.0) -> DriveModel:

@@ -1,0 +1,182 @@
+"""A real rclpy client (this process) of a `usar-arm ros` node (another process), each pair on
+its own ROS_DOMAIN_ID and on localhost only."""
+
+from __future__ import annotations
+
+import itertools
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from usar_arm.ros.build import ensure_importable
+
+ensure_importable()
+
+import rclpy  # noqa: E402
+from control_msgs.action import FollowJointTrajectory  # noqa: E402
+from control_msgs.msg import JointTolerance  # noqa: E402
+from rclpy.action import ActionClient  # noqa: E402
+from rclpy.context import Context  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
+
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+STARTUP_TIMEOUT_S = 120.0
+_ids = itertools.count()
+
+
+def domain_id() -> int:
+    """A domain id no other test (xdist worker) of this run uses: 5..100."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    w = int(worker[2:]) if worker[2:].isdigit() else 0
+    return 5 + (w * 24 + next(_ids)) % 96
+
+
+def ros_env(domain: int, **extra: str) -> dict[str, str]:
+    """The environment of a node process on ``domain``, localhost only."""
+    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
+            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", **extra}
+
+
+class NodeProcess:
+    """`usar-arm ros ...` in a subprocess; stop() sends SIGTERM and returns its exit code."""
+
+    def __init__(self, domain: int, args: list[str], log: Path, **env: str):
+        self.log = log
+        self._log_file = open(log, "w")
+        self.proc = subprocess.Popen([sys.executable, "-m", "usar_arm", "ros", *args],
+                                     env=ros_env(domain, **env), stdout=self._log_file,
+                                     stderr=subprocess.STDOUT)
+
+    def text(self) -> str:
+        return self.log.read_text()
+
+    def stop(self, sig: int = signal.SIGTERM, timeout: float = 30.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            code = self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            code = self.proc.wait(10)
+        self._log_file.close()
+        return code
+
+
+class Client:
+    """An rclpy node on ``domain`` spun in a background thread."""
+
+    def __init__(self, domain: int, namespace: str = ""):
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = rclpy.create_node("usar_arm_test_client", namespace=namespace,
+                                      context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+        self._clients: dict[str, ActionClient] = {}
+        self.feedbacks: list[Any] = []
+
+    def _spin(self) -> None:
+        while self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # shutting down
+                return
+
+    def close(self) -> None:
+        for client in self._clients.values():
+            client.destroy()
+        self.executor.shutdown(timeout_sec=2.0)
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+        self._thread.join(5)
+
+    def collect(self, msg_type: Any, topic: str, seconds: float, qos: Any = 100,
+                until: Callable[[list[Any]], bool] | None = None) -> list[tuple[float, Any]]:
+        """(receipt time.time(), message) of ``topic`` for ``seconds`` (or until ``until``)."""
+        got: list[tuple[float, Any]] = []
+        sub = self.node.create_subscription(msg_type, topic,
+                                            lambda m: got.append((time.time(), m)), qos)
+        end = time.monotonic() + seconds
+        while time.monotonic() < end and not (until and until([m for _, m in got])):
+            time.sleep(0.02)
+        self.node.destroy_subscription(sub)
+        return got
+
+    def collect_many(self, topics: dict[str, Any], seconds: float
+                     ) -> dict[str, list[tuple[float, Any]]]:
+        """Like :meth:`collect`, several topics (name -> type) at once."""
+        got: dict[str, list[tuple[float, Any]]] = {name: [] for name in topics}
+        subs = [self.node.create_subscription(
+            kind, name, lambda m, n=name: got[n].append((time.time(), m)), 100)
+            for name, kind in topics.items()]
+        time.sleep(seconds)
+        for sub in subs:
+            self.node.destroy_subscription(sub)
+        return got
+
+    def description(self, topic: str = "robot_description",
+                    timeout: float = STARTUP_TIMEOUT_S) -> str:
+        got = self.collect(String, topic, timeout, LATCHED, until=lambda ms: bool(ms))
+        assert got, f"no {topic} within {timeout} s"
+        return str(got[0][1].data)
+
+    def action(self, name: str) -> ActionClient:
+        if name not in self._clients:
+            self._clients[name] = ActionClient(self.node, FollowJointTrajectory, name)
+        client = self._clients[name]
+        assert client.wait_for_server(timeout_sec=30.0), f"no action server {name}"
+        return client
+
+    def send(self, name: str, goal: FollowJointTrajectory.Goal,
+             timeout: float = 60.0) -> Any:
+        """Send a goal; returns its handle once accepted (or rejected)."""
+        future = self.action(name).send_goal_async(goal, feedback_callback=self._feedback)
+        return _wait(future, timeout)
+
+    def _feedback(self, msg: Any) -> None:
+        self.feedbacks.append(msg.feedback)
+
+    def result(self, handle: Any, timeout: float = 60.0) -> Any:
+        """The goal's (status, result) once it ends."""
+        response = _wait(handle.get_result_async(), timeout)
+        return response.status, response.result
+
+
+def _wait(future: Any, timeout: float) -> Any:
+    end = time.monotonic() + timeout
+    while not future.done():
+        assert time.monotonic() < end, f"no answer within {timeout} s"
+        time.sleep(0.005)
+    return future.result()
+
+
+def make_goal(names: list[str], points: list[tuple[float, list[float]]],
+              path_tolerance: dict[str, float] | None = None,
+              goal_tolerance: dict[str, float] | None = None,
+              stamp: tuple[int, int] = (0, 0)) -> FollowJointTrajectory.Goal:
+    """A goal through (time s, positions) points."""
+    trajectory = JointTrajectory(joint_names=names)
+    trajectory.header.stamp.sec, trajectory.header.stamp.nanosec = stamp
+    for t, q in points:
+        point = JointTrajectoryPoint(positions=[float(v) for v in q])
+        point.time_from_start.sec = int(t)
+        point.time_from_start.nanosec = round((t - int(t)) * 1e9)
+        trajectory.points.append(point)
+    goal = FollowJointTrajectory.Goal(trajectory=trajectory)
+    goal.path_tolerance = [JointTolerance(name=n, position=v)
+                           for n, v in (path_tolerance or {}).items()]
+    goal.goal_tolerance = [JointTolerance(name=n, position=v)
+                           for n, v in (goal_tolerance or {}).items()]
+    return goal
