@@ -22,8 +22,9 @@ SOURCES = [p for folder in ("usar_arm", "tests", "bench", "tools", "fuzz", "exam
 SOURCES += [ROOT / "README.md", ROOT / "Makefile"]
 CITATION = re.compile(r"docs/([a-z_-]+\.md)(?:\s*\(?\s*sections?\s+"
                       r"([0-9][0-9.]*(?:(?:,\s*|\s+and\s+)[0-9][0-9.]*)*))?")
-# Pages written in parallel on issue 24 that the README already links; each is checked like any
-# other as soon as it exists.
+# Pages written in parallel on issue 24 that the README already links: each is checked like any
+# other as soon as it exists. When one lands, add it to mkdocs.yml's nav and docs/index.md, and
+# remove it from here (the site's nav test then requires it).
 PENDING = {"ros.md"}
 README = ROOT / "README.md"
 OUTSIDE = re.compile(r"usarsim-protocol\.md|ros-conventions\.md|DESIGN\.md|shared/reference"

@@ -1,5 +1,6 @@
-"""MkDocs hook of ``make docs`` (mkdocs.yml ``hooks``): every public name of the package must
-have a docstring, or the strict build fails.
+"""MkDocs hooks of ``make docs`` (mkdocs.yml ``hooks``): every public name of the package must
+have a docstring, or the strict build fails; and the docstrings' Sphinx roles
+(``:class:`Arm```) show as the code they name.
 
 Public: each name in ``__all__`` of ``usar_arm`` and of each of its subpackages, and the public
 methods and properties of those that are classes (mkdocstrings renders these; without a
@@ -11,6 +12,7 @@ exits 1 if anything is.
 from __future__ import annotations
 
 import logging
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -19,6 +21,7 @@ import griffe
 
 ROOT = Path(__file__).resolve().parents[1]
 log = logging.getLogger("mkdocs.hooks.docstrings")
+ROLE = re.compile(r":(?:class|mod|meth|func|attr|data|exc|obj):(?=<code>)")
 
 
 def _documented(obj: Any) -> bool:
@@ -66,6 +69,12 @@ def on_pre_build(config: Any) -> None:
     docstring."""
     for line in missing_docstrings():
         log.warning("public name without a docstring: %s", line)
+
+
+def on_page_content(html: str, **_: Any) -> str:
+    """Drop the role of a Sphinx cross-reference, which mkdocstrings leaves as text before the
+    code it names."""
+    return ROLE.sub("", html)
 
 
 if __name__ == "__main__":
