@@ -3,10 +3,12 @@
 PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
+DOCS_VENV := .venv-docs
 WARM_UP := from usar_arm.planning.compiled import warm_up; warm_up(); \
 	from usar_arm.workspace.kernels import warm_up; warm_up()
 
-.PHONY: demo test test-all test-slow lint typecheck bench bench-quick load soak clean ros-setup
+.PHONY: demo test test-all test-slow lint typecheck docs bench bench-quick load soak clean \
+	ros-setup
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -60,6 +62,22 @@ lint: $(TEST_VENV)/.installed
 typecheck: $(TEST_VENV)/.installed
 	$(TEST_VENV)/bin/mypy usar_arm
 
+# The documentation site (mkdocs.yml) into build/site, with --strict: a broken link or anchor, or
+# a public name without a docstring (tools/docs_hooks.py), fails it. Its own venv: mkdocstrings
+# reads the package's source with griffe and imports nothing, so the package goes in without its
+# dependencies (no Pinocchio, OMPL or MuJoCo to download for the docs).
+DOCS_PACKAGES := "mkdocs>=1.6,<2" "mkdocs-material>=9.5,<10" "mkdocstrings[python]>=0.27"
+
+$(DOCS_VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(DOCS_VENV)
+	$(DOCS_VENV)/bin/pip install --quiet --upgrade pip
+	$(DOCS_VENV)/bin/pip install --quiet $(DOCS_PACKAGES)
+	$(DOCS_VENV)/bin/pip install --quiet --no-deps -e .
+	touch $@
+
+docs: $(DOCS_VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(DOCS_VENV)/bin/mkdocs build --strict --site-dir build/site
+
 # Benchmarks (bench/README-peers.md, bench/results/README.md). Each peer gets its own venv in
 # bench/.venvs (created once by venvs.py; mplib needs numpy < 2); usar-arm runs in the test venv.
 BENCH_QUICK_OUT ?= build/bench-quick
@@ -83,4 +101,4 @@ soak: $(TEST_VENV)/.installed
 	$(TEST_VENV)/bin/python tools/soak_sim.py --minutes 10 --json bench/results/soak.json
 
 clean:
-	rm -rf $(DEMO_VENV) $(TEST_VENV) build *.egg-info
+	rm -rf $(DEMO_VENV) $(TEST_VENV) $(DOCS_VENV) build *.egg-info

@@ -9,8 +9,9 @@ imported on first use, so a process that needs one layer (a workspace worker, ``
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from usar_arm.core.lazy import exports
 from usar_arm.core.version import __version__
 
 if TYPE_CHECKING:
@@ -18,10 +19,4 @@ if TYPE_CHECKING:
 
 __all__ = ["Arm", "__version__"]
 
-
-def __getattr__(name: str) -> Any:
-    if name == "Arm":
-        from usar_arm.arm.facade import Arm
-
-        return Arm
-    raise AttributeError(f"module 'usar_arm' has no attribute {name!r}")
+__getattr__ = exports(__name__, {"arm.facade": ("Arm",)})

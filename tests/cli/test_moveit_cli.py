@@ -26,7 +26,7 @@ def test_the_ros_distro_chooses_the_pipeline_s_format(
                  *chosen]) == EXIT_OK
     doc = json.loads(capsys.readouterr().out)
     expected = distro or DEFAULT_DISTRO
-    assert DEFAULT_DISTRO == "jazzy"  # the current LTS, as the help and README say
+    assert DEFAULT_DISTRO == "jazzy"  # the current LTS, as the help and the docs say
     assert doc["ros_distro"] == expected and doc["calibrated"] is False
     pipeline = yaml.safe_load((out / "config" / "ompl_planning.yaml").read_text())
     key = "planning_plugin" if expected == "humble" else "planning_plugins"

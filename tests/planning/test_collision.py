@@ -129,11 +129,11 @@ def test_unknown_links_in_allow_are_rejected(kr60: Robot, tmp_path: Path) -> Non
     assert "link_9" in str(info.value) and "link_6" in str(info.value)
 
 
-@pytest.mark.xfail(strict=True, reason="known limitation (README): one cylinder per link, "
-                   "trimmed short of its joints, leaves the joints bare; cylinders spanning "
-                   "their joints made self-collision near the joints too conservative (the "
-                   "Fanuc's calibration tour could not be planned); the fix is a second, thin "
-                   "core shape per link")
+@pytest.mark.xfail(strict=True, reason="known limitation (docs/limitations.md): one cylinder "
+                   "per link, trimmed short of its joints, leaves the joints bare; cylinders "
+                   "spanning their joints made self-collision near the joints too conservative "
+                   "(the Fanuc's calibration tour could not be planned); the fix is a second, "
+                   "thin core shape per link")
 @pytest.mark.parametrize("robot_name", ["kr60", "fanuc"])
 def test_a_thin_plate_through_any_joint_touches_the_arm(robot_name: str,
                                                         request: pytest.FixtureRequest) -> None:

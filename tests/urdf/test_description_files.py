@@ -58,8 +58,9 @@ FILES = ("discovery.json", "joint_limits.yaml", "readings.csv", "srdf", "urdf")
 @pytest.mark.parametrize("robot", ["KR60", "Fanuc_M16iB20"])
 def test_the_calibrated_descriptions_are_regenerated_byte_identically_from_their_readings(
         robot: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The README's command: usar-arm urdf --robot ROBOT --readings
-    robots/generated/ROBOT.readings.csv --out-dir robots/generated (the Fanuc's tour read a
+    """The command of docs/calibration.md (Reproducing a calibrated description): usar-arm
+    urdf --robot ROBOT --readings robots/generated/ROBOT.readings.csv --out-dir
+    robots/generated (the Fanuc's tour read a
     joint 1.2 mrad past its limit: the readings file must still be read back)."""
     monkeypatch.setenv("USAR_ARM_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "out"

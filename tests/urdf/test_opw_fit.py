@@ -56,14 +56,14 @@ def test_the_usarsim_kr60_is_3_mm_from_opw_because_its_wrist_axes_pass_2_mm_apar
     assert not fit.within(1e-6, 1e-6) and fit.within(5e-3, 1e-6)
 
 
-def test_the_readme_gives_the_figures_the_tool_measures() -> None:
-    """README's Tesseract section quotes the wrist gap and OPW's deviation of the as-learnt and
-    the calibrated KR60 to two digits, as tesseract-config reports them."""
-    text = " ".join((ROOT / "README.md").read_text().split())
+def test_the_docs_give_the_figures_the_tool_measures() -> None:
+    """The Tesseract section of docs/moveit-tesseract.md quotes the wrist gap and OPW's deviation
+    of the as-learnt and the calibrated KR60 to two digits, as tesseract-config reports them."""
+    text = " ".join((ROOT / "docs" / "moveit-tesseract.md").read_text().split())
     quoted = re.search(r"the axes of its joints a4 and a6 pass ([0-9.]+) mm apart \(([0-9.]+) mm "
                        r"in the calibrated description\), so OPW would put tool0 up to ([0-9.]+) "
                        r"mm off \(([0-9.]+) mm calibrated\)", text)
-    assert quoted, "README's sentence on the KR60 and OPW changed: update this test"
+    assert quoted, "the docs' sentence on the KR60 and OPW changed: update this test"
     chains = [robot_from_files(d / "KR60.urdf").chain for d in (AS_LEARNT, AS_LEARNT.parent)]
     fits = [fit_opw(chain) for chain in chains]
     measured = [*(f.wrist_gap_m for f in fits), *(f.position_error_m for f in fits)]

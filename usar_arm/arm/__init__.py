@@ -4,17 +4,22 @@ calibration of a live arm through its tip sensor (:mod:`.tour`, :mod:`.tour_cali
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from usar_arm.core.lazy import exports
 
 if TYPE_CHECKING:
+    from usar_arm.arm.cycle import CycleResult, run_cycle
     from usar_arm.arm.facade import Arm
+    from usar_arm.arm.tour_calibration import CalibrationSettings, calibrate_arm
 
-__all__ = ["Arm"]
+_HOMES = {
+    "cycle": ("CycleResult", "run_cycle"),
+    "facade": ("Arm",),
+    "tour_calibration": ("CalibrationSettings", "calibrate_arm"),
+}
+"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
 
+__all__ = ["Arm", "CalibrationSettings", "CycleResult", "calibrate_arm", "run_cycle"]
 
-def __getattr__(name: str) -> Any:
-    if name == "Arm":
-        from usar_arm.arm.facade import Arm
-
-        return Arm
-    raise AttributeError(f"module 'usar_arm.arm' has no attribute {name!r}")
+__getattr__ = exports(__name__, _HOMES)

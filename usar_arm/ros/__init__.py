@@ -5,3 +5,29 @@
   checks, the transform tree, running goals on usar-arm's executor);
 * :mod:`.node`: the only module that imports rclpy and ROS message packages.
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from usar_arm.core.lazy import exports
+
+if TYPE_CHECKING:
+    from usar_arm.ros.build import BuiltInterfaces, RosSetupError, setup
+    from usar_arm.ros.frames import TransformTree
+    from usar_arm.ros.goals import CheckedGoal, GoalRejected, TrajectoryGoal, check_goal
+    from usar_arm.ros.runner import GoalRunner
+
+_HOMES = {
+    "build": ("BuiltInterfaces", "RosSetupError", "setup"),
+    "frames": ("TransformTree",),
+    "goals": ("CheckedGoal", "GoalRejected", "TrajectoryGoal", "check_goal"),
+    "runner": ("GoalRunner",),
+}
+"""The module of each public name, imported on first use (usar_arm.core.lazy). The node itself
+(:mod:`.node`, rclpy) is run by ``usar-arm ros``; none of these names imports rclpy."""
+
+__all__ = ["BuiltInterfaces", "CheckedGoal", "GoalRejected", "GoalRunner", "RosSetupError",
+           "TrajectoryGoal", "TransformTree", "check_goal", "setup"]
+
+__getattr__ = exports(__name__, _HOMES)

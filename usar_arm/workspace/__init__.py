@@ -26,8 +26,9 @@ batch jobs.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from usar_arm.core.lazy import exports
 
 if TYPE_CHECKING:
     from usar_arm.workspace.engine import InProcess, RunStats
@@ -39,22 +40,20 @@ if TYPE_CHECKING:
     from usar_arm.workspace.reach_map import ReachMap
     from usar_arm.workspace.targets import Target, load_targets
 
-_HOMES = {"InProcess": "engine", "RunStats": "engine", "ReachBound": "grid",
-          "VoxelGrid": "grid", "reach_bound": "grid", "OrientationSet": "orientations",
-          "orientation_set": "orientations", "PlaceSettings": "placement",
-          "ProcessBackend": "pool", "ReachPlan": "reach", "ReachSettings": "reach",
-          "ReachMap": "reach_map", "Target": "targets", "load_targets": "targets"}
-"""Where each name of the package lives. They are imported when first asked for, so that a
-process that needs one module (a Ray worker, the process that owns a local Ray instance) does
-not load Pinocchio, FCL and the compiled kernels for nothing."""
+_HOMES = {
+    "engine": ("InProcess", "RunStats"),
+    "grid": ("ReachBound", "VoxelGrid", "reach_bound"),
+    "orientations": ("OrientationSet", "orientation_set"),
+    "placement": ("PlaceSettings",),
+    "pool": ("ProcessBackend",),
+    "reach": ("ReachPlan", "ReachSettings"),
+    "reach_map": ("ReachMap",),
+    "targets": ("Target", "load_targets"),
+}
+"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
 
 __all__ = ["InProcess", "OrientationSet", "PlaceSettings", "ProcessBackend", "ReachBound",
            "ReachMap", "ReachPlan", "ReachSettings", "RunStats", "Target", "VoxelGrid",
            "load_targets", "orientation_set", "reach_bound"]
 
-
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'usar_arm.workspace' has no attribute {name!r}")
-    return getattr(importlib.import_module(f"usar_arm.workspace.{home}"), name)
+__getattr__ = exports(__name__, _HOMES)

@@ -137,6 +137,7 @@ class InProcess:
         """Nothing to stop."""
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
+        """:meth:`Backend.run`: every chunk of ``todo`` with its result, as each finishes."""
         for i in todo:
             failures: list[str] = []
             while True:
@@ -150,6 +151,7 @@ class InProcess:
             yield i, result
 
     def describe(self) -> str:
+        """:meth:`Backend.describe`: one line, what runs the chunks."""
         return "this process"
 
 

@@ -139,9 +139,11 @@ class ProcessBackend:
         """Nothing left running between runs."""
 
     def describe(self) -> str:
+        """:meth:`Backend.describe`: one line, what runs the chunks."""
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
+        """:meth:`Backend.run`: every chunk of ``todo`` with its result, as each finishes."""
         context = mp.get_context(start_method(self.start_method))
         queue = deque(todo)
         failures: dict[int, list[str]] = {}
