@@ -5,7 +5,7 @@ A figure in README.md or docs/*.md is written inside a marker that says where it
     <!-- fig execution.json#/cases/udk wire, no correction/max_m | *1e3 | .2f -->2.19<!-- /fig -->
 
 ``FILE#/a/b/c`` is a JSON pointer into ``bench/results/FILE`` (``*`` expands every item of a list
-or every value of an object); then each ``|`` step: ``max``, ``min``, ``first``, ``len``,
+or every value of an object); then each ``|`` step: ``max``, ``min``, ``mean``, ``first``, ``len``,
 ``*K`` (multiply), ``/K`` (divide), and last a format (``.2f``, ``.3g``, ``,.0f``, ``.1%``). The
 markers are HTML comments: invisible on GitHub and in the docs site.
 
@@ -65,10 +65,12 @@ def evaluate(spec: str, results: Path = RESULTS) -> str:
     values: Any = _pointer(json.loads((results / name).read_text()), pointer)
     value: Any = values[0] if len(values) == 1 else values
     fmt = steps.pop() if steps and not steps[-1].startswith(("*", "/")) and steps[-1] not in (
-        "max", "min", "first", "len") else ""
+        "max", "min", "mean", "first", "len") else ""
     for step in steps:
         if step in ("max", "min"):
             value = (max if step == "max" else min)(value)
+        elif step == "mean":
+            value = sum(value) / len(value)
         elif step == "first":
             value = value[0]
         elif step == "len":
