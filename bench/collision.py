@@ -33,6 +33,9 @@ from usar_arm.planning.robot import robot_from_files
 
 BATCH = 100
 """Configurations per ``in_collision_many`` call (an edge of ~1 rad at 0.01 rad steps)."""
+WARMUP = 3
+"""Configurations checked once, untimed, at the start of every scene, through the API that is
+timed: the peers' collision runners warm up the same way (``solve_by_scene(warmup=3)``)."""
 
 
 def _worlds(spec: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
@@ -67,9 +70,11 @@ def solver_main(argv: list[str] | None = None) -> int:
     for name, group in _by_scene(spec["problems"]).items():
         world = worlds[name]
         qs = np.array([p["q"] for p in group], float)
-        world.in_collision_many(qs[:BATCH])  # warm-up: lazy models, page faults
-        for q in qs[:3]:
-            world.in_collision(q)
+        if a.api == "single":  # warm-up in every scene, as the peers (peerio.solve_by_scene)
+            for q in qs[:WARMUP]:
+                world.in_collision(q)
+        else:
+            world.in_collision_many(qs[:WARMUP])
         if a.api == "single":
             for p, q in zip(group, qs, strict=True):
                 hit, sec = peerio.timed(world.in_collision, q)

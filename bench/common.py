@@ -247,9 +247,24 @@ def run_alternating(spec: dict[str, Any], solvers: Sequence[Solver], workdir: Pa
     return out
 
 
+LAUNCHED_AT = "BENCH_LAUNCHED_AT"
+"""Environment variable: the wall-clock time (``time.time()``, s) at which the harness launched
+the solver process (see :func:`since_launch`)."""
+
+
+def since_launch() -> float:
+    """Seconds since the harness launched this process (interpreter start and imports
+    included): what a user waits for a command they type. A process not launched by the
+    harness counts from the import of this module."""
+    return time.time() - float(os.environ.get(LAUNCHED_AT, _IMPORTED))
+
+
+_IMPORTED = time.time()
+
+
 def _run(s: Solver, problems: Path, results: Path) -> str:
     """Run one solver process; "" on success, else why it failed."""
-    env = {**os.environ, **ENVIRONMENT}
+    env = {**os.environ, **ENVIRONMENT, LAUNCHED_AT: repr(time.time())}
     try:
         proc = subprocess.run([*s.command, str(problems), str(results)], capture_output=True,
                               text=True, timeout=RUNNER_TIMEOUT_S, env=env, cwd=ROOT)
@@ -318,15 +333,18 @@ def timed_calls(fn: Callable[..., Any], *args: Any) -> tuple[Any, float]:
 
 
 # ------------------------------------------------------------------------------ cases
+Check = Callable[[dict[str, Any], dict[str, Any]], dict[str, Any]]
+
+
 def build_case(problem_file: Path, spec: dict[str, Any], outcomes: dict[str, Outcome],
-               check: Callable[[dict[str, Any], dict[str, Any]], dict[str, Any]],
-               extra: Callable[[dict[str, list[Any]]], dict[str, Any]] | None = None
-               ) -> dict[str, Any]:
+               check: Check, extra: Callable[[dict[str, list[Any]]], dict[str, Any]] | None = None,
+               checks: dict[str, Check] | None = None) -> dict[str, Any]:
     """One case of a stage: every solver's raw per-problem figures (columns), its summary, and
     the time ratios usar-arm / peer measured in this run.
 
     ``check(problem, result)`` returns the per-problem row (must hold ``verified``);
-    ``extra(columns)`` adds stage-specific summary figures.
+    ``checks`` names solvers judged by a check of their own instead (a solver that claims more,
+    e.g. collision-free IK answers); ``extra(columns)`` adds stage-specific summary figures.
     """
     problems = {p["id"]: p for p in spec["problems"]}
     solvers: dict[str, Any] = {}
@@ -335,9 +353,10 @@ def build_case(problem_file: Path, spec: dict[str, Any], outcomes: dict[str, Out
             solvers[name] = solver_record(o, {}, {})
             continue
         rows = []
+        judge = (checks or {}).get(name, check)
         for r in o.results:
             row = {"id": r["id"], "answered": bool(r.get("success")),
-                   "seconds": r.get("seconds"), **check(problems[r["id"]], r)}
+                   "seconds": r.get("seconds"), **judge(problems[r["id"]], r)}
             if "error" in r:
                 row["error"] = r["error"]
             rows.append(row)

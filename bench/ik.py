@@ -11,7 +11,10 @@ before, untimed, as the peers). ``batch``: ``IKSolver.solve_batch`` over blocks 
 :data:`BATCH` poses; a pose's time is its block's time / the block size (s per pose).
 
 Every answer is checked here with Pinocchio FK of the shared URDF: within the problem's
-tolerance (1e-5 m, 1e-5 rad) and the joint limits, or it is not a success.
+tolerance (1e-5 m, 1e-5 rad) and the joint limits, or it is not a success. The answers of the
+solvers that check collisions (:data:`COLLISION_CHECKED`: ``usar-arm checked``, mplib,
+roboplan) must also be free of self-collision by the judge (``verify.Judge``, SRDF pairs
+disabled, no obstacles), or they are not a success either.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ from usar_arm.planning.robot import robot_from_files
 BATCH = 1000
 """Poses per ``solve_batch`` call (at most; the per-pose cost levels off near 1,000)."""
 ROBOTS = ("KR60", "Fanuc_M16iB20")
+COLLISION_CHECKED = ("usar-arm checked", "mplib", "roboplan")
+"""Solvers whose answers claim to be free of self-collision: the judge checks that too."""
 SLOW_PEER_LIMIT = {("KR60", "ikpy"): 2000, ("Fanuc_M16iB20", "ikpy"): 1000}
 """Full run: ikpy (pure Python, ~15-30 ms a pose here) solves only the first poses of the set,
 to keep the whole run under 30 minutes; its ratios are taken over those poses."""
@@ -126,8 +131,9 @@ def run(ctx: Context) -> dict[str, Any]:
     cases: dict[str, Any] = {}
     for name in ROBOTS:
         path, spec = ctx.problem(f"ik_{name}")
-        kin = verify.Kinematics(JudgedRobot.from_files(spec["urdf"], spec["srdf"]),
-                                list(spec["joint_names"]))
+        judged = JudgedRobot.from_files(spec["urdf"], spec["srdf"])
+        kin = verify.Kinematics(judged, list(spec["joint_names"]))
+        judge = verify.Judge(judged, [], list(spec["joint_names"]))
         tol = spec["tolerance"]
         outcomes = common.run_alternating(spec, _solvers(ctx, name), ctx.work, ctx.rounds,
                                           f"ik_{name}")
@@ -139,17 +145,26 @@ def run(ctx: Context) -> dict[str, Any]:
                     "orientation_error_rad": c.orientation_error_rad,
                     "within_limits": c.within_limits}
 
+        def checked(p: dict[str, Any], r: dict[str, Any], judge: Any = judge,
+                    check: Any = check) -> dict[str, Any]:
+            row = check(p, r)  # (an answer off the target fails anyway: not checked)
+            free = not judge.collides(np.asarray(r["q"], float)) if row["verified"] else None
+            return {**row, "verified": row["verified"] and free is True, "collision_free": free}
+
         def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
             wrong = sum(1 for a, v in zip(raw["answered"], raw["verified"], strict=True)
                         if a and not v)
             pe = [x for x in raw["position_error_m"] if x is not None]
             oe = [x for x in raw["orientation_error_rad"] if x is not None]
             return {"answered_but_wrong": wrong,
+                    "in_self_collision": sum(1 for f in raw.get("collision_free", [])
+                                             if f is False),
                     "max_position_error_m": max(pe) if pe else None,
                     "max_orientation_error_rad": max(oe) if oe else None}
 
         cases[name] = {"robot": name, "dof": len(spec["joint_names"]), "tolerance": tol,
-                       **common.build_case(path, spec, outcomes, check, extra)}
+                       **common.build_case(path, spec, outcomes, check, extra,
+                                           {n: checked for n in COLLISION_CHECKED})}
     return common.stage_document("ik", ctx.mode, {"rounds": ctx.rounds, "batch": BATCH},
                                  cases, _targets(cases), started)
 

@@ -1,10 +1,14 @@
 """What the judge reads, read by the judge itself: the URDF's link cylinders and joint limits,
-the SRDF's disabled pairs, and the obstacles of a problem file's scene.
+the SRDF's disabled pairs, and the obstacles of a scene: from the scene's YAML file (the
+``scene_files`` of a problem file: the shipped ``robots/scenes/*.yaml`` and the generated
+``boxes_N.yaml``), parsed here with PyYAML, not from the JSON the solvers read (which
+``bench/scenes.py`` writes with usar-arm's own scene parser: a bug there must not reach the
+judge).
 
 Nothing here (nor in ``verify.py``) imports ``usar_arm``: the checks that every solver's answers
-go through must not share the code that produced ours. XML by ``xml.etree``, poses by this
-module's own roll-pitch-yaw and quaternion formulas, meshes by trimesh, forward kinematics by
-Pinocchio from the URDF text. Metres and radians.
+go through must not share the code that produced ours. XML by ``xml.etree``, YAML by PyYAML,
+poses by this module's own roll-pitch-yaw and quaternion formulas, meshes by trimesh, forward
+kinematics by Pinocchio from the URDF text. Metres and radians.
 """
 
 from __future__ import annotations
@@ -169,3 +173,61 @@ def read_scene(items: list[dict[str, Any]]) -> list[Obstacle]:
         out.append(Obstacle(str(d.get("name", "")), kind, where, params,
                             frozenset(d.get("allow", []))))
     return out
+
+
+def _number_list(value: Any, count: int, what: str) -> list[float]:
+    if not isinstance(value, list) or len(value) != count:
+        raise ValueError(f"the judge expected {count} numbers for {what}, got {value!r}")
+    out = [float(v) for v in value]
+    if not all(math.isfinite(v) for v in out):
+        raise ValueError(f"the judge expected finite numbers for {what}, got {value!r}")
+    return out
+
+
+def _yaml_shape(obj: dict[str, Any], base: Path, what: str) -> tuple[str, dict[str, Any]]:
+    """(kind, params) of one scene-file object: ``box: [x, y, z]``, ``cylinder: {radius,
+    length}``, ``sphere: {radius}`` or ``mesh: {file, scale}`` (file relative to the scene)."""
+    kinds = [k for k in ("box", "cylinder", "sphere", "mesh") if k in obj]
+    if len(kinds) != 1:
+        raise ValueError(f"the judge expected one shape for {what}, found {kinds}")
+    kind, spec = kinds[0], obj[kinds[0]]
+    if kind == "box":
+        return kind, {"size": _number_list(spec, 3, f"{what}.box")}
+    if kind == "cylinder":
+        return kind, {"radius": float(spec["radius"]), "length": float(spec["length"])}
+    if kind == "sphere":
+        return kind, {"radius": float(spec["radius"])}
+    import trimesh
+
+    file = Path(spec["file"])
+    mesh = trimesh.load(str(file if file.is_absolute() else base / file), force="mesh")
+    return kind, {"vertices": np.asarray(mesh.vertices, float) * float(spec.get("scale", 1.0)),
+                  "faces": np.asarray(mesh.faces, np.int32)}
+
+
+def read_scene_file(path: str | Path) -> list[Obstacle]:
+    """The obstacles of a scene YAML file (``name``, ``objects``: each with a ``name``, one
+    shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``), read by the judge."""
+    import yaml
+
+    path = Path(path)
+    doc = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+    out = []
+    for k, obj in enumerate(doc.get("objects") or []):
+        what = f"{path.name} objects[{k}]"
+        kind, params = _yaml_shape(obj, path.parent, what)
+        rpy = _number_list(obj.get("rpy", [0.0, 0.0, 0.0]), 3, f"{what}.rpy")
+        where = pose(rpy_matrix(*rpy), _number_list(obj["xyz"], 3, f"{what}.xyz"))
+        out.append(Obstacle(str(obj["name"]), kind, where, params,
+                            frozenset(str(a) for a in obj.get("allow") or [])))
+    return out
+
+
+def scene_obstacles(spec: dict[str, Any], scene: str) -> list[Obstacle]:
+    """The obstacles of a problem file's scene as the judge reads them: from the scene's YAML
+    file (``spec["scene_files"]``); a problem file without one (hand-made test files, scenes
+    that exist only as obstacle lists) falls back to the obstacle list itself."""
+    files = spec.get("scene_files") or {}
+    if scene in files:
+        return read_scene_file(files[scene])
+    return read_scene(spec["scenes"][scene])

@@ -189,22 +189,24 @@ def scaling_joints(docs: dict[str, Any], folder: Path) -> Path | None:
 def describe(doc: dict[str, Any], folder: Path) -> Path:
     fig = Figure(figsize=(8, 3))
     ax = fig.subplots()
-    names, parts = [], {"discovery (TCP)": [], "build + checks + ACM": [], "write": []}
-    keys = {"discovery (TCP)": "discovery_seconds", "build + checks + ACM": "build_seconds",
+    keys = {"start-up (interpreter, imports)": "startup_seconds",
+            "discovery (TCP)": "discovery_seconds", "build + checks + ACM": "build_seconds",
             "write": "write_seconds"}
+    names: list[str] = []
+    parts: dict[str, list[float]] = {label: [] for label in keys}
     for name, case in doc["cases"].items():
         sm = case["solvers"]["usar-arm"].get("summary") or {}
         names.append(name)
         for label, key in keys.items():
             parts[label].append((sm.get(key) or {}).get("median") or 0.0)
     left = np.zeros(len(names))
-    for (label, values), color in zip(parts.items(), (OURS, "tab:red", "tab:gray"),
-                                      strict=True):
+    for (label, values), color in zip(parts.items(), ("tab:olive", OURS, "tab:red",
+                                                       "tab:gray"), strict=True):
         ax.barh(names, values, left=left, color=color, label=label)
         left += np.array(values)
     ax.invert_yaxis()
     ax.set_xlabel("s (median)")
-    ax.set_title("describe(): time to learn and describe an arm", fontsize=10)
+    ax.set_title("A fresh process: time to learn and describe an arm", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
     return _save(fig, folder / "discovery.png")

@@ -11,10 +11,16 @@ base_link):
 * ``collision_KR60.json``: uniformly random in-limit configurations in ``table`` and in the
   ``boxes_N`` scenes (N = 1, 10, 100, 1000 boxes of 0.1 m).
 * ``plan_KR60.json``: start/goal pairs in empty, table, shelf and cage; both collision-free with
-  1 cm to spare; among up to 100 seeded candidates the first pair whose straight joint-space
-  line is blocked. ``plan_Fanuc_M16iB20.json``: the same for the 7-joint arm.
+  1 cm to spare; per problem, among up to :data:`PAIR_TRIES` seeded candidates the first pair
+  whose straight joint-space line is blocked (``line_blocked``; a problem none of whose
+  candidates is blocked keeps the first, ``line_blocked: false``: the stages report those
+  apart). ``plan_Fanuc_M16iB20.json``: the same for the 7-joint arm.
   ``plan_KR60_boxes.json``: fixed pairs in every ``boxes_N`` scene (nested: the first N of the
-  same 1,000 boxes, none touching the arm at any start or goal).
+  same 1,000 boxes, none touching the arm at any start or goal), chosen the same way in the
+  empty scene (a line the arm itself blocks stays blocked among any boxes).
+* Every file with scenes names each scene's YAML file (``scene_files``: the shipped
+  ``robots/scenes/*.yaml``, the boxes scenes written to ``<out>/scenes``): the judge reads
+  those, the solvers the obstacle lists (``scenes``).
 * ``topp_KR60.json``: the geometric paths our planner returns for the first plan problems
   (fixed in the file, so that every time-parameteriser gets exactly the same path), with the
   description's velocity and acceleration limits (and jerk, which only Ruckig uses).
@@ -28,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +41,7 @@ from typing import Any
 import common
 import numpy as np
 import scenes
-from judge_reading import JudgedRobot, read_scene
+from judge_reading import JudgedRobot, read_scene_file
 from verify import Judge, densify
 
 from usar_arm.control.trajectory import MotionLimits
@@ -61,6 +66,8 @@ IK_TIMEOUT_S = 0.005
 PLAN_TIME_LIMIT_S = 2.0
 CLEARANCE = 0.01
 """m: start and goal configurations keep at least this much from everything."""
+PAIR_TRIES = 100
+"""Witness walks tried per plan problem for one whose straight start-goal line is blocked."""
 
 
 @dataclass(frozen=True)
@@ -101,13 +108,11 @@ def load_robot(urdf: str | Path) -> Robot:
     return robot_from_files(urdf)
 
 
-def _judge(robot: Robot, sc: Scene) -> Judge:
-    """The benchmark's judge of ``robot`` in ``sc``, built from the same text a problem file
-    carries (the judge reads no usar-arm object)."""
+def _judge(robot: Robot, scene_file: Path) -> Judge:
+    """The benchmark's judge of ``robot`` in the scene of ``scene_file`` (YAML), built from the
+    same text a problem file names (the judge reads no usar-arm object)."""
     srdf = next((text for name, text in robot.files.items() if name.endswith(".srdf")), None)
-    with tempfile.TemporaryDirectory() as folder:
-        obstacles = read_scene(scenes.to_json(sc, Path(folder)))
-    return Judge(JudgedRobot.from_text(robot.urdf, srdf), obstacles,
+    return Judge(JudgedRobot.from_text(robot.urdf, srdf), read_scene_file(scene_file),
                  list(robot.chain.joint_names))
 
 
@@ -120,12 +125,12 @@ def box_pairs(robot: Robot) -> list[dict[str, Any]]:
     each with its witness path), and the 1,000 box centres, kept clear of every witness."""
     if "pairs" not in _BOXES:
         empty = Scene("empty")
-        pairs = [_pair(robot, empty, np.random.default_rng([SEED, 8, i]), tries=1)
+        pairs = [_pair(robot, empty, np.random.default_rng([SEED, 8, i]))
                  for i in range(BOX_PAIRS)]
         dense = np.vstack([densify(np.array(p["witness"]), 0.01) for p in pairs])
         _BOXES["pairs"] = pairs
-        _BOXES["centres"] = scenes.box_centres(max(scenes.BOX_COUNTS),
-                                               _judge(robot, empty).capsules(dense),
+        judge = _judge(robot, scenes.shipped_file("empty"))
+        _BOXES["centres"] = scenes.box_centres(max(scenes.BOX_COUNTS), judge.capsules(dense),
                                                SEED + 9)
     return _BOXES["pairs"]
 
@@ -140,6 +145,21 @@ def scene(name: str) -> Scene:
 
 def scene_json(sc: Scene, out: Path) -> list[dict[str, Any]]:
     return scenes.to_json(sc, out)
+
+
+def scene_files(names: Any, out: Path) -> dict[str, str]:
+    """Scene name -> its YAML file (absolute), what the judge reads; the boxes scenes are
+    written into ``out/scenes``."""
+    files = {}
+    for name in names:
+        if name.startswith("boxes_"):
+            scene(name)  # the centres
+            path = scenes.write_boxes_file(_BOXES["centres"], int(name.removeprefix("boxes_")),
+                                           out / "scenes")
+        else:
+            path = scenes.shipped_file(name)
+        files[name] = str(path.resolve())
+    return files
 
 
 # ------------------------------------------------------------------------------ sets
@@ -157,7 +177,7 @@ def _robot_header(stage: str, name: str, robot: Robot, urdf: Path, srdf: Path
 def ik_set(name: str, n: int, out: Path) -> dict[str, Any]:
     urdf, srdf = robot_paths(name, out)
     robot = load_robot(urdf)
-    judge = _judge(robot, Scene("empty"))
+    judge = _judge(robot, scenes.shipped_file("empty"))
     lo, hi = robot.chain.lower(), robot.chain.upper()
     mid = ((lo + hi) / 2).tolist()
     problems = []
@@ -191,10 +211,11 @@ def collision_set(sizes: Sizes, out: Path) -> dict[str, Any]:
             q = np.random.default_rng([SEED, 2, k, i]).uniform(lo, hi)
             problems.append({"id": len(problems), "scene": sc, "q": q.tolist()})
     return {**_robot_header("collision", KR60, robot, urdf, srdf),
-            "scenes": {sc: scene_json(scene(sc), out) for sc in names}, "problems": problems}
+            "scenes": {sc: scene_json(scene(sc), out) for sc in names},
+            "scene_files": scene_files(names, out), "problems": problems}
 
 
-def _pair(robot: Robot, sc: Scene, rng: np.random.Generator, tries: int = 20
+def _pair(robot: Robot, sc: Scene, rng: np.random.Generator, tries: int = PAIR_TRIES
           ) -> dict[str, Any]:
     """A start/goal pair with a witness: the goal is the end of a walk of up to
     :data:`WALK_SEGMENTS` free straight segments (1 cm to spare) from the start to uniformly
@@ -203,7 +224,7 @@ def _pair(robot: Robot, sc: Scene, rng: np.random.Generator, tries: int = 20
     lo, hi = robot.chain.lower(), robot.chain.upper()
     padded = robot.collision_world(sc, padding=CLEARANCE)
     world = robot.collision_world(sc)
-    judge = _judge(robot, sc)
+    judge = _judge(robot, scenes.shipped_file(sc.name))
 
     def sample() -> Array:
         for _ in range(10_000):
@@ -252,7 +273,8 @@ def plan_set(name: str, per_scene: int, out: Path) -> dict[str, Any]:
                              **_pair(robot, sc, rng)})
     return {**_robot_header("plan", name, robot, urdf, srdf),
             "scenes": {s: scene_json(scene(s), out) for s in SCENES},
-            "time_limit_s": PLAN_TIME_LIMIT_S, "problems": problems}
+            "scene_files": scene_files(SCENES, out), "time_limit_s": PLAN_TIME_LIMIT_S,
+            "problems": problems}
 
 
 def plan_boxes_set(pairs: int, counts: tuple[int, ...], out: Path) -> dict[str, Any]:
@@ -269,7 +291,8 @@ def plan_boxes_set(pairs: int, counts: tuple[int, ...], out: Path) -> dict[str, 
                              "line_blocked": bool(worlds[sc].in_collision_many(line).any())})
     return {**_robot_header("plan", KR60, robot, urdf, srdf),
             "scenes": {s: scene_json(scene(s), out) for s in names},
-            "time_limit_s": PLAN_TIME_LIMIT_S, "problems": problems}
+            "scene_files": scene_files(names, out), "time_limit_s": PLAN_TIME_LIMIT_S,
+            "problems": problems}
 
 
 def topp_set(plan_doc: dict[str, Any], n: int, out: Path) -> dict[str, Any]:
@@ -286,7 +309,7 @@ def topp_set(plan_doc: dict[str, Any], n: int, out: Path) -> dict[str, Any]:
         problems.append({"id": p["id"], "scene": p["scene"],
                          "waypoints": path.waypoints.tolist()})
     keep = ("robot", "urdf", "srdf", "joint_names", "lower", "upper", "vmax", "amax", "jmax",
-            "scenes")
+            "scenes", "scene_files")
     return {"stage": "topp", **{k: plan_doc[k] for k in keep}, "speed_scale": 1.0,
             "source": "usar-arm plan_to_joints (RRTConnect + simplification, OMPL seed 0) on "
                       "the first plan_KR60 problems", "problems": problems}
@@ -302,7 +325,9 @@ def topp_neutral_set(plan_doc: dict[str, Any], n: int) -> dict[str, Any]:
     lo, hi = np.array(plan_doc["lower"]), np.array(plan_doc["upper"])
     padded = robot.collision_world(scene("empty"), padding=CLEARANCE)
     levers = padded.lever_arms()
-    judge = Judge.for_scene({**plan_doc, "scenes": {"empty": []}}, "empty")
+    empty = {"empty": str(scenes.shipped_file("empty").resolve())}
+    judge = Judge.for_scene({**plan_doc, "scenes": {"empty": []}, "scene_files": empty},
+                            "empty")
     rng = np.random.default_rng(SEED + 7)
     problems: list[dict[str, Any]] = []
 
@@ -323,7 +348,7 @@ def topp_neutral_set(plan_doc: dict[str, Any], n: int) -> dict[str, Any]:
                          "waypoints": np.array(points).tolist()})
     keep = ("robot", "urdf", "srdf", "joint_names", "lower", "upper", "vmax", "amax", "jmax")
     return {"stage": "topp", **{k: plan_doc[k] for k in keep}, "speed_scale": 1.0,
-            "scenes": {"empty": []},
+            "scenes": {"empty": []}, "scene_files": empty,
             "source": "random self-collision-free polylines, 3-7 waypoints, empty scene",
             "problems": problems}
 

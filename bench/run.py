@@ -27,6 +27,7 @@ import tempfile
 import time
 import traceback
 from pathlib import Path
+from typing import Any
 
 import common
 import problems as problem_sets
@@ -84,12 +85,13 @@ def main(argv: list[str] | None = None) -> int:
                    f"{out / f'{stage}.json'}")
     import report
 
-    common.write_json(out / "run.json", {
+    record = {
         "mode": mode, "stages": stages, "failed_stages": failed, "rounds": ctx.rounds,
         "peers": sorted(ctx.peers) if ctx.peers else "all",
         "problem_folder": str(folder), "problem_generation_seconds": generation,
         "wall_seconds_before_report": time.perf_counter() - begin,
-        "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": common.machine()})
+        "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": common.machine()}
+    common.write_json(out / "run.json", _run_record(out / "run.json", record))
     report.generate(out, total_seconds=time.perf_counter() - begin)
     if a.keep_work:
         common.log(f"per-round files kept in {work}")
@@ -98,6 +100,18 @@ def main(argv: list[str] | None = None) -> int:
     common.log(f"done in {time.perf_counter() - begin:.1f} s; results in {out}"
                + (f"; FAILED stages: {', '.join(failed)}" if failed else ""))
     return 1 if failed else 0
+
+
+def _run_record(path: Path, record: dict[str, Any]) -> dict[str, Any]:
+    """What ``run.json`` keeps: a run of every stage replaces it; a run of some stages into a
+    folder that holds a whole run is added to its ``later_runs`` (the report says which
+    stages come from those)."""
+    if set(record["stages"]) == set(STAGES) or not path.is_file():
+        return record
+    whole = common.read_json(path)
+    if set(whole.get("stages", ())) != set(STAGES):
+        return record
+    return {**whole, "later_runs": [*whole.get("later_runs", []), record]}
 
 
 if __name__ == "__main__":

@@ -1,5 +1,7 @@
 """The benchmark's scenes: the four shipped ones (``robots/scenes``) and ``boxes_N``, N boxes of
-:data:`BOX_EDGE` m (the first N of the same 1,000), and their JSON form in the problem files.
+:data:`BOX_EDGE` m (the first N of the same 1,000), their JSON form in the problem files (what
+the solvers read) and their YAML files (what the judge reads: ``scene_files``; the boxes scenes
+are written as YAML here, straight from their centres).
 
 Frame base_link, metres, radians.
 """
@@ -24,9 +26,27 @@ BOX_MARGIN = 0.03
 a link moves between two witness configurations 0.01 rad apart)."""
 
 
+def shipped_file(name: str) -> Path:
+    """The YAML file of a shipped scene (empty, table, shelf or cage)."""
+    return common.ROOT / "robots" / "scenes" / f"{name}.yaml"
+
+
 def shipped(name: str) -> Scene:
     """empty, table, shelf or cage (from ``robots/scenes``)."""
-    return load_scene(common.ROOT / "robots" / "scenes" / f"{name}.yaml")
+    return load_scene(shipped_file(name))
+
+
+def write_boxes_file(centres: Array, n: int, folder: Path) -> Path:
+    """``folder/boxes_N.yaml``: the scene of the first ``n`` boxes in the scene-file format
+    (edges of :data:`BOX_EDGE` m, centres in base_link), written from the centres alone."""
+    lines = [f"name: boxes_{n}", "objects:" if n else "objects: []"]
+    lines += [f"  - {{name: box_{k}, box: [{BOX_EDGE!r}, {BOX_EDGE!r}, {BOX_EDGE!r}], "
+              f"xyz: [{float(c[0])!r}, {float(c[1])!r}, {float(c[2])!r}]}}"
+              for k, c in enumerate(centres[:n])]
+    path = folder / f"boxes_{n}.yaml"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
 
 
 def box_centres(count: int, capsules: tuple[Array, Array, Array], seed: int) -> Array:

@@ -9,11 +9,15 @@ As a solver (our side)::
     python bench/timing.py --mode stop|blend PROBLEMS.json RESULTS.json
 
 Timed: ``control.timing.stop_at_waypoints`` / ``blended`` (blend re-checks its segments for
-collisions in the problem's scene and falls back to stopping where a segment fails), not the
-100 Hz sampling. Figures: duration (s) and its ratio to toppra's on the same path; computation
-time per trajectory (s). Every trajectory's 100 Hz samples are checked: ends at the waypoints,
-velocity and acceleration within the limits (finite differences), collision-free in the scene
-(the judge) - toppra's spline may leave the collision-checked polyline.
+collisions in the problem's scene and falls back to stopping where a segment fails) and the
+trajectory's 100 Hz samples (``evaluate``): roboplan's ``generate`` samples at 100 Hz inside
+its own call, which cannot be taken apart, so every solver's time includes its 100 Hz sampling
+(``timing_seconds``: ours and toppra's without it). ``seconds_with_1khz_samples``: the timing
+again, plus every 1 ms sample of it (the 1 kHz target). Figures: duration (s) and its ratio to
+toppra's on the same path; computation time per trajectory (s). Every trajectory's 100 Hz
+samples are checked: ends at the waypoints, velocity and acceleration within the limits (finite
+differences), collision-free in the scene (the judge) - toppra's spline may leave the
+collision-checked polyline.
 """
 
 from __future__ import annotations
@@ -64,16 +68,20 @@ def solver_main(argv: list[str] | None = None) -> int:
             motion, sec = peerio.timed(blended, names, wp, limits,
                                        worlds[p["scene"]].in_collision_many,
                                        1.0 / DEFAULT_RATE_HZ)
+        begin = time.perf_counter()  # the 100 Hz samples, as roboplan's timed call makes them
         t = peerio.sample_times(motion.duration)
         q = motion.evaluate(t)[0]
-        return {"success": True, "seconds": sec, "duration_s": motion.duration,
-                "fallbacks": motion.fallbacks, "samples": {"t": t, "q": q},
-                "seconds_with_1khz_samples": sampled_1khz}
+        sampling = time.perf_counter() - begin
+        return {"success": True, "seconds": sec + sampling, "timing_seconds": sec,
+                "duration_s": motion.duration, "fallbacks": motion.fallbacks,
+                "samples": {"t": t, "q": q}, "seconds_with_1khz_samples": sampled_1khz}
 
     peerio.write(a.results, peer=f"usar-arm ({a.mode})", dist="usar-arm", stage="topp",
                  results=peerio.solve_all(spec["problems"], solve),
                  settings={"mode": a.mode, "jerk_limits": spec["jmax"],
-                           "blend_check_step_s": 1.0 / DEFAULT_RATE_HZ})
+                           "blend_check_step_s": 1.0 / DEFAULT_RATE_HZ},
+                 notes="seconds = the timing + its 100 Hz samples (as roboplan's generate); "
+                       "timing_seconds = the timing alone")
     return 0
 
 
@@ -93,12 +101,14 @@ def run(ctx: Context) -> dict[str, Any]:
                                  cases, _targets(cases["KR60"], cases["KR60 neutral"]), started)
 
 
-RULE = ("Every solver times the same polylines. A trajectory passes when it starts and ends at "
-        "the polyline's ends, stays within the velocity and acceleration limits (finite "
-        "differences of its 100 Hz samples) and, sampled at 100 Hz, is collision-free by the "
-        "judge in the problem's scene. A spline through the waypoints (toppra) may leave the "
-        "polyline the planner checked: on the planner's paths that can fail it; on the neutral "
-        "set (empty scene) it cannot.")
+RULE = ("Every solver times the same polylines; every solver's computation time includes its "
+        "100 Hz sampling of the trajectory (roboplan samples inside its timed call, which "
+        "cannot be taken apart: usar-arm and toppra sample in theirs too). A trajectory passes "
+        "when it starts and ends at the polyline's ends, stays within the velocity and "
+        "acceleration limits (finite differences of its 100 Hz samples) and, sampled at 100 Hz,"
+        " is collision-free by the judge in the problem's scene. A spline through the waypoints"
+        " (toppra) may leave the polyline the planner checked: on the planner's paths that can "
+        "fail it; on the neutral set (empty scene) it cannot.")
 
 
 def _case(ctx: Context, key: str) -> dict[str, Any]:
@@ -118,6 +128,7 @@ def _case(ctx: Context, key: str) -> dict[str, Any]:
     def check(p: dict[str, Any], r: dict[str, Any]) -> dict[str, Any]:
         ref = reference.get(p["id"])
         row: dict[str, Any] = {"duration_s": r.get("duration_s"),
+                               "timing_seconds": r.get("timing_seconds"),
                                "seconds_with_1khz_samples": r.get("seconds_with_1khz_samples"),
                                "waypoints": len(p["waypoints"]),
                                "ratio_to_toppra": common.ratio(r.get("duration_s"), ref)}
@@ -135,6 +146,7 @@ def _case(ctx: Context, key: str) -> dict[str, Any]:
         near_5s = [sec for sec, d in zip(raw["seconds_with_1khz_samples"], raw["duration_s"],
                                          strict=True) if sec is not None and d and 4 <= d <= 6]
         return {"duration_s": common.stats(raw["duration_s"]),
+                "timing_seconds": common.stats(raw["timing_seconds"]),
                 "timing_and_1khz_samples_4_to_6_s": common.stats(near_5s),
                 "ratio_to_toppra": common.stats(raw["ratio_to_toppra"]),
                 "in_collision": sum(1 for c in raw.get("collision_free", []) if c is False),
@@ -146,6 +158,10 @@ def _case(ctx: Context, key: str) -> dict[str, Any]:
 
     return {"robot": spec["robot"], "source": spec.get("source", ""),
             **common.build_case(path, spec, outcomes, check, extra)}
+
+
+def _ms(seconds: float | None) -> str:
+    return "-" if seconds is None else f"{seconds * 1e3:.3g} ms"
 
 
 def _targets(case: dict[str, Any], neutral: dict[str, Any]) -> list[dict[str, Any]]:
@@ -160,11 +176,14 @@ def _targets(case: dict[str, Any], neutral: dict[str, Any]) -> list[dict[str, An
                       1.25, "<=", "ratio", "random polylines in the empty scene"),
         common.target("Timing: blend duration / TOPP-RA (toppra) duration, median",
                       (blend.get("ratio_to_toppra") or {}).get("median"), 1.25, "<=", "ratio"),
-        common.target("Timing: Ruckig computation per trajectory (stop, default), mean",
-                      (stop.get("time_all_s") or {}).get("mean"), 1e-3, "<=", "s"),
-        common.target("Timing (stop) plus sampling at 1 kHz, trajectories of 4-6 s, median",
-                      (stop.get("timing_and_1khz_samples_4_to_6_s") or {}).get("median"), 1e-3,
-                      "<=", "s"),
+        common.target("Timing: Ruckig computation per trajectory (stop, default), mean, "
+                      "without the 100 Hz samples", (stop.get("timing_seconds") or {}).get(
+                          "mean"), 1e-3, "<=", "s", "with them (as the peers are timed): "
+                      f"{_ms((stop.get('time_all_s') or {}).get('mean'))}"),
+        *[common.target(f"Timing (stop) plus sampling at 1 kHz, trajectories of 4-6 s, median"
+                        f" ({label})", (s("usar-arm", c).get("timing_and_1khz_samples_4_to_6_s")
+                                        or {}).get("median"), 1e-3, "<=", "s")
+          for label, c in (("the planner's paths", case), ("neutral paths", neutral))],
         common.target("Timing: stop trajectories verified (limits, ends, collision-free)",
                       stop.get("success_rate"), 1.0, ">=", "fraction"),
     ]

@@ -1,7 +1,7 @@
 """The correctness checks every solver's answers go through, ours as much as the peers'.
 
-Nothing here imports ``usar_arm``: the judge reads the URDF, the SRDF and the scene from the
-problem files itself (``judge_reading.py``), builds its own python-fcl primitives and places them
+Nothing here imports ``usar_arm``: the judge reads the URDF, the SRDF and the scene's YAML file
+itself (``judge_reading.py``), builds its own python-fcl primitives and places them
 by Pinocchio's forward kinematics of the URDF text.
 
 * IK: forward kinematics of the answer against the target pose, and the joint limits.
@@ -26,7 +26,7 @@ from typing import Any
 import fcl
 import numpy as np
 import pinocchio as pin
-from judge_reading import JudgedRobot, Obstacle, pose, quat_matrix, read_scene
+from judge_reading import JudgedRobot, Obstacle, pose, quat_matrix, scene_obstacles
 
 Array = np.ndarray
 
@@ -132,9 +132,9 @@ class Judge:
     @classmethod
     def for_scene(cls, spec: dict[str, Any], scene: str) -> Judge:
         """The judge of a problem file's robot (``urdf``, ``srdf``, ``joint_names``) in its
-        scene ``scene``."""
+        scene ``scene`` (read from the scene's YAML file, ``scene_files``)."""
         robot = JudgedRobot.from_files(spec["urdf"], spec.get("srdf"))
-        return cls(robot, read_scene(spec["scenes"][scene]), list(spec["joint_names"]))
+        return cls(robot, scene_obstacles(spec, scene), list(spec["joint_names"]))
 
     def poses(self, q: Array) -> Array:
         """World poses (L, 4, 4) of the link cylinders at one configuration."""

@@ -156,16 +156,18 @@ def solve_by_scene(
 ) -> list[dict]:
     """Like :func:`solve_all` for plan problems: problems are grouped by their "scene",
     ``enter_scene(name)`` (untimed: builds or swaps the obstacles) runs once before each group,
-    and the results come back in the problems' order."""
+    the group's first ``warmup`` problems are solved once, untimed, in every scene (a scene's
+    first calls pay for its own lazy set-up; usar-arm's solvers warm up the same way), and the
+    results come back in the problems' order."""
     groups: dict[str, list[int]] = {}
     for i, p in enumerate(problems):
         groups.setdefault(p.get("scene", ""), []).append(i)
     out: list[dict | None] = [None] * len(problems)
-    for n, (scene, idx) in enumerate(groups.items()):
+    for scene, idx in groups.items():
         group = [problems[i] for i in idx]
         try:
             enter_scene(scene)
-            res = solve_all(group, solve_one, warmup=warmup if n == 0 else 0)
+            res = solve_all(group, solve_one, warmup=warmup)
         except Exception as e:
             res = [
                 {

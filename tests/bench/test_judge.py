@@ -1,7 +1,8 @@
 """The benchmark's judge (bench/verify.py, bench/judge_reading.py): it imports nothing from
 usar_arm, it sees contacts and gaps on hand-made cases whose answer is worked out here, it skips
-the SRDF's disabled pairs and an obstacle's allowed links, and it agrees with usar-arm's own
-collision world on random KR60 configurations in every shipped scene."""
+the SRDF's disabled pairs and an obstacle's allowed links, it reads every scene from the scene's
+YAML file itself (and finds there what the solvers are given as JSON), and it agrees with
+usar-arm's own collision world on random KR60 configurations in every shipped scene."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
 
 import verify  # noqa: E402
-from judge_reading import JudgedRobot, read_scene  # noqa: E402
+from judge_reading import JudgedRobot, read_scene, read_scene_file  # noqa: E402
 
 # A base cylinder (radius 0.1, length 0.4, centred 0.2 above the base) and an arm cylinder
 # (radius 0.05, length 1.0) lying along the x axis of link_1, 0.5 above the base, centred
@@ -105,7 +106,8 @@ def test_the_judge_agrees_with_usar_arm_on_random_configurations(scene: str,
     robot = robot_from_files(urdf, srdf)
     sc = scenes.shipped(scene)
     spec = {"urdf": str(urdf), "srdf": str(srdf), "joint_names": list(robot.chain.joint_names),
-            "scenes": {scene: scenes.to_json(sc, tmp_path)}}
+            "scenes": {scene: scenes.to_json(sc, tmp_path)},
+            "scene_files": {scene: str(scenes.shipped_file(scene))}}
     judge = verify.Judge.for_scene(spec, scene)
     world = robot.collision_world(sc)
     qs = np.random.default_rng(4).uniform(robot.chain.lower(), robot.chain.upper(), (300, 6))
@@ -113,3 +115,45 @@ def test_the_judge_agrees_with_usar_arm_on_random_configurations(scene: str,
     theirs = judge.colliding(qs)
     assert (ours == theirs).all(), np.flatnonzero(ours != theirs)
     assert 0 < theirs.sum() < len(qs)
+
+
+@pytest.mark.parametrize("scene", ["empty", "table", "shelf", "cage"])
+def test_the_judge_reads_each_scene_file_itself_and_finds_what_the_solvers_are_given(
+        scene: str, tmp_path: Path) -> None:
+    import scenes  # writes the solvers' JSON with usar-arm's own scene parser
+
+    mine = read_scene_file(scenes.shipped_file(scene))
+    given = read_scene(scenes.to_json(scenes.shipped(scene), tmp_path))
+    assert [o.name for o in mine] == [o.name for o in given] and (scene == "empty" or mine)
+    for a, b in zip(mine, given, strict=True):
+        assert (a.kind, a.allow, sorted(a.params)) == (b.kind, b.allow, sorted(b.params))
+        np.testing.assert_allclose(a.pose, b.pose, rtol=0, atol=1e-12)
+        for key, value in a.params.items():  # an STL stores float32 vertices
+            np.testing.assert_allclose(value, b.params[key], rtol=0, atol=1e-6)
+
+
+def test_the_boxes_scene_files_hold_the_boxes_the_solvers_get(tmp_path: Path) -> None:
+    import scenes
+
+    centres = np.random.default_rng(2).uniform(-2, 2, (5, 3))
+    mine = read_scene_file(scenes.write_boxes_file(centres, 3, tmp_path))
+    given = read_scene(scenes.to_json(scenes.boxes(centres, 3), tmp_path))
+    assert [o.name for o in mine] == [o.name for o in given] == ["box_0", "box_1", "box_2"]
+    for a, b in zip(mine, given, strict=True):
+        assert a.params == b.params == {"size": [scenes.BOX_EDGE] * 3}
+        np.testing.assert_array_equal(a.pose, b.pose)
+    assert read_scene_file(scenes.write_boxes_file(centres, 0, tmp_path)) == []
+
+
+def test_the_judge_of_a_problem_file_reads_the_scene_file_not_the_solvers_list(
+        tmp_path: Path) -> None:
+    # The solvers' list is empty; the YAML file holds the box under the arm: the judge sees it.
+    (tmp_path / "probe.urdf").write_text(URDF)
+    scene = tmp_path / "s.yaml"
+    scene.write_text("name: s\nobjects:\n  - {name: b, box: [0.2, 0.2, 0.2], "
+                     "xyz: [0.8, 0, 0.36], rpy: [0, 0, 0.3]}\n")
+    spec = {"urdf": str(tmp_path / "probe.urdf"), "joint_names": ["j1"], "scenes": {"s": []},
+            "scene_files": {"s": str(scene)}}
+    assert verify.Judge.for_scene(spec, "s").colliding(np.array([[0.0]]))[0]
+    assert not verify.Judge.for_scene({**spec, "scene_files": {}}, "s").colliding(
+        np.array([[0.0]]))[0]
