@@ -63,6 +63,9 @@ log = logging.getLogger("usar_arm.ros")
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 """robot_description and tf_static: late joiners get the last message."""
+RESULT_KEPT_S = 60
+"""How long a finished goal's result is kept for a client to fetch (s; rclpy's default, 900 s,
+lets the node's memory grow with every goal for 15 minutes)."""
 
 
 @dataclass(frozen=True)
@@ -231,7 +234,8 @@ class TrajectoryInterfaces:
         self.server = ActionServer(
             node, FollowJointTrajectory, f"{controller}/follow_joint_trajectory",
             execute_callback=self._execute, goal_callback=lambda _goal: GoalResponse.ACCEPT,
-            cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group)
+            cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group,
+            result_timeout=RESULT_KEPT_S)
         self.topic = node.create_subscription(JointTrajectory, f"{controller}/joint_trajectory",
                                               self._on_topic, 10, callback_group=group)
 
