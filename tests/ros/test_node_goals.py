@@ -207,7 +207,7 @@ def test_the_joint_trajectory_topic_moves_the_arm(client: Client) -> None:
     target = q0 + np.array([0, 0, 0, 0, 0, -0.3])
     msg = JointTrajectory(joint_names=NAMES)
     point = JointTrajectoryPoint(positions=target.tolist())
-    point.time_from_start.sec = 1
+    point.time_from_start.sec = 2
     msg.points.append(point)
     deadline = time.monotonic() + 10
     while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
