@@ -115,14 +115,16 @@ def _goals(probe: Probe, names: list[str], seconds: float, refused: bool) -> dic
     """Goals every 2 s (small moves back and forth), or refused ones; latencies in ms."""
     accept, refuse, codes, errors = [], [], [], []
     end = time.monotonic() + seconds
-    sign = 1.0
+    home = np.array(probe.states[-1][1].position)
+    away = home + np.array([0.2, -0.1, 0.1, 0.2, 0.2, 0.2])
+    k = 0
     while time.monotonic() < end:
         q = np.array(probe.states[-1][1].position)
         if refused:
             goal = _goal([*names[:5], "joint_x"], q, 1.0)
-        else:
-            goal = _goal(names, q + sign * np.array([0.2, 0.1, -0.1, 0.2, 0.2, 0.2]), 1.5)
-            sign = -sign
+        else:  # back and forth between two fixed configurations
+            goal = _goal(names, away if k % 2 == 0 else home, 1.5)
+            k += 1
         begin = time.perf_counter()
         handle = probe.wait(probe.action.send_goal_async(goal), 10)
         accept.append((time.perf_counter() - begin) * 1000)
