@@ -90,6 +90,8 @@ def test_two_robots_of_one_world_under_two_namespaces(
                   for _, m in got["/r2/joint_states"]]
         assert len(stamps) >= 10 and all(s in sim_times for s in stamps), \
             "r2 stamps with the simulator's time"
+        steps = np.diff([sec + nsec * 1e-9 for sec, nsec in stamps])
+        assert np.allclose(steps, 0.1, atol=1e-3), f"an ASTA line was skipped: {steps}"
         assert all(m.header.stamp.sec > 1e9 for _, m in got["/r1/joint_states"]), \
             "r1 stamps with the system's time"
         before1, before2 = _joints(client, "/r1/joint_states"), \
