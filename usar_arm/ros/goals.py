@@ -173,6 +173,9 @@ def check_goal(goal: TrajectoryGoal, chain: KinematicChain, current: Array, now:
                                f"{now - goal.stamp - times[-1]:.3f} s ago (header stamp "
                                f"{goal.stamp:.3f} s + {times[-1]:.3f} s, now {now:.3f} s)")
         delay = max(0.0, goal.stamp - now)
+        if delay > MAX_DURATION_S:
+            raise GoalRejected(INVALID_GOAL, f"the header stamp is {delay:.0f} s in the future; "
+                               f"at most {MAX_DURATION_S:.0f} s is waited for")
     _check_limits(q, chain)
     if times[0] == 0:
         gap = np.abs(q[0] - current)
