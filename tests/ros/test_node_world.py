@@ -152,4 +152,5 @@ def test_sigterm_during_a_goal_stops_the_motion_and_exits_0(tmp_path: Path) -> N
         client.close()
     assert code == 0, node.text()[-3000:]
     assert "the node is shutting down" in node.text(), node.text()[-3000:]
+    assert "Traceback" not in node.text(), node.text()[-3000:]
     assert took < 10.0, f"{took:.1f} s from SIGTERM to exit"

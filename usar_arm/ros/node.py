@@ -281,12 +281,15 @@ class TrajectoryInterfaces:
     def _finish(self, handle: Any, outcome: Outcome) -> None:
         log.info("goal %s: %s", "succeeded" if outcome.succeeded else
                  "cancelled" if outcome.cancelled else "aborted", outcome.message)
-        if outcome.succeeded:
-            handle.succeed()
-        elif outcome.cancelled:
-            handle.canceled()
-        else:
-            handle.abort()
+        try:
+            if outcome.succeeded:
+                handle.succeed()
+            elif outcome.cancelled:
+                handle.canceled()
+            else:
+                handle.abort()
+        except Exception as exc:  # Ctrl-C/SIGTERM shut the context down first: nobody to tell
+            log.debug("goal state not sent: %s", exc)
 
     def _feedback_to(self, handle: Any) -> Any:
         def send(desired: Array, velocity: Array, actual: Array) -> None:
