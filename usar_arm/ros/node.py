@@ -230,14 +230,21 @@ class TrajectoryInterfaces:
         self.runner = runner
         self.rate_hz = rate_hz
         self.names = list(arm.joint_names)
+        self._tickets: dict[bytes, int] = {}
         group = ReentrantCallbackGroup()
         self.server = ActionServer(
             node, FollowJointTrajectory, f"{controller}/follow_joint_trajectory",
             execute_callback=self._execute, goal_callback=lambda _goal: GoalResponse.ACCEPT,
+            handle_accepted_callback=self._accepted,
             cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group,
             result_timeout=RESULT_KEPT_S)
         self.topic = node.create_subscription(JointTrajectory, f"{controller}/joint_trajectory",
                                               self._on_topic, 10, callback_group=group)
+
+    def _accepted(self, handle: Any) -> None:
+        """Number the goal in the order goals are accepted, then run it."""
+        self._tickets[bytes(handle.goal_id.uuid)] = self.runner.ticket()
+        handle.execute()
 
     def _current(self) -> Array:
         asta = self.arm.client.latest_asta(str(self.arm.robot.actuator)) \
@@ -260,6 +267,7 @@ class TrajectoryInterfaces:
         return checked
 
     def _execute(self, handle: Any) -> Any:
+        ticket = self._tickets.pop(bytes(handle.goal_id.uuid), 0) or self.runner.ticket()
         request = handle.request
         result = FollowJointTrajectory.Result()
         try:
@@ -273,7 +281,7 @@ class TrajectoryInterfaces:
             handle.abort()
             return result
         outcome = self.runner.run(Job(checked, lambda: bool(handle.is_cancel_requested),
-                                      self._feedback_to(handle), "action goal"))
+                                      self._feedback_to(handle), "action goal", ticket))
         self._finish(handle, outcome)
         result.error_code, result.error_string = outcome.code, outcome.message
         return result
@@ -303,6 +311,7 @@ class TrajectoryInterfaces:
         return send
 
     def _on_topic(self, msg: JointTrajectory) -> None:
+        ticket = self.runner.ticket()
         if not msg.points:  # as joint_trajectory_controller: stop what runs and hold
             self.runner.stop_active("an empty joint_trajectory message: hold")
             log.info("joint_trajectory: an empty message; the arm holds")
@@ -313,7 +322,7 @@ class TrajectoryInterfaces:
             log.error("joint_trajectory message refused: %s", exc.message)
             return
         self._finish_topic(self.runner.run(Job(checked, lambda: False, lambda *_: None,
-                                               "joint_trajectory message")))
+                                               "joint_trajectory message", ticket)))
 
     @staticmethod
     def _finish_topic(outcome: Outcome) -> None:
