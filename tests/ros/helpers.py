@@ -3,6 +3,7 @@ its own ROS_DOMAIN_ID and on localhost only."""
 
 from __future__ import annotations
 
+import fcntl
 import itertools
 import os
 import signal
@@ -34,11 +35,25 @@ STARTUP_TIMEOUT_S = 120.0
 _ids = itertools.count()
 
 
+_leases: list[Any] = []
+
+
 def domain_id() -> int:
-    """A domain id no other test (xdist worker) of this run uses: 5..100."""
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
-    w = int(worker[2:]) if worker[2:].isdigit() else 0
-    return 5 + (w * 24 + next(_ids)) % 96
+    """A domain id (5..100) no other process on this machine holds: each is leased by an
+    exclusive lock on /tmp/usar-arm-ros-domain-<id>.lock, kept until this process ends, so
+    xdist workers and concurrent test sessions never share a graph."""
+    start = next(_ids) * 7 + os.getpid()
+    for k in range(96):
+        domain = 5 + (start + k) % 96
+        lock = open(f"/tmp/usar-arm-ros-domain-{domain}.lock", "w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        _leases.append(lock)
+        return domain
+    raise RuntimeError("every ROS domain id 5..100 is leased by another process")
 
 
 def ros_env(domain: int, **extra: str) -> dict[str, str]:

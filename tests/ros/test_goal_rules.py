@@ -71,6 +71,8 @@ def test_tolerances_zero_means_default_negative_means_none() -> None:
     (goal([(1.0, [math.nan] * 6)]), INVALID_GOAL, "finite"),
     (goal([(1.0, HERE.tolist()), (1.0, HERE.tolist())]), INVALID_GOAL, "strictly increasing"),
     (goal([(-1.0, HERE.tolist())]), INVALID_GOAL, "non-negative"),
+    (goal([(1e6, HERE.tolist())]), INVALID_GOAL, "at most 600 s"),
+    (goal([(1.0, HERE.tolist())], stamp=1e7), INVALID_GOAL, "in the future"),
     (goal([(1.0, [0, 0, 0, 0, 2.5, 0])]), INVALID_GOAL, "joint_a5 at 2.5000, outside"),
     (goal([(0.1, (HERE + 1.0).tolist())]), INVALID_GOAL, "above its velocity limit"),
     (goal([(0.0, (HERE + 0.2).tolist())]), INVALID_GOAL, "but the arm is at"),

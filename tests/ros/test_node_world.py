@@ -90,6 +90,8 @@ def test_two_robots_of_one_world_under_two_namespaces(
                   for _, m in got["/r2/joint_states"]]
         assert len(stamps) >= 10 and all(s in sim_times for s in stamps), \
             "r2 stamps with the simulator's time"
+        steps = np.diff([sec + nsec * 1e-9 for sec, nsec in stamps])
+        assert np.allclose(steps, 0.1, atol=1e-3), f"an ASTA line was skipped: {steps}"
         assert all(m.header.stamp.sec > 1e9 for _, m in got["/r1/joint_states"]), \
             "r1 stamps with the system's time"
         before1, before2 = _joints(client, "/r1/joint_states"), \
@@ -131,3 +133,24 @@ def test_a_simulator_killed_mid_goal_aborts_the_goal_and_the_node_lives_on(
         client.close()
         code = node.stop(signal.SIGINT)
     assert code == 0, node.text()[-3000:]
+
+
+def test_sigterm_during_a_goal_stops_the_motion_and_exits_0(tmp_path: Path) -> None:
+    domain = domain_id()
+    node = NodeProcess(domain, ["-v"], tmp_path / "node.log")
+    client = Client(domain)
+    try:
+        client.description()
+        q0 = _joints(client)
+        handle = client.send(ACTION, make_goal(NAMES, [(8.0, q0 + 0.4)]))
+        time.sleep(1.5)
+        began = time.monotonic()
+        code = node.stop(signal.SIGTERM)
+        took = time.monotonic() - began
+        del handle
+    finally:
+        client.close()
+    assert code == 0, node.text()[-3000:]
+    assert "the node is shutting down" in node.text(), node.text()[-3000:]
+    assert "Traceback" not in node.text(), node.text()[-3000:]
+    assert took < 10.0, f"{took:.1f} s from SIGTERM to exit"

@@ -9,7 +9,7 @@ Rules (each failure is a :class:`GoalRejected` with the controller's error code)
 * joint names: none missing, none unknown, none twice (INVALID_JOINTS);
 * points: at least one; per point as many positions as joints, velocities and accelerations
   empty or as many (accelerations are checked, not followed); every number finite; times
-  strictly increasing (INVALID_GOAL);
+  strictly increasing; at most ``MAX_DURATION_S`` long (INVALID_GOAL);
 * the header stamp, when set, plus the last point's time lies in the future
   (OLD_HEADER_TIMESTAMP);
 * every position inside the joint limits, every velocity the trajectory needs within the
@@ -39,6 +39,10 @@ INVALID_JOINTS = -2
 OLD_HEADER_TIMESTAMP = -3
 PATH_TOLERANCE_VIOLATED = -4
 GOAL_TOLERANCE_VIOLATED = -5
+
+
+MAX_DURATION_S = 600.0
+"""The longest goal (s): its samples are held in memory (100 Hz: about 9 MB for 600 s)."""
 
 
 class GoalRejected(Exception):
@@ -154,6 +158,9 @@ def check_goal(goal: TrajectoryGoal, chain: KinematicChain, current: Array, now:
             or np.any(np.diff(times) <= 0):
         raise GoalRejected(INVALID_GOAL, "time_from_start must be finite, non-negative and "
                                          f"strictly increasing; got {times.round(4).tolist()}")
+    if times[-1] > MAX_DURATION_S:
+        raise GoalRejected(INVALID_GOAL, f"the trajectory lasts {times[-1]:.0f} s; this node "
+                                         f"runs at most {MAX_DURATION_S:.0f} s per goal")
     q = _matrix(goal.positions, "positions", k, n, optional=False)
     assert q is not None
     qd = _matrix(goal.velocities, "velocities", k, n, optional=True)
@@ -166,6 +173,9 @@ def check_goal(goal: TrajectoryGoal, chain: KinematicChain, current: Array, now:
                                f"{now - goal.stamp - times[-1]:.3f} s ago (header stamp "
                                f"{goal.stamp:.3f} s + {times[-1]:.3f} s, now {now:.3f} s)")
         delay = max(0.0, goal.stamp - now)
+        if delay > MAX_DURATION_S:
+            raise GoalRejected(INVALID_GOAL, f"the header stamp is {delay:.0f} s in the future; "
+                               f"at most {MAX_DURATION_S:.0f} s is waited for")
     _check_limits(q, chain)
     if times[0] == 0:
         gap = np.abs(q[0] - current)

@@ -63,6 +63,9 @@ log = logging.getLogger("usar_arm.ros")
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 """robot_description and tf_static: late joiners get the last message."""
+RESULT_KEPT_S = 60
+"""How long a finished goal's result is kept for a client to fetch (s; rclpy's default, 900 s,
+lets the node's memory grow with every goal for 15 minutes)."""
 
 
 @dataclass(frozen=True)
@@ -227,13 +230,21 @@ class TrajectoryInterfaces:
         self.runner = runner
         self.rate_hz = rate_hz
         self.names = list(arm.joint_names)
+        self._tickets: dict[bytes, int] = {}
         group = ReentrantCallbackGroup()
         self.server = ActionServer(
             node, FollowJointTrajectory, f"{controller}/follow_joint_trajectory",
             execute_callback=self._execute, goal_callback=lambda _goal: GoalResponse.ACCEPT,
-            cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group)
+            handle_accepted_callback=self._accepted,
+            cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group,
+            result_timeout=RESULT_KEPT_S)
         self.topic = node.create_subscription(JointTrajectory, f"{controller}/joint_trajectory",
                                               self._on_topic, 10, callback_group=group)
+
+    def _accepted(self, handle: Any) -> None:
+        """Number the goal in the order goals are accepted, then run it."""
+        self._tickets[bytes(handle.goal_id.uuid)] = self.runner.ticket()
+        handle.execute()
 
     def _current(self) -> Array:
         asta = self.arm.client.latest_asta(str(self.arm.robot.actuator)) \
@@ -256,6 +267,7 @@ class TrajectoryInterfaces:
         return checked
 
     def _execute(self, handle: Any) -> Any:
+        ticket = self._tickets.pop(bytes(handle.goal_id.uuid), 0) or self.runner.ticket()
         request = handle.request
         result = FollowJointTrajectory.Result()
         try:
@@ -269,7 +281,7 @@ class TrajectoryInterfaces:
             handle.abort()
             return result
         outcome = self.runner.run(Job(checked, lambda: bool(handle.is_cancel_requested),
-                                      self._feedback_to(handle), "action goal"))
+                                      self._feedback_to(handle), "action goal", ticket))
         self._finish(handle, outcome)
         result.error_code, result.error_string = outcome.code, outcome.message
         return result
@@ -277,12 +289,15 @@ class TrajectoryInterfaces:
     def _finish(self, handle: Any, outcome: Outcome) -> None:
         log.info("goal %s: %s", "succeeded" if outcome.succeeded else
                  "cancelled" if outcome.cancelled else "aborted", outcome.message)
-        if outcome.succeeded:
-            handle.succeed()
-        elif outcome.cancelled:
-            handle.canceled()
-        else:
-            handle.abort()
+        try:
+            if outcome.succeeded:
+                handle.succeed()
+            elif outcome.cancelled:
+                handle.canceled()
+            else:
+                handle.abort()
+        except Exception as exc:  # Ctrl-C/SIGTERM shut the context down first: nobody to tell
+            log.debug("goal state not sent: %s", exc)
 
     def _feedback_to(self, handle: Any) -> Any:
         def send(desired: Array, velocity: Array, actual: Array) -> None:
@@ -296,6 +311,7 @@ class TrajectoryInterfaces:
         return send
 
     def _on_topic(self, msg: JointTrajectory) -> None:
+        ticket = self.runner.ticket()
         if not msg.points:  # as joint_trajectory_controller: stop what runs and hold
             self.runner.stop_active("an empty joint_trajectory message: hold")
             log.info("joint_trajectory: an empty message; the arm holds")
@@ -306,7 +322,7 @@ class TrajectoryInterfaces:
             log.error("joint_trajectory message refused: %s", exc.message)
             return
         self._finish_topic(self.runner.run(Job(checked, lambda: False, lambda *_: None,
-                                               "joint_trajectory message")))
+                                               "joint_trajectory message", ticket)))
 
     @staticmethod
     def _finish_topic(outcome: Outcome) -> None:

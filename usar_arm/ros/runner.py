@@ -52,6 +52,8 @@ class Job:
     cancelled: Callable[[], bool]
     feedback: Feedback
     label: str = "goal"
+    ticket: int = 0
+    """Its place in the order the goals arrived (:meth:`GoalRunner.ticket`): the newest wins."""
     preempted: str | None = None
     violation: str | None = None
     last_asta: float = field(default=-1.0)
@@ -87,6 +89,7 @@ class GoalRunner:
         self._guard = threading.Lock()
         self._active: Job | None = None
         self._latest: Job | None = None
+        self._tickets = 0
         self.stopping: str | None = None
         """Set when the node shuts down: the running goal stops with this reason."""
 
@@ -95,6 +98,12 @@ class GoalRunner:
         with self._guard:
             if self._active is not None and self._active.preempted is None:
                 self._active.preempted = reason
+
+    def ticket(self) -> int:
+        """The next number in arrival order (call it when a goal arrives)."""
+        with self._guard:
+            self._tickets += 1
+            return self._tickets
 
     def wait_idle(self, timeout: float = TAKE_OVER_TIMEOUT_S) -> bool:
         """Wait (at most ``timeout`` s) until no job runs; False on timeout."""
@@ -105,8 +114,12 @@ class GoalRunner:
 
     def run(self, job: Job) -> Outcome:
         """Pre-empt the running job, then execute ``job`` and say how it ended. Of several
-        jobs waiting for the arm, only the newest runs; the others end pre-empted."""
+        jobs waiting for the arm, only the newest (highest ticket) runs; the others end
+        pre-empted."""
         with self._guard:
+            if self._latest is not None and job.ticket < self._latest.ticket:
+                return Outcome(False, SUCCESSFUL, "pre-empted by a newer goal before it "
+                               "started")
             self._latest = job
         self.stop_active(f"pre-empted by a newer goal ({job.label})")
         if not self._lock.acquire(timeout=TAKE_OVER_TIMEOUT_S):
