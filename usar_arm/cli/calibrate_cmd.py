@@ -14,13 +14,20 @@ import json
 from pathlib import Path
 
 from usar_arm.calibrate.bounds import Bounds
-from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
+from usar_arm.calibrate.identify import CalibrationOptions, identify
 from usar_arm.calibrate.measurements import read_measurements
-from usar_arm.calibrate.report import calibration_dict, check_validated, compact_names
+from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.validation import held_out_note, split_held_out
+from usar_arm.cli.calibration_text import (
+    BOUND_OPTIONS,
+    calibration_options,
+    identifiability_line,
+    residual_line,
+    tool_point_line,
+    warn_lost,
+)
 from usar_arm.cli.common import (
     add_verbosity,
-    err,
     out,
     print_json,
     progress,
@@ -33,13 +40,7 @@ from usar_arm.core.model import JointType
 from usar_arm.urdf.reader import parse_urdf
 
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
-BOUND_OPTIONS = (("reading", "--max-reading-offset",
-                  "how far a reading may sit from the nominal description before the fit"),
-                 ("joint", "--max-joint-correction", "the largest correction of a joint frame"),
-                 ("tool", "--max-tool-correction",
-                  "the largest correction of the measured frame's mount"),
-                 ("base", "--max-base-correction",
-                  "the largest correction of the base from its guess"))
+
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -111,41 +112,6 @@ def run_robot(args: argparse.Namespace) -> int:
     return calibrate_robot(args)
 
 
-def calibration_options(args: argparse.Namespace) -> CalibrationOptions:
-    """The fit's options from the arguments (bounds in SI units)."""
-    values = {f"{kind}_{unit}": float(v) for kind, flag, _ in BOUND_OPTIONS
-              for unit, v in zip(("m", "rad"), getattr(args, flag[2:].replace("-", "_")),
-                                 strict=True)}
-    return CalibrationOptions(quantisation=args.quantisation, bounds=Bounds(**values))
-
-
-def _milli(x: float) -> str:
-    return f"{x * 1e3:.3f}"
-
-
-def identifiability_line(cal: Calibration) -> str:
-    """What the fit could identify, by name."""
-    return (f"  rank {cal.rank} of {cal.generic_rank} generically identifiable; "
-            f"{len(cal.unidentifiable)} unidentifiable, kept as in the URDF: "
-            f"{compact_names(cal.unidentifiable)}")
-
-
-def warn_lost(cal: Calibration) -> None:
-    """A warning on stderr when these readings identify less than readings at generic
-    configurations would: the description then holds only near the configurations sampled."""
-    if cal.lost:
-        err(f"warning: these readings cannot identify {compact_names(cal.lost)} (readings at "
-            "generic configurations would): the description is only validated over the "
-            "configurations sampled (the held-out check)")
-
-
-def tool_point_line(cal: Calibration, source: str) -> str:
-    """How well the tool point is fixed, and by what."""
-    med, worst = cal.tool_sigma_m
-    return (f"  tool point {cal.measured_frame}: 1-sigma {_milli(med)} mm median, "
-            f"{_milli(worst)} mm max over the fitted configurations; {source}")
-
-
 def run_file(args: argparse.Namespace) -> int:
     urdf_path = Path(args.urdf)
     try:
@@ -183,11 +149,8 @@ def run_file(args: argparse.Namespace) -> int:
     out(f"calibrated {stem} from {len(fit)} readings of {frame} in {cal.seconds:.2f} s "
         f"({cal.quantisation}, {len(cal.rejected)} rejected)")
     out(identifiability_line(cal))
-    out(f"  fit        max {_milli(f['max_before_m'])} -> {_milli(f['max_after_m'])} mm, "
-        f"{_milli(f['max_before_rad'])} -> {_milli(f['max_after_rad'])} mrad")
-    out(f"  held out   max {_milli(v['max_before_m'])} -> {_milli(v['max_after_m'])} mm, "
-        f"{_milli(v['max_before_rad'])} -> {_milli(v['max_after_rad'])} mrad "
-        f"({len(held)} readings)")
+    out(residual_line("fit", f))
+    out(residual_line("held out", v, f" ({len(held)} readings)"))
     out(tool_point_line(cal, source))
     out(f"  bounds     readings {_bound(options, 'reading')}, joint frames "
         f"{_bound(options, 'joint')}, tool {_bound(options, 'tool')}, base "
