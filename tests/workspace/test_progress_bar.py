@@ -4,6 +4,7 @@ terminal, a line at every tenth of the work elsewhere, nothing with -q."""
 from __future__ import annotations
 
 import io
+import threading
 
 import pytest
 import tqdm.std
@@ -92,3 +93,14 @@ def test_quiet_writes_nothing(clock: Clock) -> None:
     bar(10, 10)
     bar.close()
     assert out.getvalue() == ""
+
+
+def test_the_bar_starts_no_thread(clock: Clock) -> None:
+    """The bar is drawn before a job's workers start: a second thread would make the process
+    pool start them by forkserver (seconds) instead of fork (milliseconds)."""
+    before = threading.active_count()
+    bar = ProgressBar("queries", Terminal())
+    bar(0, 100)
+    bar(50, 100)
+    assert threading.active_count() == before
+    bar.close()

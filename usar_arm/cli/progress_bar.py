@@ -28,7 +28,11 @@ def _count(n: float | None) -> str:
 
 
 class _Bar(tqdm):  # type: ignore[type-arg]
-    """tqdm with the counts of :func:`_count` (``done`` and ``whole`` in :data:`FORMAT`)."""
+    """tqdm with the counts of :func:`_count` (``done`` and ``whole`` in :data:`FORMAT`), and
+    without tqdm's monitor thread: the bar is drawn before the job's workers start, and a
+    process pool forks its workers (milliseconds) only while this process runs one thread."""
+
+    monitor_interval = 0
 
     @property
     def format_dict(self) -> dict[str, Any]:
