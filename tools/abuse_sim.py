@@ -24,11 +24,8 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import sys
-import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 from simharness import (
@@ -36,13 +33,16 @@ from simharness import (
     Flooder,
     ProcSample,
     ServerProcess,
+    campaign,
     disconnect_summaries,
     log_counts,
     machine_load,
     midline_disconnects,
     process_summary,
+    sample_server,
     summarise_bots,
     tool_parser,
+    write_result,
 )
 
 PHASES = ("baseline", "junk", "midline", "flood-act", "flood-junk", "recovery")
@@ -63,12 +63,7 @@ async def run_abuse(server: ServerProcess, args: argparse.Namespace) -> dict[str
     bots = [Bot(i, rate=args.rate, probe_every=0.5) for i in range(args.clients)]
     samples: list[ProcSample] = []
 
-    async def sampler() -> None:
-        while not stop.is_set() and server.alive():
-            samples.append(server.sample())
-            await asyncio.sleep(0.5)
-
-    sampling = asyncio.create_task(sampler())
+    sampling = asyncio.create_task(sample_server(server, samples, stop, 0.5))
     tasks = [asyncio.create_task(b.run(server.port, stop)) for b in bots]
     t_start = time.monotonic()
     while any(b.spawned_at is None and b.lost is None for b in bots) \
@@ -159,21 +154,12 @@ def print_summary(result: dict[str, Any]) -> None:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     load_before = machine_load()
-    log_path = args.server_log or Path(tempfile.mkdtemp(prefix="abuse_sim_")) / "sim.log"
-    server = ServerProcess(log_path)
-    try:
-        result = asyncio.run(run_abuse(server, args))
-        result["server_alive"] = server.alive()
-    finally:
-        code = server.stop()
+    result, server, code, log_path = campaign("abuse_sim", args.server_log,
+                                              lambda server: run_abuse(server, args))
     result.update(server_exit=code, server_log=str(log_path), load_before=load_before,
                   load_after=machine_load())
     attach_server_log(result, server.log_text())
-    text_out = json.dumps(result, indent=1)
-    if args.json:
-        args.json.write_text(text_out + "\n")
-    else:
-        sys.stdout.write(text_out + "\n")
+    write_result(result, args.json)
     print_summary(result)
     return 0 if not result["lost"] and result["server_alive"] else 1
 

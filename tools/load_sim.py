@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import sys
 import tempfile
 import time
@@ -32,8 +31,11 @@ from simharness import (
     log_counts,
     machine_load,
     process_summary,
+    sample_rows,
+    sample_server,
     summarise_bots,
     tool_parser,
+    write_result,
 )
 
 
@@ -65,14 +67,9 @@ async def run_load(port: int, server: ServerProcess | None, args: argparse.Names
     bots = [Bot(i, rate=args.rate, probe_every=args.probe_every) for i in range(args.clients)]
     samples: list[ProcSample] = []
 
-    async def sampler() -> None:
-        while not stop.is_set() and server is not None and server.alive():
-            samples.append(server.sample())
-            await asyncio.sleep(args.sample_every)
-
     started = time.monotonic()
     cpu0 = time.process_time()
-    sampling = asyncio.create_task(sampler())
+    sampling = asyncio.create_task(sample_server(server, samples, stop, args.sample_every))
     tasks = [asyncio.create_task(b.run(port, stop)) for b in bots]
     while (any(b.spawned_at is None and b.lost is None for b in bots)
            and time.monotonic() - started < 120):
@@ -96,8 +93,7 @@ async def run_load(port: int, server: ServerProcess | None, args: argparse.Names
         "asta": summarise_bots(rows),
         "server": process_summary(samples, t0),
         "client_cpu_percent": round(100 * (time.process_time() - cpu0) / (end - started), 1),
-        "server_samples": [[round(s.t - started, 2), s.rss_kib, s.threads, round(s.cpu_s, 2)]
-                           for s in samples],
+        "server_samples": sample_rows(samples, started),
         "per_client": rows,
     }
     speed = result["asta"]["sim_speed"].get("median")
@@ -161,11 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         result["server_exit"] = code
         result["server_log"] = str(log_path)
         result["server_log_counts"] = log_counts(text)
-    text_out = json.dumps(result, indent=1)
-    if args.json:
-        args.json.write_text(text_out + "\n")
-    else:
-        sys.stdout.write(text_out + "\n")
+    write_result(result, args.json)
     print_summary(result)
     ok = not result["asta"]["lost"] and result.get("server_alive") is not False
     return 0 if ok else 1

@@ -18,6 +18,7 @@ import argparse
 import asyncio
 import contextlib
 import itertools
+import json
 import math
 import os
 import re
@@ -26,8 +27,10 @@ import socket
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from array import array
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -494,3 +497,43 @@ def tool_parser(doc: str | None, clients: int, rate: float,
     p.add_argument("--server-log", type=Path, help="keep the simulator's log here")
     p.add_argument("--json", type=Path, help="write the results to this file")
     return p
+
+
+async def sample_server(server: ServerProcess | None, samples: list[ProcSample],
+                        stop: asyncio.Event, every: float) -> None:
+    """Append a sample of the server's process to ``samples`` every ``every`` s until ``stop``
+    is set or the process ends (nothing without a process of ours)."""
+    while not stop.is_set() and server is not None and server.alive():
+        samples.append(server.sample())
+        await asyncio.sleep(every)
+
+
+def sample_rows(samples: list[ProcSample], started: float, digits: int = 2) -> list[list]:
+    """[t since ``started`` (s), RSS (KiB), threads, CPU (s)] of each sample, for the JSON."""
+    return [[round(s.t - started, digits), s.rss_kib, s.threads, round(s.cpu_s, 2)]
+            for s in samples]
+
+
+def campaign(name: str, server_log: Path | None,
+             run: Callable[[ServerProcess], Awaitable[dict[str, Any]]]
+             ) -> tuple[dict[str, Any], ServerProcess, int, Path]:
+    """Start a simulator process (logging to ``server_log``, else a fresh temporary folder
+    named after the tool), run the campaign against it and stop it: (the campaign's result
+    with ``server_alive``, the process, its exit code, its log's path)."""
+    log_path = server_log or Path(tempfile.mkdtemp(prefix=f"{name}_")) / "sim.log"
+    server = ServerProcess(log_path)
+    try:
+        result = asyncio.run(run(server))
+        result["server_alive"] = server.alive()
+    finally:
+        code = server.stop()
+    return result, server, code, log_path
+
+
+def write_result(result: dict[str, Any], path: Path | None) -> None:
+    """The result as JSON into ``path`` (--json), else on stdout."""
+    text = json.dumps(result, indent=1) + "\n"
+    if path:
+        path.write_text(text)
+    else:
+        sys.stdout.write(text)

@@ -20,12 +20,9 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import statistics
 import sys
-import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 from simharness import (
@@ -33,13 +30,17 @@ from simharness import (
     Flooder,
     ProcSample,
     ServerProcess,
+    campaign,
     log_counts,
     machine_load,
     midline_disconnects,
     process_summary,
     quantiles,
+    sample_rows,
+    sample_server,
     summarise_bots,
     tool_parser,
+    write_result,
 )
 
 
@@ -68,11 +69,6 @@ async def run_soak(server: ServerProcess, args: argparse.Namespace) -> dict[str,
     bursts = 0
     started = time.monotonic()
     end = started + 60.0 * args.minutes
-
-    async def sampler() -> None:
-        while not stop.is_set() and server.alive():
-            samples.append(server.sample())
-            await asyncio.sleep(args.sample_every)
 
     async def one_churn(bot: Bot) -> None:
         leave = asyncio.Event()
@@ -108,7 +104,7 @@ async def run_soak(server: ServerProcess, args: argparse.Namespace) -> dict[str,
             await asyncio.wait(jobs, timeout=10)
             bursts += 1
 
-    helpers = [asyncio.create_task(sampler())]
+    helpers = [asyncio.create_task(sample_server(server, samples, stop, args.sample_every))]
     tasks = [asyncio.create_task(b.run(port, stop)) for b in bots]
     if args.churn_every > 0:
         helpers.append(asyncio.create_task(churner()))
@@ -150,8 +146,7 @@ async def run_soak(server: ServerProcess, args: argparse.Namespace) -> dict[str,
                                         if b.spawned_at is not None])},
         "abuse_bursts": bursts,
         "server": process_summary(samples, warm),
-        "server_samples": [[round(s.t - started, 1), s.rss_kib, s.threads, round(s.cpu_s, 2)]
-                           for s in samples],
+        "server_samples": sample_rows(samples, started, 1),
         "rss_kib_median_after_warmup": statistics.median(
             [s.rss_kib for s in samples if s.t >= warm] or [0]),
     }
@@ -160,22 +155,13 @@ async def run_soak(server: ServerProcess, args: argparse.Namespace) -> dict[str,
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     load_before = machine_load()
-    log_path = args.server_log or Path(tempfile.mkdtemp(prefix="soak_sim_")) / "sim.log"
-    server = ServerProcess(log_path)
-    try:
-        result = asyncio.run(run_soak(server, args))
-        result["server_alive"] = server.alive()
-    finally:
-        code = server.stop()
+    result, server, code, log_path = campaign("soak_sim", args.server_log,
+                                              lambda server: run_soak(server, args))
     text = server.log_text()
     result.update(server_exit=code, server_log=str(log_path), load_before=load_before,
                   load_after=machine_load(), server_log_counts=log_counts(text),
                   server_log_lines=text.count("\n"))
-    text_out = json.dumps(result, indent=1)
-    if args.json:
-        args.json.write_text(text_out + "\n")
-    else:
-        sys.stdout.write(text_out + "\n")
+    write_result(result, args.json)
     st, sv, ch = result["steady"], result["server"], result["churn"]
     sys.stderr.write(
         f"soak {args.minutes:g} min, {args.clients} steady clients x {args.rate:g} Hz, "

@@ -21,14 +21,16 @@ def local_ray_cpus(argv: list[str]) -> int | None:
     ``--workers N`` or one per core), or None when it starts none."""
     if not argv or argv[0] not in RAY_COMMANDS:
         return None
+    from usar_arm.workspace.ray_address import AUTO, LOCAL
+
     parser = argparse.ArgumentParser(add_help=False, exit_on_error=False)
-    parser.add_argument("--ray", nargs="?", const="auto")
+    parser.add_argument("--ray", nargs="?", const=AUTO)
     parser.add_argument("--workers", type=int)
     try:
         known, _ = parser.parse_known_args(argv[1:])
     except (argparse.ArgumentError, ValueError):
         return None  # (the command's own parser says what is wrong)
-    if known.ray != "local":
+    if known.ray != LOCAL:
         return None
     from usar_arm.workspace.local_head import instance_cpus
 

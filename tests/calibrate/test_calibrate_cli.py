@@ -123,7 +123,7 @@ def test_readings_in_base_link_give_a_urdf_that_reproduces_them_as_written(
     data = readings(truth, "tool0", np.eye(4), random_q(NOMINAL, 50, 5), 6, sigma_m=2e-5,
                     sigma_rad=2e-5)
     urdf, path = _in_base_link(tmp_path, data)
-    assert "# measured in: base_link" in path.read_text()
+    assert "# measured_in: base_link" in path.read_text()
     out = tmp_path / "out"
     assert main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
                  str(out)]) == EXIT_OK
@@ -168,7 +168,7 @@ def test_a_command_line_frame_that_contradicts_the_file_writes_nothing(
     assert "says its readings are measured in base_link" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
     bad = tmp_path / "bad.csv"
-    bad.write_text(path.read_text().replace("# measured in: base_link", "# measured in: world"))
+    bad.write_text(path.read_text().replace("# measured_in: base_link", "# measured_in: world"))
     code = main(["calibrate", "--measurements", str(bad), "--urdf", str(urdf), "--out-dir",
                  str(tmp_path / "out")])
     assert code == EXIT_INVALID_INPUT

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.__main__ import local_ray_cpus
-from usar_arm.cli.main import COMMANDS, build_parser
+from usar_arm.cli.main import COMMANDS, SUMMARIES, build_parser, register
 
 CORES = os.cpu_count() or 1
 
@@ -53,6 +53,36 @@ def test_the_command_table_is_what_the_modules_register_in_the_order_of_help() -
     for command, module in COMMANDS.items():  # and one command loads its own module's only
         own = [c for c, m in COMMANDS.items() if m == module]
         assert _subcommands(build_parser(command)) == own
+
+
+def test_the_summaries_help_lists_are_what_the_modules_register() -> None:
+    registered: dict[str, str | None] = {}
+    for module in dict.fromkeys(COMMANDS.values()):
+        action = argparse.ArgumentParser().add_subparsers()
+        register(action, module)
+        registered |= {a.dest: a.help for a in action._choices_actions}
+    assert registered == SUMMARIES and list(SUMMARIES) == list(COMMANDS)
+
+
+HELP_ALONE = """
+import sys
+from usar_arm.cli.main import main
+try:
+    main(["--help"])
+except SystemExit as exc:
+    assert exc.code == 0, exc.code
+print(",".join(m for m in sys.modules if m.startswith("usar_arm.cli.") and m.endswith(
+    ("_cmd", "_cmds"))) or "none")
+"""
+
+
+def test_help_lists_the_commands_without_loading_them() -> None:
+    done = subprocess.run([sys.executable, "-c", HELP_ALONE], capture_output=True, text=True,
+                          timeout=60, check=False, cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "none"
+    shown = "".join(done.stdout.split())  # (argparse wraps the lines, at hyphens too)
+    assert all("".join(summary.split()) in shown for summary in SUMMARIES.values())
 
 
 ONE_COMMAND = """

@@ -22,8 +22,10 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from usar_arm.calibrate import quantised as qm
 from usar_arm.calibrate.bounds import check_corrections, corrections
@@ -103,24 +105,8 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
             f"readings of {measured_frame} identify; a well-posed fit needs "
             f"{NUMBERS_PER_PARAMETER}x as many ({need})", len(meas), math.ceil(need / per))
     t = _unstated_noise(model, cols, q, base_guess, t, meas, options)
-    keep = np.ones(len(meas), bool)
-    p, its, converged = p0, 0, True
-    limit = int(MAX_REJECTED * len(meas))
-    for _ in range(limit + 1):
-        tk = _subset(t, keep)
-        first = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, "midpoint",
-                                    options.max_iterations)
-        p, its, converged = first.p, first.iterations, first.converged
-        if kind != "midpoint":  # started from the midpoint solution: inside or near the set
-            more = levenberg_marquardt(model, p, cols, q[keep], base_guess, tk, kind,
-                                       options.max_iterations)
-            p, its, converged = more.p, its + more.iterations, converged and more.converged
-        sc = qm.scores(qm.errors(model.poses(p, q, base_guess), t), t, kind)
-        sc[~keep] = 0.0
-        worst = int(np.argmax(sc))
-        if sc[worst] <= options.outlier_sigma or (~keep).sum() >= limit:
-            break
-        keep[worst] = False
+    p, its, converged, keep = _fit_rejecting_outliers(model, p0, cols, q, base_guess, t, kind,
+                                                      options)
     e = qm.errors(model.poses(p, q, base_guess), t)
     sc = qm.scores(e, t, kind)
     verdict = judge(e, t, sc, keep, converged, options)
@@ -148,6 +134,34 @@ def identify(urdf: str, measured_frame: str, measurements: Sequence[Measurement]
         corrections=found, bounds=options.bounds,
         tool_sigma_m=tool_sigma(model, p, cols, q[keep], base_guess, cov),
         registered=registration.registered)
+
+
+def _fit_rejecting_outliers(model: ErrorModel, p0: Array, cols: list[int], q: Array,
+                            base: Array, t: qm.Targets, kind: str,
+                            options: CalibrationOptions
+                            ) -> tuple[Array, int, bool, NDArray[Any]]:
+    """(parameters, iterations, converged, readings kept): the fit (midpoint first, then the
+    ``kind`` model from there), refitted without the worst reading while it scores over
+    ``options.outlier_sigma``, at most :data:`MAX_REJECTED` of the readings."""
+    keep = np.ones(len(q), bool)
+    p, its, converged = p0, 0, True
+    limit = int(MAX_REJECTED * len(q))
+    for _ in range(limit + 1):
+        tk = _subset(t, keep)
+        first = levenberg_marquardt(model, p, cols, q[keep], base, tk, "midpoint",
+                                    options.max_iterations)
+        p, its, converged = first.p, first.iterations, first.converged
+        if kind != "midpoint":  # started from the midpoint solution: inside or near the set
+            more = levenberg_marquardt(model, p, cols, q[keep], base, tk, kind,
+                                       options.max_iterations)
+            p, its, converged = more.p, its + more.iterations, converged and more.converged
+        sc = qm.scores(qm.errors(model.poses(p, q, base), t), t, kind)
+        sc[~keep] = 0.0
+        worst = int(np.argmax(sc))
+        if sc[worst] <= options.outlier_sigma or (~keep).sum() >= limit:
+            break
+        keep[worst] = False
+    return p, its, converged, keep
 
 
 def _unstated_noise(model: ErrorModel, cols: list[int], q: Array, base: Array, t: qm.Targets,

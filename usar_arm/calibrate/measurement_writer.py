@@ -34,7 +34,7 @@ def csv_text(data: MeasurementSet, length_unit: str = "m", angle_unit: str = "ra
     buf = io.StringIO()
     buf.write(f"# frame: {data.frame}\n")
     if data.measured_in != "tracker":
-        buf.write(f"# measured in: {data.measured_in}\n")
+        buf.write(f"# measured_in: {data.measured_in}\n")
     for key, value in data.header:
         buf.write(f"# {key}: {value}\n")
     steps = {(m.step_q, m.q_rounded) for m in data.measurements}

@@ -87,13 +87,15 @@ class MeasurementSet:
 
 
 MEASURED_IN = ("tracker", "base_link")
-"""The frames a file's poses may be given in (``# measured in:`` / ``measured_in:``)."""
+"""The frames a file's poses may be given in (``# measured_in:`` / ``measured_in:``; a tour's
+readings file, which states ``# measured in:`` the server's world, is read by
+:mod:`usar_arm.calibrate.tour_readings`)."""
 
 
 def _measured_in(value: str, path: str, line: int | None) -> str:
     if value not in MEASURED_IN:
         raise FileFormatError(path, f"the readings are measured in '{value}': expected "
-                              f"{' or '.join(MEASURED_IN)}", line=line, field="measured in")
+                              f"{' or '.join(MEASURED_IN)}", line=line, field="measured_in")
     return value
 
 
@@ -147,12 +149,22 @@ def _split(col: str) -> tuple[str, str]:
     return (base, unit) if base else (col, "")
 
 
-def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Sequence[bool],
-              lower: Array | None, upper: Array | None) -> MeasurementSet:
-    frame, header_line, rows, measured_in = "", 0, [], "tracker"
-    comments: list[tuple[str, str]] = []
-    step_q, rounded = 0.0, False
-    lines = text.splitlines()
+@dataclass
+class _Preamble:
+    """What a CSV file's comment lines before its header say, and where the header is."""
+
+    frame: str = ""
+    step_q: float = 0.0
+    rounded: bool = False
+    comments: list[tuple[str, str]] = field(default_factory=list)
+    header_line: int = 0
+    measured_in: str = "tracker"
+
+
+def _preamble(path: str, lines: list[str]) -> _Preamble:
+    """The ``# key: value`` lines before the header (frame, joint step, joint values, others
+    kept as comments) and the header's line number."""
+    found = _Preamble()
     for i, raw in enumerate(lines, start=1):
         s = raw.strip()
         if not s:
@@ -160,36 +172,34 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
         if s.startswith("#"):
             key, _, value = (part.strip() for part in s[1:].partition(":"))
             if key == "frame":
-                frame = value
-            elif key == "measured in":
-                measured_in = _measured_in(value, path, i)
+                found.frame = value
+            elif key == "measured_in":
+                found.measured_in = _measured_in(value, path, i)
             elif key == "joint step":
-                step_q = _number(value, path, i, "# joint step")
+                found.step_q = _number(value, path, i, "# joint step")
             elif key == "joint values":
                 if value not in ("rounded", "truncated"):
                     raise FileFormatError(path, f"'# joint values: {value}': expected rounded "
                                           "or truncated", line=i)
-                rounded = value == "rounded"
+                found.rounded = value == "rounded"
             elif key:
-                comments.append((key, value))
+                found.comments.append((key, value))
             continue
-        header_line = i
+        found.header_line = i
         break
-    if not header_line:
+    if not found.header_line:
         raise FileFormatError(path, "no header row (expected joint, x, y, z columns)")
-    header = next(csv.reader([lines[header_line - 1]]))
-    cols = {_split(c.strip())[0]: (k, _split(c.strip())[1]) for k, c in enumerate(header)}
-    if not frame:
+    if not found.frame:
         raise FileFormatError(path, "no '# frame: NAME' line before the header (which frame "
                               "was measured?)", line=1)
-    need = list(joint_names) + list(POSITION)
-    missing = [n for n in need if n not in cols]
-    if missing:
-        raise FileFormatError(path, f"missing column(s) {', '.join(missing)} (columns are "
-                              "NAME_UNIT, e.g. joint_a1_deg, x_mm)", line=header_line)
-    has_rpy = [a in cols for a in ANGLES]
-    if any(has_rpy) and not all(has_rpy):
-        raise FileFormatError(path, "give all of roll, pitch, yaw or none", line=header_line)
+    return found
+
+
+def _scales(path: str, header_line: int, cols: dict[str, tuple[int, str]],
+            joint_names: Sequence[str], prismatic: Sequence[bool]
+            ) -> tuple[dict[str, float], dict[str, str]]:
+    """(factor to SI of each column but label/sigma/step, the file's length and angle
+    units)."""
     scale: dict[str, float] = {}
     units = {"length": "m", "angle": "rad"}
     for name, (_, unit) in cols.items():
@@ -203,7 +213,13 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
             units["length"] = unit
         if name in ANGLES:
             units["angle"] = unit
-    # sigma / step may appear twice (length and angle): re-scan the raw header
+    return scale, units
+
+
+def _uncertainty_columns(path: str, header_line: int, header: list[str]
+                         ) -> dict[str, tuple[int, float, bool]]:
+    """sigma_m/sigma_rad/step_m/step_rad -> (column, factor to SI, is an angle): sigma and
+    step may each appear twice (length and angle), so the raw header is scanned."""
     extra: dict[str, tuple[int, float, bool]] = {}
     for k, c in enumerate(header):
         base, unit = _split(c.strip())
@@ -213,6 +229,27 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
                   "length or angle")
             extra[f"{base}_{'rad' if angle else 'm'}"] = (
                 k, (ANGLE_UNITS if angle else LENGTH_UNITS)[unit], angle)
+    return extra
+
+
+def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Sequence[bool],
+              lower: Array | None, upper: Array | None) -> MeasurementSet:
+    rows = []
+    lines = text.splitlines()
+    pre = _preamble(path, lines)
+    header_line = pre.header_line
+    header = next(csv.reader([lines[header_line - 1]]))
+    cols = {_split(c.strip())[0]: (k, _split(c.strip())[1]) for k, c in enumerate(header)}
+    need = list(joint_names) + list(POSITION)
+    missing = [n for n in need if n not in cols]
+    if missing:
+        raise FileFormatError(path, f"missing column(s) {', '.join(missing)} (columns are "
+                              "NAME_UNIT, e.g. joint_a1_deg, x_mm)", line=header_line)
+    has_rpy = [a in cols for a in ANGLES]
+    if any(has_rpy) and not all(has_rpy):
+        raise FileFormatError(path, "give all of roll, pitch, yaw or none", line=header_line)
+    scale, units = _scales(path, header_line, cols, joint_names, prismatic)
+    extra = _uncertainty_columns(path, header_line, header)
     for i, row in enumerate(csv.reader(lines[header_line:]), start=header_line + 1):
         if not row or (len(row) == 1 and not row[0].strip()) or row[0].lstrip().startswith("#"):
             continue
@@ -233,9 +270,10 @@ def _read_csv(path: str, text: str, joint_names: Sequence[str], prismatic: Seque
             q, np.array([get(n) for n in POSITION]),
             np.array([get(n) for n in ANGLES]) if all(has_rpy) else None,
             vals.get("step_m", 0.0), vals.get("step_rad", 0.0),
-            vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0), label, step_q, rounded))
-    return MeasurementSet(tuple(rows), frame, units["length"], units["angle"], tuple(joint_names),
-                          tuple(comments), measured_in)
+            vals.get("sigma_m", 0.0), vals.get("sigma_rad", 0.0), label, pre.step_q,
+            pre.rounded))
+    return MeasurementSet(tuple(rows), pre.frame, units["length"], units["angle"],
+                          tuple(joint_names), tuple(pre.comments), pre.measured_in)
 
 
 def _vector(item: Any, key: str, n: int, s: float, path: str, line: int | None) -> Array:

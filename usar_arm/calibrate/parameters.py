@@ -17,7 +17,6 @@ many configurations at once (numpy, (N, 4, 4) stacks).
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -178,8 +177,3 @@ def replace_origin(urdf: str, joint: Joint, pose: Array) -> str:
     else:
         body = "\n    " + new + body
     return urdf[:match.start(2)] + body + urdf[match.end(2):]
-
-
-def parameter_names(model: ErrorModel) -> Sequence[str]:
-    """The parameter names in vector order."""
-    return model.names

@@ -117,6 +117,7 @@ class Calibration:
                  held_out: Sequence[Measurement]) -> Residuals:
         """Residuals on readings never used for the fit: the nominal ``urdf`` at the base guess
         before, the calibrated URDF (evaluated by Pinocchio) at the fitted base after."""
-        from usar_arm.calibrate.validation import validate
+        from usar_arm.calibrate.validation import validate  # (Pinocchio, loaded when needed)
 
-        return validate(self, urdf, measured_frame, held_out)
+        return validate(urdf, self.apply(urdf), self.base_guess, self.base, measured_frame,
+                        held_out)

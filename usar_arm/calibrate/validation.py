@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,9 +14,6 @@ from usar_arm.core.errors import CalibrationError
 from usar_arm.core.spatial import Array
 from usar_arm.planning.kinematics import KinematicModel
 
-if TYPE_CHECKING:
-    from usar_arm.calibrate.identify import Calibration
-
 
 def model_poses(urdf: str, frame: str, base: Array, q: Array) -> Array:
     """(N, 4, 4) poses of ``frame`` in M = base * FK(urdf) (Pinocchio; its joint order checked
@@ -26,13 +22,14 @@ def model_poses(urdf: str, frame: str, base: Array, q: Array) -> Array:
     return np.array([base @ km.frame_pose(qi, frame) for qi in q]).reshape(-1, 4, 4)
 
 
-def validate(cal: Calibration, urdf: str, measured_frame: str,
+def validate(urdf: str, calibrated: str, base_guess: Array, base: Array, measured_frame: str,
              held_out: Sequence[Measurement]) -> Residuals:
-    """Before: ``urdf`` at the base guess; after: ``cal.apply(urdf)`` at the fitted base."""
+    """Before: ``urdf`` at ``base_guess``; after: the ``calibrated`` URDF at the fitted
+    ``base`` (see :meth:`usar_arm.calibrate.result.Calibration.validate`)."""
     t = qm.targets(held_out, 0.0, 0.0)
     q = qm.joint_midpoints(held_out)
-    before = distances(model_poses(urdf, measured_frame, cal.base_guess, q), t)
-    after = distances(model_poses(cal.apply(urdf), measured_frame, cal.base, q), t)
+    before = distances(model_poses(urdf, measured_frame, base_guess, q), t)
+    after = distances(model_poses(calibrated, measured_frame, base, q), t)
     return Residuals(t.labels, before[0], before[1], after[0], after[1])
 
 

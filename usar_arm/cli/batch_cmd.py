@@ -7,16 +7,9 @@ import json
 from collections import Counter
 from typing import Any
 
-from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
-from usar_arm.cli.job_args import (
-    add_job_args,
-    backend_from_args,
-    run_record,
-    run_with_progress,
-    versions,
-    write_outputs,
-)
-from usar_arm.cli.robot_args import add_robot_args, robot_from_args
+from usar_arm.cli import job_args as job
+from usar_arm.cli.common import out, progress, setup_logging, verbosity
+from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.control.motion import MotionOptions
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.ompl_adapter import OmplOptions
@@ -42,10 +35,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--trajectories", action="store_true",
                    help="include each plan's sampled trajectory (t, q) in its result")
     p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
-    add_job_args(p)
-    add_robot_args(p)
-    add_verbosity(p)
-    p.set_defaults(handler=run)
+    job.add_job_command_args(p, run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -55,11 +45,11 @@ def run(args: argparse.Namespace) -> int:
     options = batch.BatchOptions(args.seed, MotionOptions(
         ompl=OmplOptions(time_limit=args.time_limit, seed=args.seed)), args.trajectories)
     problems, bad = read_problems(args.file)
-    backend = backend_from_args(args)
+    backend = job.backend_from_args(args)
     robot = robot_from_args(args)
     progress(f"{len(problems)} problems and {len(bad)} invalid lines from {args.file}, on "
              f"{backend.describe()}")
-    lines, stats = run_with_progress(args, "problems", lambda bar: batch.run_batch(
+    lines, stats = job.run_with_progress(args, "problems", lambda bar: batch.run_batch(
         robot, problems, bad, options, backend, args.out, args.resume, bar))
     docs = [json.loads(line) for line in lines]
     failures = Counter(d["error"]["type"] for d in docs if not d["ok"])
@@ -69,13 +59,12 @@ def run(args: argparse.Namespace) -> int:
                    "failed": sum(not d["ok"] for d in docs), "failures": dict(failures)},
         "settings": {"seed": args.seed, "time_limit_s": args.time_limit,
                      "trajectories": args.trajectories},
-        "run": run_record(stats), "versions": versions(),
+        "run": job.run_record(stats), "versions": job.versions(),
     }
-    written = write_outputs(args.out, {
+    written = job.publish(args, {
         "results.jsonl": "".join(line + "\n" for line in lines),
-        "batch.json": json.dumps(summary, indent=2) + "\n"})
+        "batch.json": json.dumps(summary, indent=2) + "\n"}, summary)
     if args.json:
-        print_json({**summary, "files": [str(p) for p in written]})
         return EXIT_OK
     c = summary["counts"]
     kinds = ", ".join(f"{n} {k}" for k, n in failures.most_common()) or "none"

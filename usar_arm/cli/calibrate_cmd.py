@@ -16,14 +16,22 @@ from pathlib import Path
 import numpy as np
 
 from usar_arm.calibrate.bounds import Bounds
-from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
+from usar_arm.calibrate.identify import CalibrationOptions, identify
 from usar_arm.calibrate.measurements import MEASURED_IN, MeasurementSet, read_measurements
-from usar_arm.calibrate.report import calibration_dict, check_validated, compact_names
+from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.validation import held_out_note, split_held_out
 from usar_arm.calibrate.written import check_written, written_check
+from usar_arm.cli.calibration_text import (
+    BOUND_OPTIONS,
+    calibration_options,
+    identifiability_line,
+    milli,
+    residual_line,
+    tool_point_line,
+    warn_lost,
+)
 from usar_arm.cli.common import (
     add_verbosity,
-    err,
     out,
     print_json,
     progress,
@@ -37,13 +45,7 @@ from usar_arm.core.precision import with_precision
 from usar_arm.urdf.reader import parse_urdf
 
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
-BOUND_OPTIONS = (("reading", "--max-reading-offset",
-                  "how far a reading may sit from the nominal description before the fit"),
-                 ("joint", "--max-joint-correction", "the largest correction of a joint frame"),
-                 ("tool", "--max-tool-correction",
-                  "the largest correction of the measured frame's mount"),
-                 ("base", "--max-base-correction",
-                  "the largest correction of the base from its guess"))
+
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -62,7 +64,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                    help="FILE mode: the frame the poses are given in: tracker (the "
                         "instrument's own, registered from the readings; the default) or "
                         "base_link (the base correction is then folded into the URDF); "
-                        "default: the file's '# measured in:' line")
+                        "default: the file's '# measured_in:' line")
     p.add_argument("--out-dir", "--out", dest="out", default="calibrated", metavar="DIR",
                    help="where to write (default ./calibrated; --out is the same)")
     p.add_argument("--quantisation", default="auto",
@@ -120,41 +122,6 @@ def run_robot(args: argparse.Namespace) -> int:
     return calibrate_robot(args)
 
 
-def calibration_options(args: argparse.Namespace) -> CalibrationOptions:
-    """The fit's options from the arguments (bounds in SI units)."""
-    values = {f"{kind}_{unit}": float(v) for kind, flag, _ in BOUND_OPTIONS
-              for unit, v in zip(("m", "rad"), getattr(args, flag[2:].replace("-", "_")),
-                                 strict=True)}
-    return CalibrationOptions(quantisation=args.quantisation, bounds=Bounds(**values))
-
-
-def _milli(x: float) -> str:
-    return f"{x * 1e3:.3f}"
-
-
-def identifiability_line(cal: Calibration) -> str:
-    """What the fit could identify, by name."""
-    return (f"  rank {cal.rank} of {cal.generic_rank} generically identifiable; "
-            f"{len(cal.unidentifiable)} unidentifiable, kept as in the URDF: "
-            f"{compact_names(cal.unidentifiable)}")
-
-
-def warn_lost(cal: Calibration) -> None:
-    """A warning on stderr when these readings identify less than readings at generic
-    configurations would: the description then holds only near the configurations sampled."""
-    if cal.lost:
-        err(f"warning: these readings cannot identify {compact_names(cal.lost)} (readings at "
-            "generic configurations would): the description is only validated over the "
-            "configurations sampled (the held-out check)")
-
-
-def tool_point_line(cal: Calibration, source: str) -> str:
-    """How well the tool point is fixed, and by what."""
-    med, worst = cal.tool_sigma_m
-    return (f"  tool point {cal.measured_frame}: 1-sigma {_milli(med)} mm median, "
-            f"{_milli(worst)} mm max over the fitted configurations; {source}")
-
-
 def run_file(args: argparse.Namespace) -> int:
     urdf_path = Path(args.urdf)
     try:
@@ -205,14 +172,11 @@ def run_file(args: argparse.Namespace) -> int:
     out(f"calibrated {stem} from {len(fit)} readings of {frame} in {cal.seconds:.2f} s "
         f"({cal.quantisation}, {len(cal.rejected)} rejected)")
     out(identifiability_line(cal))
-    out(f"  fit        max {_milli(f['max_before_m'])} -> {_milli(f['max_after_m'])} mm, "
-        f"{_milli(f['max_before_rad'])} -> {_milli(f['max_after_rad'])} mrad")
-    out(f"  held out   max {_milli(v['max_before_m'])} -> {_milli(v['max_after_m'])} mm, "
-        f"{_milli(v['max_before_rad'])} -> {_milli(v['max_after_rad'])} mrad "
-        f"({len(held)} readings)")
+    out(residual_line("fit", f))
+    out(residual_line("held out", v, f" ({len(held)} readings)"))
     out(tool_point_line(cal, source))
     out(f"  written    {stem}.urdf reproduces the held-out readings within "
-        f"{_milli(check.max_m)} mm, {_milli(check.max_rad)} mrad "
+        f"{milli(check.max_m)} mm, {milli(check.max_rad)} mrad "
         f"({'in base_link' if in_base else 'through ' + stem + '.registration.json'})")
     out(f"  frame      {_meaning(measured_in)}")
     out(f"  bounds     readings {_bound(options, 'reading')}, joint frames "

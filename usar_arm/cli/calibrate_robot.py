@@ -9,9 +9,11 @@ from pathlib import Path
 
 from usar_arm.arm.tour_calibration import WireCalibration, calibrate_description
 from usar_arm.calibrate.identify import CalibrationOptions
-from usar_arm.cli.calibrate_cmd import (
+from usar_arm.cli.calibration_text import (
     calibration_options,
     identifiability_line,
+    milli,
+    residual_line,
     tool_point_line,
     warn_lost,
 )
@@ -20,10 +22,6 @@ from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.fileio import write_atomic
 from usar_arm.description.embedded import describe
 from usar_arm.description.pipeline import DescribeOptions, Description, write_description
-
-
-def _mm(x: float) -> str:
-    return f"{x * 1e3:.3f}"
 
 
 def check_poses(poses: int) -> None:
@@ -62,18 +60,15 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
         f"s ({cal.quantisation}, {len(cal.rejected)} rejected)")
     say(identifiability_line(cal))
     warn_lost(cal)
-    say(f"  fitted     max {_mm(fit['max_before_m'])} -> {_mm(fit['max_after_m'])} mm, "
-        f"{_mm(fit['max_before_rad'])} -> {_mm(fit['max_after_rad'])} mrad "
-        "(from each reading's interval middle)")
-    say(f"  held out   max {_mm(val['max_before_m'])} -> {_mm(val['max_after_m'])} mm, "
-        f"{_mm(val['max_before_rad'])} -> {_mm(val['max_after_rad'])} mrad")
+    say(residual_line("fitted", fit, " (from each reading's interval middle)"))
+    say(residual_line("held out", val))
     truth = calibrated.discovery.get("accuracy_vs_simulator")
     before = calibrated.discovery["calibration"].get("as_learnt_accuracy_vs_simulator")
     if truth and before:
         say(f"  against the simulator's own model ({truth['configurations']} configurations): "
-            f"flange {_mm(before['max_flange_error_m'])} -> {_mm(truth['max_flange_error_m'])} "
-            f"mm, joint axes {_mm(before['max_joint_axis_error_rad'])} -> "
-            f"{_mm(truth['max_joint_axis_error_rad'])} mrad")
+            f"flange {milli(before['max_flange_error_m'])} -> {milli(truth['max_flange_error_m'])} "
+            f"mm, joint axes {milli(before['max_joint_axis_error_rad'])} -> "
+            f"{milli(truth['max_joint_axis_error_rad'])} mrad")
     say(tool_point_line(cal, result.tool_point))
     return calibrated, result
 

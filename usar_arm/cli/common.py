@@ -7,13 +7,9 @@ import json
 import logging
 import math
 import sys
-from collections.abc import Callable
 from typing import Any
 
 from usar_arm.core import errors
-
-Handler = Callable[[argparse.Namespace], int]
-
 
 _QUIET = False
 

@@ -8,14 +8,19 @@ import platform
 from collections.abc import Callable
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
-from usar_arm.cli.common import err, verbosity
+from usar_arm.cli.common import add_verbosity, err, print_json, verbosity
 from usar_arm.cli.progress_bar import ProgressBar
+from usar_arm.cli.robot_args import add_robot_args
 from usar_arm.core.errors import InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
-from usar_arm.workspace import jobs
+from usar_arm.workspace import jobs, ray_address
 from usar_arm.workspace.engine import Backend, Progress, RunStats
+
+if TYPE_CHECKING:
+    from usar_arm.planning.robot import Robot
+    from usar_arm.planning.scene import Scene
 
 T = TypeVar("T")
 
@@ -27,15 +32,22 @@ def add_job_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="local worker processes (default: one per core; 0: in this process)")
-    p.add_argument("--ray", nargs="?", const="auto", default=None, metavar="ADDRESS",
-                   help="run the chunks on a Ray cluster: auto (RAY_ADDRESS, or the cluster "
-                        "'ray start' left on this machine; the default without ADDRESS), "
-                        "HOST:PORT of a head node, or local (start a fresh Ray here); needs "
-                        "pip install 'usar-arm[ray]'")
+    p.add_argument("--ray", nargs="?", const=ray_address.AUTO, default=None, metavar="ADDRESS",
+                   help=ray_address.HELP)
     p.add_argument("--ray-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the Ray cluster to answer (default 10)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run from the chunks it kept in DIR/.chunks")
+
+
+def add_job_command_args(p: argparse.ArgumentParser,
+                         handler: Callable[[argparse.Namespace], int]) -> None:
+    """What every job command (reach, place, batch) ends its arguments with: the job's
+    (:func:`add_job_args`), the robot's, verbosity, and its ``handler``."""
+    add_job_args(p)
+    add_robot_args(p)
+    add_verbosity(p)
+    p.set_defaults(handler=handler)
 
 
 def backend_from_args(args: argparse.Namespace) -> Backend:
@@ -86,6 +98,27 @@ def run_with_progress(args: argparse.Namespace, unit: str, work: Callable[[Progr
         raise
     finally:
         bar.close()
+
+
+def robot_record(robot: Robot) -> dict[str, Any]:
+    """The robot of a job's JSON record: name, source, joints."""
+    return {"name": robot.chain.name, "source": robot.source,
+            "joints": list(robot.chain.joint_names)}
+
+
+def scene_record(scene: Scene) -> dict[str, Any]:
+    """The scene of a job's JSON record: name and objects."""
+    return {"name": scene.name, "objects": [o.name for o in scene.objects]}
+
+
+def publish(args: argparse.Namespace, files: dict[str, str | bytes],
+            record: dict[str, Any]) -> list[Path]:
+    """Write a job's outputs (:func:`write_outputs`) into ``--out``; with ``--json``, print
+    ``record`` and the files written."""
+    written = write_outputs(args.out, files)
+    if args.json:
+        print_json({**record, "files": [str(p) for p in written]})
+    return written
 
 
 def write_outputs(out_dir: str | Path, files: dict[str, str | bytes]) -> list[Path]:

@@ -2,7 +2,8 @@
 
 A command line that names a command loads that command's module alone (``usar-arm sim``
 does not import OMPL, SciPy's statistics or the Tesseract exporter); ``usar-arm --help``, a
-missing or an unknown command load them all, to list them.
+missing or an unknown command load none: the commands are listed from :data:`COMMANDS`'
+one-line summaries (a test checks them against what the modules register).
 """
 
 from __future__ import annotations
@@ -24,9 +25,37 @@ COMMANDS: dict[str, str] = {
 """Each command and the module of ``usar_arm.cli`` that defines it, in the order of --help (a
 test checks it against what the modules register)."""
 
+SUMMARIES: dict[str, str] = {
+    "demo": "the main job: describe the KR60 and run a pick-and-place cycle",
+    "sim": "run the embedded USARSim-compatible simulator (MuJoCo physics)",
+    "urdf": "spawn a robot, learn its arm over the wire, write URDF/SRDF/limits",
+    "moveit-config": "write a complete MoveIt 2 config package for a robot",
+    "ik": "inverse kinematics: joint values that put tool0 at a pose",
+    "plan": "plan a collision-free, jerk-limited motion to a pose or joint values",
+    "execute": "execute a saved trajectory (JSON from plan --out) on the arm",
+    "calibrate": "identify joint frames, tool and base from measured tool poses",
+    "tesseract-config": "write a Tesseract config folder for a robot",
+    "reach": "reachability map: where tool0 reaches, in how many orientations",
+    "place": "base placement: where the arm reaches every target, with most margin",
+    "batch": "solve many IK or plan problems from a JSON Lines file",
+    "render": "draw the arm (and a trajectory's tool path) in its scene as a PNG",
+    "plot": "plot a trajectory's joints against their limits as a PNG",
+    "view": "replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
+    "ros": "serve the arm on ROS 2: robot_description, joint_states, tf, "
+           "FollowJointTrajectory"}
+"""Each command's line in --help, as its module registers it (a test checks they agree): what
+``usar-arm --help`` shows without loading the commands."""
+
+
+def register(sub: argparse._SubParsersAction, module: str) -> None:  # type: ignore[type-arg]
+    """Add the commands of ``usar_arm.cli.<module>`` (one of :data:`COMMANDS`' values)."""
+    loaded = importlib.import_module(f"usar_arm.cli.{module}")
+    (getattr(loaded, "add_parsers", None) or loaded.add_parser)(sub)
+
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser: with ``command`` (one of :data:`COMMANDS`), only its module's commands."""
+    """The parser: with ``command`` (one of :data:`COMMANDS`), only its module's commands;
+    otherwise every command listed by its summary, none loaded."""
     parser = argparse.ArgumentParser(
         prog="usar-arm",
         description="Learn a USARSim robot arm over its TCP protocol, describe it (URDF, SRDF, "
@@ -34,11 +63,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         epilog=EXIT_CODES_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"usar-arm {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    names = [COMMANDS[command]] if command in COMMANDS else list(dict.fromkeys(COMMANDS.values()))
-    for name in names:
-        module = importlib.import_module(f"usar_arm.cli.{name}")
-        register = getattr(module, "add_parsers", None) or module.add_parser
-        register(sub)
+    if command in COMMANDS:
+        register(sub, COMMANDS[command])
+    else:  # (listed only: a command line that names one is parsed by its own module's)
+        for name, summary in SUMMARIES.items():
+            sub.add_parser(name, help=summary, add_help=False)
     return parser
 
 

@@ -10,16 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
-from usar_arm.cli.job_args import (
-    add_job_args,
-    backend_from_args,
-    run_record,
-    run_with_progress,
-    versions,
-    write_outputs,
-)
-from usar_arm.cli.robot_args import add_robot_args, robot_from_args
+from usar_arm.cli import job_args as job
+from usar_arm.cli.common import out, progress, setup_logging, verbosity
+from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.export.placement_plot import placement_png
@@ -58,10 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--top", type=int, default=10, metavar="N",
                    help="candidates listed in the ranking (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    add_job_args(p)
-    add_robot_args(p)
-    add_verbosity(p)
-    p.set_defaults(handler=run)
+    job.add_job_command_args(p, run)
 
 
 def settings_from(args: argparse.Namespace) -> PlaceSettings:
@@ -87,12 +77,12 @@ def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     settings = settings_from(args)
     targets = load_targets(args.targets)
-    backend = backend_from_args(args)
+    backend = job.backend_from_args(args)
     scene = load_scene(args.scene) if args.scene else EMPTY
     robot = robot_from_args(args)
     progress(f"{robot.chain.name}: {len(targets)} targets, base poses every {settings.step:g} m "
              f"x {settings.yaw_steps} headings, on {backend.describe()}")
-    done = run_with_progress(args, "target checks", lambda bar: jobs.place(
+    done = job.run_with_progress(args, "target checks", lambda bar: jobs.place(
         robot, scene, targets, settings, backend, args.out, args.resume, bar))
     c, r = done.candidates, done.ranking
     names = [t.name for t in targets]
@@ -106,9 +96,7 @@ def run(args: argparse.Namespace) -> int:
 
     best_pose = c.pose(done.best, settings.floor)
     record: dict[str, Any] = {
-        "robot": {"name": robot.chain.name, "source": robot.source,
-                  "joints": list(robot.chain.joint_names)},
-        "scene": {"name": scene.name, "objects": [o.name for o in scene.objects]},
+        "robot": job.robot_record(robot), "scene": job.scene_record(scene),
         "targets": [{"name": t.name, **_pose(t.pose)} for t in targets],
         "settings": {"step_m": settings.step, "yaw_steps": settings.yaw_steps,
                      "floor_m": settings.floor,
@@ -122,17 +110,16 @@ def run(args: argparse.Namespace) -> int:
                                         for q, m in zip(*done.solutions[k], strict=True)]
                                for k, t in enumerate(targets)}},
         "ranking": [entry(int(i)) for i in r.order[:max(args.top, 1)]],
-        "run": run_record(done.stats),
-        "versions": versions(),
+        "run": job.run_record(done.stats),
+        "versions": job.versions(),
     }
     picture = placement_png(c.x, c.y, c.yaw, r.score, done.best, settings.step,
                             [(t.name, t.pose) for t in targets], scene,
                             f"{robot.chain.name} base placement: {len(r.order):,} feasible of "
                             f"{len(c):,} base poses")
-    written = write_outputs(args.out, {"placement.png": picture,
-                                       "placement.json": json.dumps(record, indent=2) + "\n"})
+    written = job.publish(args, {"placement.png": picture,
+                                 "placement.json": json.dumps(record, indent=2) + "\n"}, record)
     if args.json:
-        print_json({**record, "files": [str(p) for p in written]})
         return EXIT_OK
     b = record["best"]
     out(f"best base: x {b['x']:.3f} m, y {b['y']:.3f} m, yaw {b['yaw_deg']:.1f} deg, score "

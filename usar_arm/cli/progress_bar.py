@@ -1,28 +1,54 @@
-"""A progress bar on stderr for long jobs: done / total, rate and time left.
+"""A progress bar on stderr for long jobs: done / total, rate and time left (tqdm's).
 
-On a terminal it redraws one line; otherwise (a log file, CI) it writes a line at every tenth
-of the work, so a long run still shows it is alive. Silent with ``-q``.
+On a terminal tqdm redraws one line (at most every ``interval`` s, and always at the end);
+otherwise (a log file, CI) the bar's text is written as a line at every tenth of the work, so a
+long run still shows it is alive without a log full of carriage returns. Silent with ``-q``.
+The rate counts only the units done since the first call: a resumed run's finished chunks do
+not make it look faster.
 """
 
 from __future__ import annotations
 
+import math
 import sys
-import time
-from typing import TextIO
+from typing import Any, TextIO
+
+from tqdm import tqdm
 
 WIDTH = 30
+"""Characters of the bar itself."""
+FORMAT = ("[{bar:" + str(WIDTH) + "}] {percentage:5.1f} %  {done}/{whole}{unit}  "
+          "{rate_noinv_fmt}  {elapsed} elapsed, {remaining} left")
+"""The line: bar, percentage, done/total, rate, time spent and left."""
 
 
-def _count(n: float) -> str:
-    for limit, suffix in ((1e9, "G"), (1e6, "M"), (1e3, "k")):
-        if n >= limit:
-            return f"{n / limit:.1f}{suffix}"
-    return f"{n:.0f}"
+def _count(n: float | None) -> str:
+    """A count as people write it: 40, 999, 1.00k, 2.50M (tqdm writes 40.0)."""
+    return "?" if n is None else f"{n:.0f}" if n < 1000 else tqdm.format_sizeof(n)
 
 
-def _clock(seconds: float) -> str:
-    s = max(0, round(seconds))
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+class _Bar(tqdm):  # type: ignore[type-arg]
+    """tqdm with the counts of :func:`_count` (``done`` and ``whole`` in :data:`FORMAT`), and
+    without tqdm's monitor thread: the bar is drawn before the job's workers start, and a
+    process pool forks its workers (milliseconds) only while this process runs one thread."""
+
+    monitor_interval = 0
+
+    @property
+    def format_dict(self) -> dict[str, Any]:
+        """tqdm's fields and ours."""
+        fields: dict[str, Any] = super().format_dict
+        return fields | {"done": _count(self.n), "whole": _count(self.total)}
+
+
+class _Nowhere:
+    """Where tqdm draws when the stream is no terminal (the lines are written by the bar)."""
+
+    def write(self, text: str) -> None:
+        """Drop ``text``."""
+
+    def flush(self) -> None:
+        """Nothing to flush."""
 
 
 class ProgressBar:
@@ -35,46 +61,38 @@ class ProgressBar:
         self.enabled = enabled
         self.interval = interval
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self._start = time.perf_counter()
-        self._first: int | None = None
-        self._last_draw = 0.0
+        self.bar: _Bar | None = None
         self._last_tenth = -1
-        self._drawn = False
 
     def __call__(self, done: int, total: int) -> None:
         if not self.enabled:
             return
-        now = time.perf_counter()
-        if self._first is None:
-            self._first, self._start = done, now
-        line = self.line(done, total, now - self._start)
-        if self.tty:
-            if now - self._last_draw >= self.interval or done >= total:
-                self.stream.write("\r" + line)
+        if self.bar is None:  # (from the first call on: a resumed run's rate is its own)
+            self.bar = _Bar(
+                total=total, initial=done, unit=" " + self.unit, unit_scale=True, ascii=".#",
+                bar_format=FORMAT, smoothing=0, miniters=1, dynamic_ncols=False,
+                mininterval=self.interval if self.tty else math.inf,
+                file=self.stream if self.tty else _Nowhere())
+        bar = self.bar
+        bar.total = total
+        if done >= total and self.tty:
+            bar.n = done
+            bar.refresh()  # (the end is always drawn)
+        else:
+            bar.update(done - bar.n)
+        if not self.tty:
+            tenth = 10 * done // max(total, 1)
+            if tenth > self._last_tenth:
+                self._last_tenth = tenth
+                self.stream.write(str(bar) + "\n")
                 self.stream.flush()
-                self._last_draw, self._drawn = now, True
-            return
-        tenth = 10 * done // max(total, 1)
-        if tenth > self._last_tenth:
-            self._last_tenth = tenth
-            self.stream.write(line + "\n")
-            self.stream.flush()
 
-    def line(self, done: int, total: int, elapsed: float) -> str:
-        """The bar's text after ``elapsed`` seconds."""
-        fraction = done / total if total else 1.0
-        filled = round(WIDTH * fraction)
-        new = done - (self._first or 0)
-        rate = new / elapsed if elapsed > 0 else 0.0
-        left = (total - done) / rate if rate > 0 else float("nan")
-        eta = _clock(left) if left == left else "?"
-        return (f"[{'#' * filled}{'.' * (WIDTH - filled)}] {100 * fraction:5.1f} %  "
-                f"{_count(done)}/{_count(total)} {self.unit}  {_count(rate)}/s  "
-                f"{_clock(elapsed)} elapsed, {eta} left")
+    def line(self) -> str:
+        """The bar's text now ('' before the first call)."""
+        return str(self.bar) if self.bar is not None else ""
 
     def close(self) -> None:
-        """End the bar's line (on a terminal)."""
-        if self.enabled and self.tty and self._drawn:
-            self.stream.write("\n")
-            self.stream.flush()
-            self._drawn = False
+        """End the bar's line (on a terminal); again, nothing."""
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None

@@ -9,24 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.cli.common import (
-    add_verbosity,
-    err,
-    out,
-    print_json,
-    progress,
-    setup_logging,
-    verbosity,
-)
-from usar_arm.cli.job_args import (
-    add_job_args,
-    backend_from_args,
-    run_record,
-    run_with_progress,
-    versions,
-    write_outputs,
-)
-from usar_arm.cli.robot_args import add_robot_args, robot_from_args
+from usar_arm.cli import job_args as job
+from usar_arm.cli.common import err, out, progress, setup_logging, verbosity
+from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.export.reach_plot import reach_slice_png, shoulder
 from usar_arm.planning.scene import EMPTY
@@ -71,10 +56,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--view-port", type=int, default=8080, metavar="PORT",
                    help="port of the 3D view (default 8080; the next free one if taken)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    add_job_args(p)
-    add_robot_args(p)
-    add_verbosity(p)
-    p.set_defaults(handler=run)
+    job.add_job_command_args(p, run)
 
 
 def settings_from(args: argparse.Namespace) -> ReachSettings:
@@ -120,7 +102,7 @@ def edges_record(found: EdgeResult | None) -> dict[str, Any] | None:
 def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     settings = settings_from(args)
-    backend = backend_from_args(args)
+    backend = job.backend_from_args(args)
     scene = load_scene(args.scene) if args.scene else EMPTY
     robot = robot_from_args(args)
     plan = jobs.plan_map(robot, settings)
@@ -133,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
                  f"but some point of which it may), then {settings.edge_draws:,} random "
                  "configurations...")
 
-    done = run_with_progress(args, "queries", lambda bar: jobs.reach_map(
+    done = job.run_with_progress(args, "queries", lambda bar: jobs.reach_map(
         robot, scene, settings, backend, args.out, args.resume, bar, plan, before_edges))
     if done.edges is not None:
         progress(f"edge search: {len(done.edges.voxels):,} more voxels reached somewhere in "
@@ -141,9 +123,7 @@ def run(args: argparse.Namespace) -> int:
     reach, stats = done.map, done.stats
     reached = int((reach.index > 0).sum())
     record = {
-        "robot": {"name": robot.chain.name, "source": robot.source,
-                  "joints": list(robot.chain.joint_names)},
-        "scene": {"name": scene.name, "objects": [o.name for o in scene.objects]},
+        "robot": job.robot_record(robot), "scene": job.scene_record(scene),
         "settings": {"resolution_m": settings.resolution,
                      "orientations": len(plan.orientations), "cone_deg": settings.cone_deg,
                      "cone_axis": list(settings.cone_axis) if settings.cone_deg else None,
@@ -157,9 +137,9 @@ def run(args: argparse.Namespace) -> int:
                    "edge_voxels": int(reach.edge.sum()), "queries": plan.queries,
                    "collision_checks": done.collision_checks},
         "edges": edges_record(done.edges),
-        "run": run_record(stats),
+        "run": job.run_record(stats),
         "memory_estimate_bytes": plan.memory_bytes,
-        "versions": versions(),
+        "versions": job.versions(),
     }
     joint, height = shoulder(robot.chain)
     name = robot.chain.name
@@ -176,10 +156,8 @@ def run(args: argparse.Namespace) -> int:
             f"{name} reachability at shoulder height ({joint})"),
         "reach.json": json.dumps(record, indent=2) + "\n",
     }
-    written = write_outputs(args.out, files)
-    if args.json:
-        print_json({**record, "files": [str(p) for p in written]})
-    else:
+    written = job.publish(args, files, record)
+    if not args.json:
         out(f"{reached:,} voxels reached of {len(plan.voxels):,} within reach "
             f"({plan.queries:,} queries, {stats.seconds:.1f} s on {stats.backend})")
         for path in written:

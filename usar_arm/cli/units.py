@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from usar_arm.core.errors import InvalidInputError
-from usar_arm.core.spatial import Array, matrix_to_rpy, rpy_to_matrix, transform
+from usar_arm.core.spatial import Array, rpy_to_matrix, transform
 
 UNITS = ("m-rad", "mm-deg", "kuka")
 
@@ -36,15 +36,3 @@ def pose_from_args(values: Sequence[float], units: str, tool0_in_flange: Array) 
         flange = transform(rpy_to_matrix(np.radians([c, b, a])), np.array([x, y, z]) / 1000)
         return flange @ tool0_in_flange
     raise InvalidInputError(f"--units must be one of {', '.join(UNITS)}, got '{units}'")
-
-
-def pose_to_units(pose: Array, units: str, tool0_in_flange: Array) -> list[float]:
-    """The six numbers of a tool0 pose in ``units`` (inverse of :func:`pose_from_args`)."""
-    if units == "kuka":
-        flange = pose @ np.linalg.inv(tool0_in_flange)
-        r, p, y = matrix_to_rpy(flange[:3, :3])
-        return [*(flange[:3, 3] * 1000).tolist(), *np.degrees([y, p, r]).tolist()]
-    r, p, y = matrix_to_rpy(pose[:3, :3])
-    if units == "mm-deg":
-        return [*(pose[:3, 3] * 1000).tolist(), *np.degrees([r, p, y]).tolist()]
-    return [*pose[:3, 3].tolist(), r, p, y]

@@ -103,17 +103,7 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
                          timeout=timeout, known_classes=known_classes)
     record.exchanges.append(Exchange(f"INIT {{ClassName {robot_class}}} {{Name {name}}}"
                                      + (f" {{Start {start}}}" if start else ""), first.line))
-    deadline = time.monotonic() + max(LISTEN_S, 0.0)
-    actuators: list[str] = []
-    while time.monotonic() < deadline or not actuators:
-        actuators = [c.split(" ", 1)[1] for c in client.known_components()
-                     if c.startswith("Actuator ")]
-        if client.closed_reason is not None:
-            raise ConnectionLostError(f"listening to the status lines of {robot_class} after "
-                                      "it spawned", client.closed_reason)
-        if time.monotonic() > deadline + (timeout or client.timeout):
-            break
-        time.sleep(0.02)
+    actuators = _listen_for_actuators(client, robot_class, timeout)
     record.components = client.known_components()
     if not actuators:
         raise DescriptionError(f"{robot_class} reports no actuator (no ASTA line arrived within "
@@ -128,14 +118,7 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
         conf = ask(m.GetConf("Actuator", act), m.Conf, act)
         assert isinstance(conf, m.Conf)
         confs[act] = next(i for i in conf.items if i.name.lower() == act.lower())
-    if actuator is None:
-        actuator = max(actuators, key=lambda a: len(confs[a].links))
-        if len(actuators) > 1:
-            log.info("robot has actuators %s; learning %s (most links)", actuators, actuator)
-    elif actuator.lower() not in (a.lower() for a in actuators):
-        raise DescriptionError(f"no actuator '{actuator}' on {robot_class}; it has: "
-                               f"{', '.join(actuators)}")
-    actuator = next(a for a in actuators if a.lower() == actuator.lower())
+    actuator = _chosen_actuator(actuator, confs, robot_class)
     geo = ask(m.GetGeo("Actuator", actuator), m.Geo, actuator)
     geo_line = record.exchanges[-1].reply
     assert isinstance(geo, m.Geo)
@@ -149,6 +132,38 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
             sensors += [i for i in sgeo.items if i.name.lower() == sname.lower()]
     record.arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
     return record
+
+
+def _listen_for_actuators(client: UsarClient, robot_class: str, timeout: float | None
+                          ) -> list[str]:
+    """The actuators a just spawned robot reports in its status lines, listened to for
+    :data:`LISTEN_S` s (longer until one arrives, up to the reply timeout more)."""
+    deadline = time.monotonic() + max(LISTEN_S, 0.0)
+    actuators: list[str] = []
+    while time.monotonic() < deadline or not actuators:
+        actuators = [c.split(" ", 1)[1] for c in client.known_components()
+                     if c.startswith("Actuator ")]
+        if client.closed_reason is not None:
+            raise ConnectionLostError(f"listening to the status lines of {robot_class} after "
+                                      "it spawned", client.closed_reason)
+        if time.monotonic() > deadline + (timeout or client.timeout):
+            break
+        time.sleep(0.02)
+    return actuators
+
+
+def _chosen_actuator(asked: str | None, confs: dict[str, m.ConfItem], robot_class: str) -> str:
+    """The actuator to learn, as the robot spells it: ``asked`` (any case), else the one with
+    the most links."""
+    actuators = list(confs)
+    if asked is None:
+        asked = max(actuators, key=lambda a: len(confs[a].links))
+        if len(actuators) > 1:
+            log.info("robot has actuators %s; learning %s (most links)", actuators, asked)
+    elif asked.lower() not in (a.lower() for a in actuators):
+        raise DescriptionError(f"no actuator '{asked}' on {robot_class}; it has: "
+                               f"{', '.join(actuators)}")
+    return next(a for a in actuators if a.lower() == asked.lower())
 
 
 def _matches(kind: type, type_: str, name: str | None) -> Callable[[m.Message], bool]:

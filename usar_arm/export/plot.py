@@ -86,6 +86,31 @@ def _limits(ax: Axes, low: float, high: float, data: Array, always: bool) -> boo
     return len(shown) == 2
 
 
+def _columns(trajectory: Trajectory, jerk: bool
+             ) -> list[tuple[str, str, Array, Array, Array | None]]:
+    """(quantity, unit suffix, times, values, limit) of each column: position, velocity,
+    acceleration and, with ``jerk``, jerk by finite differences."""
+    lim = trajectory.limits
+    columns: list[tuple[str, str, Array, Array, Array | None]] = [
+        ("position", "", trajectory.t, trajectory.q, None),
+        ("velocity", "/s", trajectory.t, trajectory.qd, lim.velocity),
+        ("acceleration", "/s²", trajectory.t, trajectory.qdd, lim.acceleration)]
+    if jerk and len(trajectory.t) > 1:
+        columns.append(("jerk", "/s³", *jerk_samples(trajectory), lim.jerk))
+    return columns
+
+
+def _legend(fig: Figure, exe: tuple[Array, Array] | None, width: int, height: int) -> None:
+    """Planned, limits and (when there are) executed samples, at the top right."""
+    handles = [Line2D([], [], color=PLANNED, label="planned"),
+               Line2D([], [], color=LIMIT, linestyle="--", label="limits")]
+    if exe is not None:
+        handles.append(Line2D([], [], color=EXECUTED, marker="o", linestyle="",
+                              markersize=4, label=f"executed ({len(exe[0])} samples)"))
+    fig.legend(handles=handles, loc="upper right", bbox_to_anchor=(1 - 10 / width, 1 - 4 / height),
+               ncols=len(handles), fontsize=8, frameon=False)
+
+
 def plot_trajectory(path: str | Path, trajectory: Trajectory,
                     executed: JointSamples | None = None, *, jerk: bool = True,
                     units: Sequence[str] | None = None, title: str | None = None,
@@ -118,12 +143,7 @@ def plot_trajectory(path: str | Path, trajectory: Trajectory,
         raise InvalidInputError(f"units needs one entry per joint ({n}), got {len(units)}")
     exe = _executed(executed, n) if executed is not None else None
     lim = trajectory.limits
-    columns: list[tuple[str, str, Array, Array, Array | None]] = [
-        ("position", "", trajectory.t, trajectory.q, None),
-        ("velocity", "/s", trajectory.t, trajectory.qd, lim.velocity),
-        ("acceleration", "/s²", trajectory.t, trajectory.qdd, lim.acceleration)]
-    if jerk and len(trajectory.t) > 1:
-        columns.append(("jerk", "/s³", *jerk_samples(trajectory), lim.jerk))
+    columns = _columns(trajectory, jerk)
     height = 125 * n + 110
     fig = Figure(figsize=(width / 100, height / 100), dpi=100)
     FigureCanvasAgg(fig)
@@ -154,13 +174,7 @@ def plot_trajectory(path: str | Path, trajectory: Trajectory,
             ax.ticklabel_format(axis="y", useOffset=False)
         axes[0, c].set_title(quantity, fontsize=10)
         axes[-1, c].set_xlabel("time (s)", fontsize=8)
-    handles = [Line2D([], [], color=PLANNED, label="planned"),
-               Line2D([], [], color=LIMIT, linestyle="--", label="limits")]
-    if exe is not None:
-        handles.append(Line2D([], [], color=EXECUTED, marker="o", linestyle="",
-                              markersize=4, label=f"executed ({len(exe[0])} samples)"))
-    fig.legend(handles=handles, loc="upper right", bbox_to_anchor=(1 - 10 / width, 1 - 4 / height),
-               ncols=len(handles), fontsize=8, frameon=False)
+    _legend(fig, exe, width, height)
     fig.suptitle(title if title is not None else
                  f"{trajectory.motion.upper()} trajectory ({trajectory.mode}), "
                  f"{trajectory.duration:.2f} s, {len(trajectory.t)} samples at "

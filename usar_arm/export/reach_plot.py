@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import io
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,7 +27,6 @@ from matplotlib.transforms import Bbox
 from numpy.typing import NDArray
 
 from usar_arm.core.errors import InvalidInputError
-from usar_arm.core.fileio import write_atomic
 from usar_arm.core.model import JointType, KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
@@ -181,14 +179,6 @@ def slice_layer(shape: Sequence[int], origin: Array, resolution: float, plane: s
     across = PLANES[plane][2]
     layer = int(np.clip(round((at - origin[across]) / resolution), 0, shape[across] - 1))
     return layer, float(origin[across] + layer * resolution)
-
-
-def plot_reach_slice(path: str | Path, index: NDArray[np.floating[Any]], origin: Array,
-                     resolution: float, plane: str, chain: KinematicChain,
-                     scene: Scene | None = None, at: float = 0.0, title: str = "") -> Path:
-    """Write :func:`reach_slice_png` to ``path`` (atomically)."""
-    return write_atomic(path, reach_slice_png(index, origin, resolution, plane, chain, scene,
-                                              at, title))
 
 
 def reach_slice_png(index: NDArray[np.floating[Any]], origin: Array, resolution: float, plane: str,

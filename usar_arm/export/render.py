@@ -129,11 +129,7 @@ def render_arm(path: str | Path, chain: KinematicChain, q: Array | Sequence[floa
     width, height = (int(v) for v in size)
     if width < 100 or height < 100:
         raise InvalidInputError(f"picture size must be at least 100 x 100 pixels, got {size}")
-    configs = [np.asarray(q, dtype=float), *(np.asarray(g, dtype=float) for g in ghosts)]
-    for c in configs:
-        if c.shape != (chain.dof,):
-            raise InvalidInputError(f"a configuration of {chain.name} needs {chain.dof} values "
-                                    f"({', '.join(chain.joint_names)}), got {c.size}")
+    configs = _checked_configs(chain, q, ghosts)
     if tool_path is not None:
         tool_path = np.asarray(tool_path, dtype=float).reshape(-1, 3)
 
@@ -150,6 +146,54 @@ def render_arm(path: str | Path, chain: KinematicChain, q: Array | Sequence[floa
     arm_lo, arm_hi = np.min(np.vstack(focus), axis=0), np.max(np.vstack(focus), axis=0)
     extent = float(np.max(arm_hi - arm_lo))
 
+    near, far, edges, (lo, hi) = _scene_parts(scene, extent, focus)
+
+    fig = Figure(figsize=(width / 100, height / 100), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = cast(Axes3D, fig.add_axes((0.0, 0.0, 1.0, 0.93), projection="3d"))
+    ax.computed_zorder = False
+    ax.view_init(elev=view[0], azim=view[1])
+    light = _light(view)
+    if len(far):
+        ax.add_collection3d(far.collection(light, zorder=1), autolim=False)
+    if edges:
+        ax.add_collection3d(Line3DCollection(edges, colors=[OBSTACLE_EDGE], linewidths=0.8,
+                                             zorder=1.5), autolim=False)
+    main = near + arm
+    ax.add_collection3d(main.collection(light, zorder=2), autolim=False)
+    bones = np.array([np.zeros(3), *(poses[j.child][:3, 3] for j in chain.path_to(tool_link))])
+    ax.plot(*bones.T, color="0.25", linewidth=1.4, marker="o", markersize=3, zorder=1.8)
+    _draw_frames(ax, tool, min(0.12 * float(np.max(hi - lo)), 0.15 * extent))
+    if tool_path is not None and len(tool_path):
+        _draw_tool_path(ax, tool_path)
+    _style_axes(ax, lo, hi, ticks=max(3, min(width, height) // 110))
+    top = _header(fig, title if title is not None else chain.name, configs, scene, width, height)
+    if tool_path is not None and len(tool_path):
+        fig.legend(*ax.get_legend_handles_labels(), loc="upper left", fontsize=8,
+                   bbox_to_anchor=(6 / width, top), framealpha=0.85)
+    _fit(fig, ax, lo, hi, top)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    log.debug("rendered %s at q=%s (%d faces)", chain.name, configs[0], len(main))
+    return write_atomic(path, buf.getvalue())
+
+
+def _checked_configs(chain: KinematicChain, q: Array | Sequence[float],
+                     ghosts: Sequence[Array | Sequence[float]]) -> list[Array]:
+    """``q`` then the ghosts as arrays, each of the chain's size."""
+    configs = [np.asarray(q, dtype=float), *(np.asarray(g, dtype=float) for g in ghosts)]
+    for c in configs:
+        if c.shape != (chain.dof,):
+            raise InvalidInputError(f"a configuration of {chain.name} needs {chain.dof} values "
+                                    f"({', '.join(chain.joint_names)}), got {c.size}")
+    return configs
+
+
+def _scene_parts(scene: Scene | None, extent: float, focus: list[Array]
+                 ) -> tuple[Faces, Faces, list[Array], tuple[Array, Array]]:
+    """(near obstacles, far ones clipped to the view, outlines of the near ones, the view box)
+    for an arm of size ``extent`` (m) whose points of interest are ``focus`` (extended here by
+    what the obstacles add)."""
     # Obstacles up to twice the arm's size set the view. Bigger ones (walls, floors) are
     # clipped to the surroundings of the rest; those that reach above the ground widen the view.
     near, far = Faces(), Faces()
@@ -172,44 +216,25 @@ def render_arm(path: str | Path, chain: KinematicChain, q: Array | Sequence[floa
             focus.append(part.points())
     lo, hi = _window(np.vstack(focus))
     far = far.clipped(lo, hi)
+    return near, far, edges, (lo, hi)
 
-    fig = Figure(figsize=(width / 100, height / 100), dpi=100)
-    FigureCanvasAgg(fig)
-    ax = cast(Axes3D, fig.add_axes((0.0, 0.0, 1.0, 0.93), projection="3d"))
-    ax.computed_zorder = False
-    ax.view_init(elev=view[0], azim=view[1])
-    light = _light(view)
-    if len(far):
-        ax.add_collection3d(far.collection(light, zorder=1), autolim=False)
-    if edges:
-        ax.add_collection3d(Line3DCollection(edges, colors=[OBSTACLE_EDGE], linewidths=0.8,
-                                             zorder=1.5), autolim=False)
-    main = near + arm
-    ax.add_collection3d(main.collection(light, zorder=2), autolim=False)
-    bones = np.array([np.zeros(3), *(poses[j.child][:3, 3] for j in chain.path_to(tool_link))])
-    ax.plot(*bones.T, color="0.25", linewidth=1.4, marker="o", markersize=3, zorder=1.8)
-    size_axes = min(0.12 * float(np.max(hi - lo)), 0.15 * extent)
+
+def _draw_frames(ax: Axes3D, tool: Array, size: float) -> None:
+    """The axes (``size`` m long) and names of base_link and of tool0 (at pose ``tool``)."""
     for name, pose in (("base_link", np.eye(4)), ("tool0", tool)):
         for k, colour in enumerate(AXIS_COLORS):
-            ax.plot(*np.array([pose[:3, 3], pose[:3, 3] + size_axes * pose[:3, k]]).T,
+            ax.plot(*np.array([pose[:3, 3], pose[:3, 3] + size * pose[:3, k]]).T,
                     color=colour, linewidth=2.2, zorder=3, solid_capstyle="round")
-        ax.text(*(pose[:3, 3] + 0.35 * size_axes * np.array([1.0, 1.0, -0.6])), name,
+        ax.text(*(pose[:3, 3] + 0.35 * size * np.array([1.0, 1.0, -0.6])), name,
                 fontsize=9, color="0.15", zorder=4)
-    if tool_path is not None and len(tool_path):
-        ax.plot(*tool_path.T, color=PATH_COLOR, linewidth=2.0, zorder=3, label="tool0 path")
-        ax.plot(*tool_path[0], "o", color=PATH_COLOR, markersize=6, zorder=3, label="start")
-        ax.plot(*tool_path[-1], "s", color=PATH_COLOR, markersize=6, zorder=3,
-                markerfacecolor="white", markeredgewidth=1.8, label="end")
-    _style_axes(ax, lo, hi, ticks=max(3, min(width, height) // 110))
-    top = _header(fig, title if title is not None else chain.name, configs, scene, width, height)
-    if tool_path is not None and len(tool_path):
-        fig.legend(*ax.get_legend_handles_labels(), loc="upper left", fontsize=8,
-                   bbox_to_anchor=(6 / width, top), framealpha=0.85)
-    _fit(fig, ax, lo, hi, top)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    log.debug("rendered %s at q=%s (%d faces)", chain.name, configs[0], len(main))
-    return write_atomic(path, buf.getvalue())
+
+
+def _draw_tool_path(ax: Axes3D, tool_path: Array) -> None:
+    """The tool path as a line from a dot (start) to a square (end)."""
+    ax.plot(*tool_path.T, color=PATH_COLOR, linewidth=2.0, zorder=3, label="tool0 path")
+    ax.plot(*tool_path[0], "o", color=PATH_COLOR, markersize=6, zorder=3, label="start")
+    ax.plot(*tool_path[-1], "s", color=PATH_COLOR, markersize=6, zorder=3,
+            markerfacecolor="white", markeredgewidth=1.8, label="end")
 
 
 def _header(fig: Figure, title: str, configs: list[Array], scene: Scene | None, width: int,

@@ -306,11 +306,6 @@ class PhysicsWorld:
         idx = self._index(key, actuator)
         return idx.signs * self._data.qpos[idx.qpos_adr]
 
-    def joint_velocities(self, key: str, actuator: str) -> Array:
-        """Measured joint velocities (rad/s or m/s)."""
-        idx = self._index(key, actuator)
-        return idx.signs * self._data.qvel[idx.dof_adr]
-
     def set_joint_values(self, key: str, actuator: str, values: Sequence[float]) -> None:
         """Teleport the joints (and their targets) to ``values``, at rest (for tests)."""
         idx = self._index(key, actuator)

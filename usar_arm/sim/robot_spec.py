@@ -95,10 +95,6 @@ class ActuatorSpec:
         """4x4 pose of the actuator frame in the platform frame."""
         return transform(rpy_to_matrix(self.direction), self.position)
 
-    def tip_part(self) -> str:
-        """The part that carries the tip: the child of the last joint."""
-        return self.joints[-1].child
-
 
 @dataclass(frozen=True)
 class ItemSpec:

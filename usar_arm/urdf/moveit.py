@@ -36,12 +36,20 @@ def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
     ``jazzy``: ``ompl_planning.yaml``'s keys differ; the package records which)."""
     check_distro(distro)
     robot = chain.name
-    pkg = package_name(robot)
     joints = list(chain.joint_names)
+    files = {f"config/{robot}.urdf": urdf, f"config/{robot}.srdf": srdf,
+             "config/joint_limits.yaml": joint_limits}
+    files.update(_xacro_files(robot, joints, home))
+    files.update(_controller_files(joints, controller))
+    files.update(_package_files(robot, distro))
+    files.update(planning_files(chain, distro))
+    return files
+
+
+def _xacro_files(robot: str, joints: list[str], home: dict[str, float]) -> dict[str, str]:
+    """The robot's xacro (the URDF and the mock hardware's ros2_control macro) and the mock
+    hardware's initial positions (``home``, rad or m per joint)."""
     files: dict[str, str] = {}
-    files[f"config/{robot}.urdf"] = urdf
-    files[f"config/{robot}.srdf"] = srdf
-    files["config/joint_limits.yaml"] = joint_limits
     files[f"config/{robot}.urdf.xacro"] = "\n".join([
         '<?xml version="1.0" encoding="utf-8"?>',
         f'<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="{robot}">',
@@ -75,6 +83,13 @@ def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
     files["config/initial_positions.yaml"] = "\n".join(
         ["# Default initial positions for the mock hardware (the SRDF's home state).",
          "initial_positions:"] + [f"  {j}: {num(home[j])}" for j in joints]) + "\n"
+    return files
+
+
+def _controller_files(joints: list[str], controller: str) -> dict[str, str]:
+    """Kinematics, Pilz limits, and the ros2_control and MoveIt controllers (``controller``
+    drives ``joints``)."""
+    files: dict[str, str] = {}
     files["config/kinematics.yaml"] = "\n".join([
         f"{GROUP}:",
         "  kinematics_solver: kdl_kinematics_plugin/KDLKinematicsPlugin",
@@ -114,6 +129,14 @@ def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
         "  allowed_execution_duration_scaling: 1.2",
         "  allowed_goal_duration_margin: 0.5",
         "  allowed_start_tolerance: 0.01", ""])
+    return files
+
+
+def _package_files(robot: str, distro: str) -> dict[str, str]:
+    """The package's own files: Setup Assistant record, package.xml, CMakeLists.txt and the
+    launch files."""
+    pkg = package_name(robot)
+    files: dict[str, str] = {}
     files[".setup_assistant"] = "\n".join([
         f"# written by usar-arm for ROS 2 {distro} (usar-arm moveit-config --ros-distro "
         f"{distro})",
@@ -169,5 +192,4 @@ def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
             f'    moveit_config = MoveItConfigsBuilder("{robot}", package_name="{pkg}")'
             ".to_moveit_configs()",
             f"    return generate_{name}_launch(moveit_config)", ""])
-    files.update(planning_files(chain, distro))
     return files

@@ -9,7 +9,6 @@ the element and what was expected.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 
@@ -23,7 +22,7 @@ from usar_arm.core.model import (
     Link,
     Origin,
 )
-from usar_arm.core.yamlio import load_yaml, loads_yaml
+from usar_arm.core.yamlio import loads_yaml
 
 Pair = tuple[str, str]
 
@@ -157,19 +156,15 @@ def parse_srdf(text: str, path: str = "<srdf>") -> tuple[set[Pair], dict[str, di
     return disabled, states
 
 
-def apply_joint_limits(chain: KinematicChain, path: str | Path) -> KinematicChain:
-    """The chain with acceleration/jerk (and velocity) limits from a MoveIt joint_limits.yaml."""
-    return apply_joint_limits_data(chain, load_yaml(path))
-
-
 def apply_joint_limits_text(chain: KinematicChain, text: str, name: str = "<joint_limits>"
                             ) -> KinematicChain:
-    """:func:`apply_joint_limits` from the file's text."""
+    """The chain with acceleration/jerk (and velocity) limits from a MoveIt joint_limits.yaml's
+    text."""
     return apply_joint_limits_data(chain, loads_yaml(text, name))
 
 
 def apply_joint_limits_data(chain: KinematicChain, data: object) -> KinematicChain:
-    """:func:`apply_joint_limits` from the loaded YAML document."""
+    """:func:`apply_joint_limits_text` from the loaded YAML document."""
     table = (data or {}).get("joint_limits", {}) if isinstance(data, dict) else {}
     joints = []
     for j in chain.joints:

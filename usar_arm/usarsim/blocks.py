@@ -121,18 +121,6 @@ class BlockReader:
                                 f"got '{raw}'")
         return (x, y, z)
 
-    def opt_float(self, key: str) -> float | None:
-        b = self.find(key)
-        return None if b is None else self.number(b)
-
-    def opt_str(self, key: str) -> str | None:
-        b = self.find(key)
-        return None if b is None else b.value
-
-    def opt_vector(self, key: str) -> m.Vector3 | None:
-        b = self.find(key)
-        return None if b is None else self.vector(b)
-
     def extra(self, *known: str) -> tuple[m.Block, ...]:
         lowered = {k.lower() for k in known}
         seen: set[str] = set()

@@ -64,7 +64,7 @@ CHUNKS = ".chunks"
 
 def backend_for(workers: int | None = None, ray: str | None = None,
                 timeout: float = 10.0) -> Backend:
-    """The backend: Ray at ``ray`` (``local``, ``auto``, an address), else ``workers`` local
+    """The backend: Ray at ``ray`` (an address: :mod:`.ray_address`), else ``workers`` local
     processes (0: this process; None: one per core).
 
     Raises:

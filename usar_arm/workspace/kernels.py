@@ -183,16 +183,26 @@ def numeric_solutions(rots: Array, poss: Array, seeds: Array, lo: Array, hi: Arr
         count_out[m] = kept
 
 
+def _warm_up_arrays() -> tuple[tuple, tuple]:
+    """Arguments of the types :class:`usar_arm.workspace.solver.AllSolutions` passes to each
+    kernel (float64 arrays, floats, ints: only the types matter to what is compiled)."""
+    z3, z6, rot = np.zeros((1, 3)), np.zeros(6), np.eye(3)[None]
+    outs = (np.zeros((1, MAX_SOLUTIONS, 6)), np.zeros(1, np.int64),
+            np.zeros((1, MAX_SOLUTIONS)), np.zeros((1, MAX_SOLUTIONS)))
+    analytic = (rot, z3, np.zeros(ik_kernel.C_SIZE), z6 - 1, z6 + 1, z6 + 1, z6, z6,
+                np.zeros((6, 3)), np.zeros((6, 3)), np.eye(4), 1e-5, 1e-5, 8, 0.3, 0.05, 1e-3,
+                *outs)
+    numeric = (rot, z3, np.zeros((1, 6)), z6 - 1, z6 + 1, z6 + 1, z6, z6, np.zeros((6, 3)),
+               np.zeros((6, 3)), np.eye(4), 1e-5, 1e-5, 1, 0.01, 1e-4, 0.5, 1e-3, *outs)
+    return analytic, numeric
+
+
 def warm_up() -> None:
     """Compile the kernels for the argument types :mod:`.solver` passes (numba caches the
     machine code on disk; ``make`` runs this once after installing)."""
-    from usar_arm.workspace.solver import warm_up_arrays
-
-    for args in warm_up_arrays():
-        if len(args) == 21:
-            analytic_solutions(*args)
-        else:
-            numeric_solutions(*args)
+    analytic, numeric = _warm_up_arrays()
+    analytic_solutions(*analytic)
+    numeric_solutions(*numeric)
     z = np.zeros((1, 6))
     manipulabilities(z, np.zeros((6, 3)), np.zeros((6, 3)), np.ones(6), np.eye(4))
     from usar_arm.workspace import edge_kernel

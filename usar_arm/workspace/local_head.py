@@ -27,6 +27,7 @@ import tempfile
 import time
 
 from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.workspace.ray_address import LOCAL
 
 ANNOUNCE = "usar-arm local ray at "
 """The line (then the GCS address) by which the process says its instance is ready."""
@@ -80,7 +81,7 @@ class LocalHead:
                 if not chunk:
                     self.process.wait(STOP_TIMEOUT)
                     raise ClusterUnavailableError(
-                        "local", f"the process starting Ray ended (exit code "
+                        LOCAL, f"the process starting Ray ended (exit code "
                                  f"{self.process.returncode}): {self._tail()}")
                 self._buffer += chunk
                 for line in self._buffer.decode(errors="replace").splitlines():
@@ -92,7 +93,7 @@ class LocalHead:
                 self.close()
                 self.wait_stopped()
                 raise ClusterUnavailableError(
-                    "local", f"Ray did not start within {self.timeout:g} s: {self._tail()}")
+                    LOCAL, f"Ray did not start within {self.timeout:g} s: {self._tail()}")
             if time.monotonic() >= deadline:
                 return None
         return self.address

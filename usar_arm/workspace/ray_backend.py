@@ -1,6 +1,12 @@
 """The Ray execution backend: chunks as calls on Ray actors, on a cluster of any size.
 
 The only module that imports ``ray`` (an optional extra: ``pip install 'usar-arm[ray]'``).
+This module connects (or starts a local instance), creates and replaces the actors and leaves;
+the dispatch of a job's chunks to them (calls queued per actor, deadlines, retries, a helper
+while a local instance starts) is :mod:`.ray_dispatch`'s, through :meth:`RayBackend.wait_one`,
+:meth:`RayBackend.answer` and :meth:`RayBackend.kill`; the address rules are
+:mod:`.ray_address`'s.
+
 :meth:`RayBackend.start` connects and creates the actors at once (for ``local``: starts the
 instance's process, joined when it is up), so a bad address fails before any planning and
 the actors' processes start (a fresh Python importing usar-arm, Pinocchio, FCL) while the
@@ -8,26 +14,15 @@ caller plans. One actor per free CPU of the
 cluster (``workers`` asks for fewer or more: more than the free CPUs are not started, which a
 log line says, as actors that cannot be scheduled would hold their chunks forever). Each actor
 gets the job by value (URDF, SRDF and scene text: Pinocchio models, FCL geometry and OMPL
-spaces do not pickle), builds its context once, and always has :data:`IN_FLIGHT` calls
-queued, so it never waits for the driver while a result travels. The driver collects them
-with ``ray.wait`` as they finish (never one ``ray.get`` of thousands of references).
+spaces do not pickle) and builds its context once.
 
-No wait is unbounded: an actor that is not ready within ``start_timeout`` is an error naming
-it, and a call without an answer within ``call_timeout`` counts as a failure of its chunk. A
-chunk whose actor dies or raises is retried once (on a fresh actor when it died; the chunks
-queued behind it are not charged); a second failure stops the run.
-
-Addresses: ``local`` always starts a fresh Ray instance on this machine (workers at the
-priority of the process pool's, nice 0, rather than Ray's default 15) and stops it at the
-end; a process already connected to another Ray instance is refused rather than joined. The
-instance is started by a process of its own (:mod:`.local_head`; run as ``python -m
-usar_arm.workspace.ray_backend N``, :func:`serve_local`) while this one goes on, and until its
-actors are ready a helper runs chunks (:mod:`.warm_up_helper`). The ``usar-arm`` executable
-starts that process before it loads its commands (:mod:`usar_arm.__main__`).
-
-``auto`` joins the cluster ``RAY_ADDRESS`` names, or the one ``ray start`` left on this machine
-(or the instance this process is connected to); ``HOST:PORT`` (a head node's GCS, port 6379
-by default) or ``ray://HOST:PORT`` joins that cluster. An address that does not answer within
+``local`` starts its instance with workers at the priority of the process pool's, nice 0,
+rather than Ray's default 15, and stops it at the end; a process already connected to another
+Ray instance is refused rather than joined. The instance is started by a process of its own
+(:mod:`.local_head`; run as ``python -m usar_arm.workspace.ray_backend N``,
+:func:`serve_local`) while this one goes on, and until its actors are ready a helper runs
+chunks (:mod:`.warm_up_helper`). The ``usar-arm`` executable starts that process before it
+loads its commands (:mod:`usar_arm.__main__`). An address that does not answer within
 ``timeout`` seconds is an error saying so: a refused connection is found before Ray is asked,
 and Ray's own retries (about one a second, 20 by default) are bounded by the timeout.
 """
@@ -42,20 +37,13 @@ import socket
 import sys
 import threading
 import time
-from collections import deque
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import ray
 
-from usar_arm.core.errors import ChunkFailedError, ClusterUnavailableError
-from usar_arm.workspace.engine import (
-    ATTEMPTS,
-    Job,
-    Result,
-    run_chunk,
-)
+from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.workspace.engine import Job, Result, run_chunk
 from usar_arm.workspace.local_head import (
     ANNOUNCE,
     AUTH_VARIABLE,
@@ -63,7 +51,8 @@ from usar_arm.workspace.local_head import (
     instance_cpus,
     take_early,
 )
-from usar_arm.workspace.warm_up_helper import WarmUpHelper
+from usar_arm.workspace.ray_address import AUTO, LOCAL, host_port, where
+from usar_arm.workspace.ray_dispatch import Run, Slot
 
 log = logging.getLogger("usar_arm.workspace")
 
@@ -77,16 +66,10 @@ LOCAL_SYSTEM_CONFIG = {"worker_niceness": 0}
 """Ray starts its workers at nice 15; a local instance is this command's own, so its actors
 run at the priority of the process pool's workers (on a busy machine nice 15 gives them a
 fraction of a core)."""
-IN_FLIGHT = 2
-"""Calls queued per actor: the next chunk is there when one finishes."""
 START_TIMEOUT = 120.0
 """s an actor may take to start (a fresh Python importing usar-arm: about 2 s on 2 cores)."""
 CALL_TIMEOUT = 3600.0
 """s a chunk's call may run before it counts as failed (chunks take about 0.1 to 1 s)."""
-POLL = 1.0
-"""s between checks of those deadlines while waiting."""
-HELPER_POLL = 0.05
-"""s between looks at the actors while the helper runs a chunk (a chunk takes 0.05 to 1 s)."""
 STOP_TIMEOUT = 30.0
 """s to wait for the shutdown of a local instance before another start (it takes about 1.4 s:
 Ray stops its processes one after the other, each given up to 1 s to leave)."""
@@ -110,19 +93,6 @@ class _ChunkActor:
         """One chunk's result."""
         assert self.job is not None, "setup comes first"
         return run_chunk(*self.job, chunk)
-
-
-@dataclass(eq=False)
-class _Slot:
-    """An actor, its place among the actors and its calls, oldest first."""
-
-    actor: Any
-    name: str
-    created: float
-    ready: Any = None  # the reference of its setup call until it answered
-    given: bool = False  # it was given the job (its setup call sent)
-    calls: deque[tuple[Any, int]] = field(default_factory=deque)
-    since: float = 0.0  # when its oldest call could start (s, monotonic)
 
 
 def _refuse_if_connected(address: str) -> None:
@@ -167,7 +137,7 @@ def serve_local(num_cpus: int) -> int:
     output (:data:`~usar_arm.workspace.local_head.ANNOUNCE`), and stop it when standard input
     closes: the process that owns ``--ray local``'s instance (see :mod:`.local_head`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # (the command stops it: by closing stdin)
-    ray.init(address="local", include_dashboard=False, log_to_driver=False,
+    ray.init(address=LOCAL, include_dashboard=False, log_to_driver=False,
              logging_level=logging.WARNING, num_cpus=num_cpus,
              object_store_memory=LOCAL_OBJECT_STORE, _system_config=dict(LOCAL_SYSTEM_CONFIG))
     print(ANNOUNCE + ray.get_runtime_context().gcs_address, flush=True)
@@ -176,25 +146,11 @@ def serve_local(num_cpus: int) -> int:
     return 0
 
 
-def _host_port(address: str) -> tuple[str, int] | None:
-    """(host, port) of an address to probe, or None for ``local`` / an undetectable ``auto``."""
-    if address == "auto":
-        address = os.environ.get("RAY_ADDRESS", "") or "auto"
-    if address in ("auto", "local"):
-        return None
-    bare = address.removeprefix("ray://")
-    host, _, port = bare.rpartition(":")
-    if not host or not port.isdigit():
-        raise ClusterUnavailableError(address, "expected local, auto, HOST:PORT or "
-                                               "ray://HOST:PORT")
-    return host, int(port)
-
-
 class RayBackend:
-    """Chunks run on a Ray cluster (see the module for ``address``).
+    """Chunks run on a Ray cluster.
 
     Args:
-        address: ``local``, ``auto``, ``HOST:PORT`` or ``ray://HOST:PORT``.
+        address: ``local``, ``auto``, ``HOST:PORT`` or ``ray://HOST:PORT`` (:mod:`.ray_address`).
         workers: actors to start (default: one per free CPU of the cluster; never more).
         timeout: s to wait for the cluster to answer.
         start_timeout: s an actor may take to become ready.
@@ -210,10 +166,10 @@ class RayBackend:
     instances would share this machine's CPUs), the end of this process does not (it stops
     its instance by itself)."""
 
-    def __init__(self, address: str = "auto", workers: int | None = None,
+    def __init__(self, address: str = AUTO, workers: int | None = None,
                  timeout: float = 10.0, start_timeout: float = START_TIMEOUT,
                  call_timeout: float = CALL_TIMEOUT):
-        _host_port(address)  # (a malformed address is refused at once)
+        host_port(address)  # (a malformed address is refused at once)
         self.address = address
         self.requested = workers
         self.workers = workers or 0
@@ -222,7 +178,7 @@ class RayBackend:
         self.call_timeout = call_timeout
         self.start_seconds = 0.0
         self.gcs_address = ""  # (the instance's, once connected)
-        self.slots: list[_Slot] = []
+        self.slots: list[Slot] = []
         self.head: LocalHead | None = None  # (local: the process starting the instance)
         self.chunks_here = 0  # chunks a helper process ran while the actors started
         self._begin = 0.0
@@ -231,13 +187,12 @@ class RayBackend:
         self._actor_class: Any = None
 
     def describe(self) -> str:
-        where = "a fresh local Ray instance" if self.address == "local" else \
-            f"the Ray cluster at {self.address}"
         if not self._counted:  # (before it connects, it does not know how many)
             count = f"{self.requested} Ray actors (at most one" if self.requested else \
                 "Ray actors (one"
-            return f"{count} per free CPU) on {where}"
-        return f"{self.workers} Ray actor{'s' if self.workers != 1 else ''} on {where}"
+            return f"{count} per free CPU) on {where(self.address)}"
+        return (f"{self.workers} Ray actor{'s' if self.workers != 1 else ''} on "
+                f"{where(self.address)}")
 
     # ------------------------------------------------------------------ start and stop
     def start(self) -> bool:
@@ -258,7 +213,7 @@ class RayBackend:
             RayBackend.leaving.wait_stopped()
             RayBackend.leaving = None
         self.chunks_here, self.gcs_address = 0, ""
-        if self.address == "local":
+        if self.address == LOCAL:
             _refuse_if_connected(self.address)
             cpus = instance_cpus(self.requested)
             self.head = take_early(cpus, self.start_timeout) or LocalHead(cpus,
@@ -330,7 +285,7 @@ class RayBackend:
 
     def _connect(self) -> bool:
         """Connect (or start); True when this backend started the Ray instance."""
-        target = _host_port(self.address)
+        target = host_port(self.address)
         if target is not None:
             try:
                 socket.create_connection(target, timeout=self.timeout).close()
@@ -379,186 +334,50 @@ class RayBackend:
                         "%g): starting %d", asked, self.address, free, total, free)
         return min(asked, free)
 
-    def _new_slot(self, k: int) -> _Slot:
-        return _Slot(self._actor_class.remote(), f"actor {k + 1} of {self.workers}",
+    def _new_slot(self, k: int) -> Slot:
+        return Slot(self._actor_class.remote(), f"actor {k + 1} of {self.workers}",
                      time.monotonic())
 
     # ------------------------------------------------------------------ the run
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
         self.start()
         try:
-            yield from _Run(self, job, todo).results()
+            yield from Run(self, job, todo).results()
         finally:
             self.close()
 
-    def replace(self, k: int, job: Job) -> _Slot:
+    # ------------------------------------------------------------------ for the dispatch
+    def replace(self, k: int, job: Job) -> Slot:
         """A fresh actor in place of slot ``k`` (its old one killed), given the job."""
-        ray.kill(self.slots[k].actor)
+        self.kill(self.slots[k])
         slot = self.slots[k] = self._new_slot(k)
         slot.ready, slot.given = slot.actor.setup.remote(job.key, job.prepare, job.work), True
         return slot
 
+    @staticmethod
+    def kill(slot: Slot) -> None:
+        """Kill the actor of ``slot``."""
+        ray.kill(slot.actor)
 
-class _Run:
-    """One job's chunks through the backend's actors."""
+    @staticmethod
+    def wait_one(refs: list[Any], timeout: float) -> list[Any]:
+        """The references of ``refs`` answered within ``timeout`` s (one at most)."""
+        ready, _ = ray.wait(refs, num_returns=1, timeout=timeout)
+        return list(ready)
 
-    def __init__(self, backend: RayBackend, job: Job, todo: Sequence[int]):
-        self.backend, self.job = backend, job
-        self.queue = deque(todo)
-        self.failures: dict[int, list[str]] = {}
-        self.start_failures: dict[int, list[str]] = {}
-        self.share = len(todo) // (backend.head.num_cpus + 1) if backend.head else 0
-        """Chunks a helper may run while a local instance starts: one worker's share."""
-        self.helper = WarmUpHelper(job)
-        self._give_job()
-
-    def _give_job(self) -> None:
-        for slot in self.backend.slots:
-            if not slot.given:
-                slot.ready = slot.actor.setup.remote(self.job.key, self.job.prepare,
-                                                     self.job.work)
-                slot.given = True
-
-    def results(self) -> Iterator[tuple[int, Result]]:
-        backend = self.backend
+    @staticmethod
+    def answer(ref: Any, wait: bool = True) -> tuple[str, Any]:
+        """What the call ``ref`` answered: ("ok", its value); ("lost", why) when its actor
+        died; ("raised", why) when the call raised; without ``wait``, ("pending", None) when
+        it has not answered yet."""
         try:
-            while self.queue or any(s.calls for s in backend.slots) or self.helper.busy:
-                if backend.joining and backend.join(0.0):
-                    self._give_job()
-                self._feed()
-                self._keep_helper_busy()
-                if self.helper.busy:
-                    yield from self._helper_result(HELPER_POLL)
-                elif backend.joining:  # nothing to do here but wait for the instance
-                    if backend.join(POLL):
-                        self._give_job()
-                    continue
-                slots = backend.slots
-                waiting = [s.ready for s in slots if s.ready is not None] + [
-                    ref for s in slots for ref, _ in s.calls]
-                if waiting:
-                    ready, _ = ray.wait(waiting, num_returns=1,
-                                        timeout=0.0 if self.helper.busy else POLL)
-                    for ref in ready:
-                        yield from self._collect(ref)
-                yield from self._check_deadlines()
-        finally:
-            self.helper.stop()
-
-    # ------------------------------------------------------------------ the helper
-    def _keep_helper_busy(self) -> None:
-        """While a local instance starts (until every actor is ready), the helper runs chunks
-        too, at most one worker's share; then it is stopped."""
-        b = self.backend
-        warming = b.head is not None and (b.joining or any(s.ready is not None
-                                                            for s in b.slots))
-        if self.helper.busy:
-            return
-        if warming and self.queue and self.helper.done < self.share:
-            self.helper.give(self.queue.popleft())
-        else:
-            self.helper.stop()
-
-    def _helper_result(self, timeout: float) -> Iterator[tuple[int, Result]]:
-        done = self.helper.result(timeout, self.backend.call_timeout)
-        if done is None:
-            return
-        i, result = done
-        if isinstance(result, str):
-            self._failed(i, result)
-            return
-        self.backend.chunks_here = self.helper.done
-        yield i, result
-
-    def _feed(self) -> None:
-        """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup)."""
-        for slot in self.backend.slots:
-            while self.queue and len(slot.calls) < IN_FLIGHT:
-                i = self.queue.popleft()
-                if not slot.calls:
-                    slot.since = time.monotonic()
-                slot.calls.append((slot.actor.run.remote(self.job.chunks[i]), i))
-
-    def _collect(self, ref: Any) -> Iterator[tuple[int, Result]]:
-        """The answer ``ref`` (a setup's or a chunk's) brought."""
-        for k, slot in enumerate(self.backend.slots):
-            if slot.ready is not None and slot.ready == ref:
-                try:
-                    ray.get(ref)
-                except ray.exceptions.RayError as exc:
-                    yield from self._actor_lost(k, f"it did not start: {_reason(exc)}")
-                    return
-                slot.ready, slot.since = None, time.monotonic()
-                return
-            n = next((n for n, (call, _) in enumerate(slot.calls) if call == ref), None)
-            if n is None:
-                continue
-            i = slot.calls[n][1]
-            try:
-                result: Result = ray.get(ref)
-            except ray.exceptions.RayActorError as exc:
-                yield from self._actor_lost(k, _reason(exc))
-                return
-            except ray.exceptions.RayError as exc:  # the chunk raised; its actor lives on
-                del slot.calls[n]
-                self._failed(i, _reason(exc))
-                return
-            del slot.calls[n]
-            slot.since = time.monotonic()
-            yield i, result
-            return
-
-    def _actor_lost(self, k: int, reason: str) -> Iterator[tuple[int, Result]]:
-        """The actor of slot ``k`` is gone: keep what it finished, charge the chunk it was
-        running (none when it never started: then the slot's start), queue the others again
-        uncharged, and start a fresh actor."""
-        slot = self.backend.slots[k]
-        again: list[int] = []
-        for ref, i in slot.calls:
-            try:
-                done, _ = ray.wait([ref], timeout=0)
-                if done:
-                    yield i, ray.get(ref)
-                    continue
-            except ray.exceptions.RayError:
-                pass
-            again.append(i)
-        slot.calls.clear()
-        charged = again.pop(0) if again and slot.ready is None else None
-        self.queue.extendleft(reversed(again))
-        if slot.ready is not None:  # it never became ready: no chunk of it ran
-            self.start_failures.setdefault(k, []).append(reason)
-            if len(self.start_failures[k]) >= ATTEMPTS:
-                raise ClusterUnavailableError(
-                    self.backend.address,
-                    f"Ray {slot.name} failed to start {ATTEMPTS} times: {reason}")
-        if charged is not None:
-            self._failed(charged, reason)  # (queued again first)
-        self.backend.replace(k, self.job)
-
-    def _failed(self, i: int, reason: str) -> None:
-        """Chunk ``i`` failed: queue it again first, or stop after :data:`ATTEMPTS`."""
-        self.failures.setdefault(i, []).append(reason)
-        if len(self.failures[i]) >= ATTEMPTS:
-            raise ChunkFailedError(i, len(self.failures[i]), reason)
-        self.queue.appendleft(i)
-
-    def _check_deadlines(self) -> Iterator[tuple[int, Result]]:
-        """No wait is unbounded: an actor not ready in time is an error naming it; a call
-        without an answer in time is a failure of its chunk (and its actor is replaced)."""
-        now = time.monotonic()
-        for k, slot in enumerate(self.backend.slots):
-            if slot.ready is not None and now - slot.created > self.backend.start_timeout:
-                raise ClusterUnavailableError(
-                    self.backend.address,
-                    f"Ray {slot.name} was not ready within {self.backend.start_timeout:g} s "
-                    f"({len(self.backend.slots)} actors of 1 CPU each: is a node gone, or are "
-                    "its CPUs taken by another job?)")
-            if slot.ready is None and slot.calls and \
-                    now - slot.since > self.backend.call_timeout:
-                ray.kill(slot.actor)
-                yield from self._actor_lost(
-                    k, f"no answer within {self.backend.call_timeout:g} s")
+            if not wait and not ray.wait([ref], timeout=0)[0]:
+                return "pending", None
+            return "ok", ray.get(ref)
+        except ray.exceptions.RayActorError as exc:
+            return "lost", _reason(exc)
+        except ray.exceptions.RayError as exc:
+            return "raised", _reason(exc)
 
 
 def _reason(exc: BaseException) -> str:

@@ -111,15 +111,3 @@ class AllSolutions:
                 q, count, manip, room)
         return Candidates(q, count, manip, room)
 
-
-def warm_up_arrays() -> list[tuple]:
-    """Arguments of the types :class:`AllSolutions` passes to each kernel (for compiling)."""
-    z3, z6, rot = np.zeros((1, 3)), np.zeros(6), np.eye(3)[None]
-    outs = (np.zeros((1, kernels.MAX_SOLUTIONS, 6)), np.zeros(1, np.int64),
-            np.zeros((1, kernels.MAX_SOLUTIONS)), np.zeros((1, kernels.MAX_SOLUTIONS)))
-    analytic = (rot, z3, np.zeros(ik_kernel.C_SIZE), z6 - 1, z6 + 1, z6 + 1, z6, z6,
-                np.zeros((6, 3)), np.zeros((6, 3)), np.eye(4), 1e-5, 1e-5, 8,
-                MAX_NEWTON_STEP, ANALYTIC_SLACK, 1e-3, *outs)
-    numeric = (rot, z3, np.zeros((1, 6)), z6 - 1, z6 + 1, z6 + 1, z6, z6, np.zeros((6, 3)),
-               np.zeros((6, 3)), np.eye(4), 1e-5, 1e-5, 1, 0.01, 1e-4, 0.5, 1e-3, *outs)
-    return [analytic, numeric]
