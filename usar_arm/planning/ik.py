@@ -33,6 +33,7 @@ from usar_arm.planning.ik_types import (
     IKOptions,
     IKResult,
     IKSolution,
+    admit,
     frozen,
     is_new,
 )
@@ -217,14 +218,8 @@ class IKSolver:
             if bad is not None:
                 violation = _least(violation, bad)
                 continue
-            sol = IKSolution(frozen(qq), sol.position_error, sol.orientation_error)
-            if not is_new(sol.q, [f.q for f in found], self.options.distinct):
-                continue
-            if collision is not None and collision.in_collision(sol.q):
-                collided.append(sol.q)
-                continue
-            found.append(sol)
-            if not all_solutions:
+            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
+                     self.options.distinct, collision, collided) and not all_solutions:
                 break
         return found, (violation if not found else None), tried
 

@@ -20,7 +20,7 @@ from usar_arm.core.spatial import Array
 from usar_arm.planning import ik_kernel
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik_branches import MAX_NEWTON_STEP, Windings
-from usar_arm.planning.ik_types import IKOptions, IKSolution, frozen, is_new
+from usar_arm.planning.ik_types import IKOptions, IKSolution, admit, frozen
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.poe import PoeModel
 
@@ -144,14 +144,8 @@ class NumericIK:
             qq = self.windings.wind(np.array(sol.q), ref)
             if self.windings.violation(qq) is not None:
                 continue
-            sol = IKSolution(frozen(qq), sol.position_error, sol.orientation_error)
-            if not is_new(sol.q, [f.q for f in found], self.options.distinct):
-                continue
-            if collision is not None and collision.in_collision(sol.q):
-                collided.append(sol.q)
-                continue
-            found.append(sol)
-            if not all_solutions:
+            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
+                     self.options.distinct, collision, collided) and not all_solutions:
                 break
         return found
 

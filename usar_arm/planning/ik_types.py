@@ -5,10 +5,14 @@ public API, the branch bookkeeping (:mod:`.ik_branches`) and the numeric solver
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from usar_arm.core.spatial import Array
+
+if TYPE_CHECKING:
+    from usar_arm.planning.collision import CollisionWorld
 
 
 @dataclass(frozen=True)
@@ -80,3 +84,16 @@ def is_new(q: Array, found: list[Array], distinct: float) -> bool:
     """True when ``q`` differs from every configuration of ``found`` by ``distinct`` (rad or m)
     or more on some joint."""
     return not any(np.max(np.abs(q - f)) < distinct for f in found)
+
+
+def admit(sol: IKSolution, found: list[IKSolution], distinct: float,
+          collision: CollisionWorld | None, collided: list[Array]) -> bool:
+    """Append ``sol`` to ``found`` when it is a new solution (:func:`is_new`) and collision-free
+    (one in collision goes to ``collided``); True when it was appended."""
+    if not is_new(sol.q, [f.q for f in found], distinct):
+        return False
+    if collision is not None and collision.in_collision(sol.q):
+        collided.append(sol.q)
+        return False
+    found.append(sol)
+    return True
