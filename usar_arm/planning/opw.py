@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.urdf.opw_fit import OpwLengths
 
 V = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi
@@ -74,18 +75,10 @@ def _wrap(angle: float) -> float:
 
 
 @dataclass(frozen=True)
-class OpwParameters:
-    """The classical OPW parameters (m) of the arm, for reports and other OPW solvers:
-    c1 shoulder height, a1 shoulder offset, b lateral offset, c2 upper arm, a2 elbow offset,
-    c3 forearm (elbow -> wrist centre), c4 wrist centre -> flange."""
+class OpwParameters(OpwLengths):
+    """The classical OPW parameters (m) of the arm, for reports and other OPW solvers: the
+    seven lengths (:class:`~usar_arm.urdf.opw_fit.OpwLengths`) and the wrist's offset."""
 
-    a1: float
-    a2: float
-    b: float
-    c1: float
-    c2: float
-    c3: float
-    c4: float
     wrist_offset: float
     """How far (m) the wrist axes miss a common point on the real model (0 for a true OPW arm)."""
 
