@@ -10,10 +10,6 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "usar_arm"
 MAX_FUNCTION, MAX_CLASS, MAX_MODULE = 80, 300, 450
 
-# Split in branch house-plan (the planning core's share of issue 24); remove at its merge.
-KNOWN_OFFENDERS = {"planning/ik.py", "planning/collision.py", "planning/bounds.py"}
-
-
 def _long_units(path: Path) -> list[str]:
     text = path.read_text()
     name = path.relative_to(PACKAGE).as_posix()
@@ -32,15 +28,5 @@ def _long_units(path: Path) -> list[str]:
 
 
 def test_no_unit_is_over_its_size() -> None:
-    found = [line for path in sorted(PACKAGE.rglob("*.py"))
-             if path.relative_to(PACKAGE).as_posix() not in KNOWN_OFFENDERS
-             for line in _long_units(path)]
+    found = [line for path in sorted(PACKAGE.rglob("*.py")) for line in _long_units(path)]
     assert not found, "too long:\n" + "\n".join(found)
-
-
-def test_the_known_offenders_are_still_there() -> None:
-    """An offender split (or gone) leaves the allow-list: this names it."""
-    for name in sorted(KNOWN_OFFENDERS):
-        path = PACKAGE / name
-        assert path.exists() and _long_units(path), f"{name} is no offender: drop it from " \
-                                                    "KNOWN_OFFENDERS"

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from usar_arm.core.errors import AllSolutionsInCollisionError, JointLimitError, UnreachableError
 from usar_arm.core.spatial import rotation_distance, transform
 from usar_arm.planning.ik import IKOptions
-from usar_arm.planning.poe import PoeChain
+from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
 
@@ -176,10 +176,10 @@ def test_tolerances_are_options(kr60: Robot) -> None:
 
 def test_vectorised_kinematics_match_pinocchio(kr60: Robot, fanuc: Robot) -> None:
     for robot in (kr60, fanuc):
-        poe = PoeChain(robot.chain, "tool0")
+        poe = PoeModel(robot.chain)
         qs = np.random.default_rng(1).uniform(robot.chain.lower(), robot.chain.upper(),
                                               size=(50, robot.chain.dof))
-        poses, jac = poe.model.frame_jacobian(qs, "tool0")
+        poses, jac = poe.frame_jacobian(qs, "tool0")
         for q, pose, j in zip(qs, poses, jac, strict=True):
             assert np.allclose(pose, robot.kinematics.frame_pose(q, "tool0"), atol=1e-8)
             assert np.allclose(j, robot.kinematics.jacobian(q, "tool0"), atol=1e-8)

@@ -74,7 +74,7 @@ def test_the_compiled_path_picks_the_python_path_s_branch_within_tolerance(
         out = np.empty(6)
         status, pe, re = ik_kernel.nearest(
             np.ascontiguousarray(target[:3, :3]), np.ascontiguousarray(target[:3, 3]), seed,
-            *ik._fast, 1e-5, 1e-5, 8, 0.3, 0.05, 0.05, out)
+            *ik.branches.arrays, 1e-5, 1e-5, 8, 0.3, 0.05, 0.05, out)
         if status == ik_kernel.FALLBACK:
             continue
         solved += 1

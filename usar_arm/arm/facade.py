@@ -25,13 +25,13 @@ import numpy as np
 
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
 from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
-from usar_arm.control.tip import TipSensor, platform_sensor_name, pose_error
+from usar_arm.control.tip import TipSensor, platform_sensor_name
 from usar_arm.control.tip_correction import correct_tip
 from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.core.errors import ConnectionLostError, InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
-from usar_arm.core.spatial import Array
+from usar_arm.core.spatial import Array, pose_error
 from usar_arm.description.cache import cache_folder, robot_from_record
 from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.discover.interview import discover

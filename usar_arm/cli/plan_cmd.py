@@ -19,6 +19,7 @@ from usar_arm.cli.robot_args import add_server_args
 from usar_arm.cli.units import UNITS, pose_from_args
 from usar_arm.control.executor import ExecutionOptions
 from usar_arm.control.motion import MotionOptions
+from usar_arm.core import inputs
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.lin import LinOptions
 from usar_arm.planning.ompl_adapter import PLANNERS, OmplOptions
@@ -87,10 +88,7 @@ def joint_vector(values: list[float] | None, arm: Arm, what: str) -> np.ndarray 
     """A joint vector from the command line, checked against the arm's joint count."""
     if values is None:
         return None
-    if len(values) != len(arm.joint_names):
-        raise InvalidInputError(f"{what} needs {len(arm.joint_names)} values "
-                                f"({', '.join(arm.joint_names)}), got {len(values)}")
-    return np.array(values, float)
+    return inputs.joint_vector(values, arm.joint_names, what, noun="values")
 
 
 def goal_pose(args: argparse.Namespace, arm: Arm) -> np.ndarray | None:

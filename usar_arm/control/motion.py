@@ -23,6 +23,7 @@ from usar_arm.control.timing import (
 )
 from usar_arm.control.trajectory import MotionLimits, Trajectory
 from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.inputs import check_pose, joint_vector
 from usar_arm.core.spatial import Array, rotation_distance
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.lin import LinOptions, plan_lin
@@ -97,43 +98,6 @@ class MotionPlan:
                 "mode": self.trajectory.mode, **self.details}
 
 
-RIGID_TOLERANCE = 1e-6
-"""Largest |R^T R - I| entry of a goal pose's rotation (and error of its bottom row)."""
-
-
-def _numbers(values: Any, what: str) -> Array:
-    try:
-        return np.asarray(values, float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"the {what} must be numbers, got {values!r}") from None
-
-
-def check_pose(pose: Any) -> Array:
-    """``pose`` as a 4x4 float array, checked to be a finite rigid transform.
-
-    Raises:
-        InvalidInputError: not 4x4, NaN or infinite entries, or no rotation (not orthonormal,
-            a reflection) or a bottom row other than (0, 0, 0, 1).
-    """
-    t = _numbers(pose, "goal pose")
-    if t.shape != (4, 4):
-        raise InvalidInputError(f"a goal pose is a 4x4 homogeneous transform (m), got an array "
-                                f"of shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise InvalidInputError("the goal pose contains NaN or infinite values")
-    rot = t[:3, :3]
-    off = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
-    det = float(np.linalg.det(rot))
-    if off > RIGID_TOLERANCE or det < 0:
-        raise InvalidInputError(f"the goal pose's rotation is not a rotation matrix "
-                                f"(|R^T R - I| up to {off:.2g}, det {det:.4f}; expected "
-                                f"orthonormal, det +1)")
-    if float(np.max(np.abs(t[3] - (0.0, 0.0, 0.0, 1.0)))) > RIGID_TOLERANCE:
-        raise InvalidInputError(f"the goal pose's bottom row is {t[3].tolist()}, expected "
-                                "[0, 0, 0, 1]")
-    return t
-
-
 def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
                 goal: Array | None = None, pose: Array | None = None,
                 options: MotionOptions = MotionOptions()) -> MotionPlan:
@@ -148,14 +112,9 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
         raise InvalidInputError("give exactly one of a goal configuration or a goal pose")
     chain = robot.chain
     names = chain.joint_names
-    start = _numbers(start, "start")
-    if start.shape != (chain.dof,):
-        raise InvalidInputError(f"the start needs {chain.dof} joint values, got {start.size}")
+    start = joint_vector(start, names, "the start", named=False)
     if goal is not None:
-        goal = _numbers(goal, "goal")
-        if goal.shape != (chain.dof,):
-            raise InvalidInputError(f"the goal needs {chain.dof} joint values ({', '.join(names)})"
-                                    f", got {goal.size}")
+        goal = joint_vector(goal, names, "the goal")
     if pose is not None:
         pose = check_pose(pose)
     limits = MotionLimits.from_chain(chain, options.speed_scale)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usar_arm.core.errors import ResponseTimeoutError
-from usar_arm.core.spatial import FLIP_X, Array, invert, log_so3, rpy_to_matrix, transform
+from usar_arm.core.spatial import FLIP_X, Array, invert, rpy_to_matrix, transform
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.numbers import truncated_midpoint
@@ -131,12 +131,3 @@ def platform_sensor_name(client: UsarClient, tip_sensor: str) -> str | None:
         if kind == "GroundTruth" and name.lower() != tip_sensor.lower():
             return name
     return None
-
-
-def pose_error(target: Array, measured: Array) -> tuple[Array, float, float]:
-    """The 6-vector (position m; rotation rad, world axes) from measured to target, and its
-    two norms."""
-    e = np.empty(6)
-    e[:3] = target[:3, 3] - measured[:3, 3]
-    e[3:] = log_so3(target[:3, :3] @ measured[:3, :3].T)
-    return e, float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))

@@ -23,9 +23,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.control.tip import RawReading, TipSensor, pose_error
+from usar_arm.control.tip import RawReading, TipSensor
 from usar_arm.control.tip_bias import BiasEstimate, Reading, estimate_bias, interval
-from usar_arm.core.spatial import Array, exp_so3, log_so3, matrix_to_rpy, rpy_to_matrix, transform
+from usar_arm.core.spatial import (
+    Array,
+    exp_so3,
+    log_so3,
+    matrix_to_rpy,
+    pose_error,
+    rpy_to_matrix,
+    transform,
+)
 
 log = logging.getLogger("usar_arm.control")
 

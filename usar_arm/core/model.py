@@ -226,27 +226,29 @@ class KinematicChain:
         return path[::-1]
 
     # ------------------------------------------------------------------ kinematics
+    def _walk(self, q: Vector) -> Iterator[tuple[Joint, Array, Array]]:
+        """The forward-kinematics walk (the one of the data model): each joint in order with
+        its world frame before its own motion and its child link's world pose, at ``q``."""
+        values = dict(zip(self.joint_names, (float(v) for v in q), strict=True))
+        poses: dict[str, Array] = {self.root: np.eye(4)}
+        for jt in self.joints:
+            frame = poses[jt.parent] @ jt.origin.matrix()
+            poses[jt.child] = frame @ jt.motion(values.get(jt.name, 0.0))
+            yield jt, frame, poses[jt.child]
+
     def link_poses(self, q: Vector) -> dict[str, Array]:
         """World (root-frame) 4x4 pose of every link at configuration ``q``.
 
         A straightforward reference implementation for checks and tests; the planner uses
         Pinocchio.
         """
-        values = dict(zip(self.joint_names, (float(v) for v in q), strict=True))
         poses: dict[str, Array] = {self.root: np.eye(4)}
-        for jt in self.joints:
-            parent = poses[jt.parent]
-            frame = parent @ jt.origin.matrix()
-            poses[jt.child] = frame @ jt.motion(values.get(jt.name, 0.0))
+        poses.update((jt.child, pose) for jt, _, pose in self._walk(q))
         return poses
 
     def joint_frames(self, q: Vector) -> Iterator[tuple[Joint, Array]]:
         """Each joint with its world frame (before its own motion) at configuration ``q``."""
-        values = dict(zip(self.joint_names, (float(v) for v in q), strict=True))
-        poses: dict[str, Array] = {self.root: np.eye(4)}
-        for jt in self.joints:
-            frame = poses[jt.parent] @ jt.origin.matrix()
-            poses[jt.child] = frame @ jt.motion(values.get(jt.name, 0.0))
+        for jt, frame, _ in self._walk(q):
             yield jt, frame
 
     def frame_pose(self, role_or_link: str, q: Vector) -> Array:

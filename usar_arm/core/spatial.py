@@ -123,6 +123,15 @@ def log_so3(rot: Array) -> Array:
     return w * (angle / (2.0 * np.sin(angle)))
 
 
+def pose_error(target: Array, measured: Array) -> tuple[Array, float, float]:
+    """The pose error (the one of the project): the 6-vector (position m; rotation rad, world
+    axes) from ``measured`` to ``target`` (4x4 each), and its two norms (m, rad)."""
+    e = np.empty(6)
+    e[:3] = target[:3, 3] - measured[:3, 3]
+    e[3:] = log_so3(target[:3, :3] @ measured[:3, :3].T)
+    return e, float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
+
+
 def exp_so3(w: Vector) -> Array:
     """Rotation matrix of a rotation vector (axis * angle, rad)."""
     v = np.asarray(w, dtype=float)

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.jit import kernel
+from usar_arm.planning.jit import inline_kernel, kernel
 from usar_arm.planning.opw import OrthoParallelArm
 
 SOLVED, FALLBACK = 0, 1
@@ -305,6 +305,18 @@ def _solve6(a: Array, b: Array, x: Array) -> bool:
     return True
 
 
+@inline_kernel
+def _take_step(q: Array, step: Array, max_step: float) -> None:
+    """``q += step`` (in place), the step scaled down so that no joint moves more than
+    ``max_step`` (rad or m)."""
+    biggest = 0.0
+    for k in range(q.shape[0]):
+        biggest = max(biggest, abs(step[k]))
+    scale = max_step / biggest if biggest > max_step else 1.0
+    for k in range(q.shape[0]):
+        q[k] += step[k] * scale
+
+
 @kernel
 def polish(q: Array, target_rot: Array, target_pos: Array, axes: Array, points: Array,
            rev: Array, tool: Array, tol_p: float, tol_r: float, steps: int, max_step: float
@@ -341,12 +353,7 @@ def polish(q: Array, target_rot: Array, target_pos: Array, axes: Array, points: 
                 for i in range(6):
                     s += jac[i, k] * y[i]
                 step[k] = s
-        biggest = 0.0
-        for k in range(n):
-            biggest = max(biggest, abs(step[k]))
-        scale = max_step / biggest if biggest > max_step else 1.0
-        for k in range(n):
-            q[k] += step[k] * scale
+        _take_step(q, step, max_step)
     pe, re = pose_error(q, target_rot, target_pos, axes, points, rev, tool, err, jac)
     return (pe < tol_p and re < tol_r), pe, re
 
@@ -382,12 +389,7 @@ def levenberg_marquardt(q: Array, target_rot: Array, target_pos: Array, axes: Ar
                 h[a, b] = s + (lam if a == b else 0.0)
         if not _solve6(h, g, step):
             return False, pe, re
-        biggest = 0.0
-        for k in range(n):
-            biggest = max(biggest, abs(step[k]))
-        scale = max_step / biggest if biggest > max_step else 1.0
-        for k in range(n):
-            q[k] += step[k] * scale
+        _take_step(q, step, max_step)
     pe, re = pose_error(q, target_rot, target_pos, axes, points, rev, tool, err, jac)
     return False, pe, re
 

@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from usar_arm.core.errors import ValidationError
-from usar_arm.core.spatial import Array
+from usar_arm.core.spatial import Array, pose_error
 
 
 class KinematicModel:
@@ -138,11 +138,9 @@ class KinematicModel:
         jac = pin.computeFrameJacobian(self.model, self.data, q, frame_id,
                                        pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         pin.updateFramePlacement(self.model, self.data, frame_id)
-        m = self.data.oMf[frame_id]
-        e = np.empty(6)
-        e[:3] = target_pos - m.translation
-        e[3:] = pin.log3(target_rot @ m.rotation.T)
-        return e, jac
+        target = np.eye(4)
+        target[:3, :3], target[:3, 3] = target_rot, target_pos
+        return pose_error(target, self.data.oMf[frame_id].homogeneous)[0], jac
 
     def pose_residual(self, q: Array, frame_id: int, target_rot: Array, target_pos: Array
                       ) -> tuple[float, float]:

@@ -24,9 +24,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from usar_arm.core.spatial import Array
+from usar_arm.urdf.opw_fit import OpwLengths
 
 V = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi
@@ -75,18 +75,10 @@ def _wrap(angle: float) -> float:
 
 
 @dataclass(frozen=True)
-class OpwParameters:
-    """The classical OPW parameters (m) of the arm, for reports and other OPW solvers:
-    c1 shoulder height, a1 shoulder offset, b lateral offset, c2 upper arm, a2 elbow offset,
-    c3 forearm (elbow -> wrist centre), c4 wrist centre -> flange."""
+class OpwParameters(OpwLengths):
+    """The classical OPW parameters (m) of the arm, for reports and other OPW solvers: the
+    seven lengths (:class:`~usar_arm.urdf.opw_fit.OpwLengths`) and the wrist's offset."""
 
-    a1: float
-    a2: float
-    b: float
-    c1: float
-    c2: float
-    c3: float
-    c4: float
     wrist_offset: float
     """How far (m) the wrist axes miss a common point on the real model (0 for a true OPW arm)."""
 
@@ -278,83 +270,6 @@ class OrthoParallelArm:
         r = rot.tolist()
         return [[*arm, *wrist] for arm in self.arm_branches(r, pos)
                 for wrist in self.wrist_branches(r, *arm)]
-
-
-    # ------------------------------------------------------------------ batches
-    def solve_batch(self, rot: Array, pos: Array) -> tuple[Array, NDArray[np.bool_]]:
-        """All 8 branches for N tool poses at once: joint values (N, 8, 6), wrapped to
-        (-pi, pi], and which exist (N, 8). The same maths as :meth:`arm_branches` and
-        :meth:`wrist_branches`, vectorised with numpy."""
-        rot = np.asarray(rot, float).reshape(-1, 3, 3)
-        pos = np.asarray(pos, float).reshape(-1, 3)
-        n = len(rot)
-        w1, u = np.array(self.w[0]), np.array(self.u)
-        d = rot @ np.array(self._tw) + pos - np.array(self.p[0])           # (N, 3)
-        dh = d - (d @ w1)[:, None] * w1
-        a, b = dh @ u, dh @ np.array(self._w1xu)
-        rad = np.hypot(a, b)
-        ok1 = (rad > 1e-12) & (np.abs(self.lateral) <= rad + self.slack)
-        spread = np.arccos(np.clip(self.lateral / np.maximum(rad, 1e-12), -1.0, 1.0))
-        q1 = np.arctan2(b, a)[:, None] + np.array([1.0, -1.0]) * spread[:, None]  # (N, 2)
-        back = _rot_batch(w1, -q1, d[:, None, :])                          # (N, 2, 3)
-        x = back @ np.array(self.ea) + self._p1_2d[0] - self.p2[0]
-        y = back @ np.array(self.eb) + self._p1_2d[1] - self.p2[1]
-        rhs = (x * x + y * y - self.L2sq - self.L3sq) / 2.0
-        ok2 = np.abs(rhs) <= self._mag + self.slack * self._reach           # (N, 2)
-        delta = np.arccos(np.clip(rhs / self._mag, -1.0, 1.0))
-        t3 = self._phase + np.stack([delta, -delta], axis=2)               # (N, 2, 2)
-        c3, s3 = np.cos(t3), np.sin(t3)
-        ex = self._p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
-        ey = self._p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
-        xx, yy = x[:, :, None], y[:, :, None]
-        q2 = np.arctan2(ex * yy - ey * xx, ex * xx + ey * yy)
-        q3 = self.s3 * t3
-        q1b = np.broadcast_to(q1[:, :, None], q2.shape)
-        theta = q2 + self.s3 * q3
-        t6 = rot @ np.array(self._m6)
-        tv = rot @ np.array(self._mv)
-        shape = (n, 2, 2, 3)
-        target = _rot_batch(u, -theta, _rot_batch(w1, -q1b, np.broadcast_to(
-            t6[:, None, None, :], shape)))
-        rv = _rot_batch(u, -theta, _rot_batch(w1, -q1b, np.broadcast_to(
-            tv[:, None, None, :], shape)))
-        w4, w5, w6 = (np.array(self.w[k]) for k in (3, 4, 5))
-        c = self._c45
-        den = c * c - 1.0
-        t4 = target @ w4
-        alpha = (c * self._w5w6 - t4) / den
-        beta = (c * t4 - self._w5w6) / den
-        g2 = (1.0 - alpha ** 2 - beta ** 2 - 2 * alpha * beta * c) / self._cr2
-        gamma = np.sqrt(np.maximum(g2, 0.0))
-        signs = np.array([1.0, -1.0])
-        z = (alpha[..., None, None] * w4 + beta[..., None, None] * w5
-             + (gamma[..., None] * signs)[..., None] * np.array(self._w4xw5))  # (N,2,2,2,3)
-        q5 = _sp1_batch(w5, np.broadcast_to(w6, z.shape), z)
-        tgt = np.broadcast_to(target[..., None, :], z.shape)
-        q4 = _sp1_batch(w4, z, tgt)
-        rvb = np.broadcast_to(rv[..., None, :], z.shape)
-        mv6 = _rot_batch(w5, -q5, _rot_batch(w4, -q4, rvb))
-        q6 = _sp1_batch(w6, np.broadcast_to(np.array(self._v), z.shape), mv6)
-        full = np.stack([np.broadcast_to(q1b[..., None], q4.shape),
-                         np.broadcast_to(q2[..., None], q4.shape),
-                         np.broadcast_to(q3[..., None], q4.shape), q4, q5, q6], axis=-1)
-        valid = (ok1[:, None, None, None] & ok2[:, :, None, None]
-                 & np.broadcast_to((g2 >= -1e-9)[..., None], q4.shape))
-        wrapped = (full + np.pi) % TWO_PI - np.pi
-        return wrapped.reshape(n, 8, 6), valid.reshape(n, 8)
-
-
-def _rot_batch(w: Array, angle: Array, v: Array) -> Array:
-    """Rodrigues on batches: vectors v (..., 3) rotated about unit axis w by angles (...)."""
-    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
-    return v * c + np.cross(w, v) * s + w * ((v @ w)[..., None] * (1.0 - c))
-
-
-def _sp1_batch(w: Array, p: Array, q: Array) -> Array:
-    """Paden-Kahan subproblem 1 on batches (angles about w taking p to q)."""
-    pp = p - (p @ w)[..., None] * w
-    qq = q - (q @ w)[..., None] * w
-    return np.arctan2(np.cross(pp, qq) @ w, np.sum(pp * qq, axis=-1))
 
 
 def _closest_point(axes: Array, points: Array) -> tuple[Array, float]:

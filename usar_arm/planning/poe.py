@@ -31,17 +31,6 @@ def _rodrigues_k(k: Array, ww: Array, angle: Array) -> Array:
     return ww + c * (np.eye(3) - ww) + s * k
 
 
-def log3(r: Array) -> Array:
-    """Rotation vectors (N, 3) of rotation matrices (N, 3, 3) whose angle is below ~3 rad."""
-    tr = np.clip((np.trace(r, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(tr)
-    skew = np.stack([r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]],
-                    axis=1)
-    s = np.sin(angle)
-    scale = np.where(angle < 1e-6, 0.5, angle / np.maximum(2.0 * s, 1e-300))
-    return skew * scale[:, None]
-
-
 class PoeModel:
     """A serial chain as twists at the zero configuration.
 
@@ -141,20 +130,3 @@ class PoeModel:
         jac[:, :3, ~rev] = axes[:, ~rev].transpose(0, 2, 1)
         return poses, jac
 
-
-class PoeChain:
-    """Batched pose errors of one frame (for batched Newton steps)."""
-
-    def __init__(self, chain: KinematicChain, frame: str):
-        self.model = PoeModel(chain)
-        self.frame = frame
-        self.model.frame_jacobian(np.zeros((1, chain.dof)), frame)  # validates the frame
-
-    def pose_errors(self, q: Array, target_rot: Array, target_pos: Array
-                    ) -> tuple[Array, Array]:
-        """Errors (N, 6) = (target - position, log(target R^T)) and Jacobians (N, 6, n)."""
-        poses, jac = self.model.frame_jacobian(q, self.frame)
-        e = np.empty((len(poses), 6))
-        e[:, :3] = target_pos - poses[:, :3, 3]
-        e[:, 3:] = log3(target_rot @ poses[:, :3, :3].transpose(0, 2, 1))
-        return e, jac

@@ -35,8 +35,10 @@ class NotOpwError(ValueError):
 
 
 @dataclass(frozen=True)
-class OpwParameters:
-    """The OPW parameters (m, rad) in ``opw_kinematics``' convention."""
+class OpwLengths:
+    """The seven lengths (m) of an ortho-parallel arm: c1 shoulder height, a1 shoulder offset,
+    b lateral offset, c2 upper arm, a2 elbow offset, c3 forearm (elbow -> wrist centre), c4
+    wrist centre -> flange."""
 
     a1: float
     a2: float
@@ -45,6 +47,13 @@ class OpwParameters:
     c2: float
     c3: float
     c4: float
+
+
+@dataclass(frozen=True)
+class OpwParameters(OpwLengths):
+    """The OPW parameters (m, rad) in ``opw_kinematics``' convention: the lengths, and each
+    joint's offset (rad) and sign."""
+
     offsets: tuple[float, float, float, float, float, float]
     sign_corrections: tuple[int, int, int, int, int, int]
 

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm.core.errors import FileFormatError
+from usar_arm.core.inputs import rigid_defects
 from usar_arm.core.spatial import Array, rpy_to_matrix, transform
 
 KINDS = ("ik", "plan")
@@ -91,9 +92,8 @@ def _pose(value: Any, what: str) -> Array:
         if any(len(r) != 4 for r in rows):
             raise _Bad(f"{what} as a matrix must be 4x4")
         t = np.array(rows)
-        rot = t[:3, :3]
-        if (np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6 or np.linalg.det(rot) < 0
-                or np.abs(t[3] - (0, 0, 0, 1)).max() > 1e-9):
+        off, det, row = rigid_defects(t)
+        if off > 1e-6 or det < 0 or row > 1e-9:
             raise _Bad(f"{what} is not a rigid transform (orthonormal rotation, det +1, "
                        "bottom row 0 0 0 1)")
         return t

@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from usar_arm.control.motion import MotionOptions, plan_motion
-from usar_arm.core.errors import InvalidInputError, UsarArmError
+from usar_arm.core.errors import UsarArmError
+from usar_arm.core.inputs import joint_vector
 from usar_arm.core.version import __version__
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ompl_adapter import reseed
@@ -102,11 +103,7 @@ def _prepare(build: ArmBuilder, scenes: dict[str, Scene], options: BatchOptions)
 
 
 def _joints(robot: Robot, values: Any, what: str) -> np.ndarray:
-    q = np.asarray(values, float)
-    if q.shape != (robot.chain.dof,):
-        raise InvalidInputError(f"{what} needs {robot.chain.dof} joint values "
-                                f"({', '.join(robot.chain.joint_names)}), got {q.size}")
-    return q
+    return joint_vector(values, robot.chain.joint_names, what)
 
 
 def _clean(value: Any) -> Any:

@@ -1,0 +1,202 @@
+"""The IK's numeric solver: Newton polishing of a start (an analytic branch), Newton with joints
+held on their limits, Levenberg-Marquardt from the seed and random restarts within a time
+budget, batched Newton for many targets, and the closest approach of an unreachable target.
+
+It works on the exact model (Pinocchio, or the compiled product of exponentials of
+:mod:`.ik_kernel` where the frame lies on one serial path). Metres and radians.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg.lapack import dgesv
+
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
+from usar_arm.planning import ik_kernel
+from usar_arm.planning.collision import CollisionWorld
+from usar_arm.planning.ik_branches import MAX_NEWTON_STEP, Windings
+from usar_arm.planning.ik_types import IKOptions, IKSolution, admit, frozen
+from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.poe import PoeModel
+
+LM_ITERATIONS = 25
+"""Iterations of one Levenberg-Marquardt attempt before a random restart."""
+LM_DAMPING = 0.01
+LM_FLOOR = 1e-4
+MAX_LM_STEP = 0.5
+"""rad or m: the largest joint change of one LM step."""
+
+
+class _ChainArrays(NamedTuple):
+    """The serial chain as the compiled kernels take it (:mod:`.ik_kernel`): joint axes and
+    points at zero (n, 3), 1.0 for revolute joints, the frame's pose at zero (4, 4)."""
+
+    axes: Array
+    points: Array
+    revolute: Array
+    tool: Array
+
+
+class NumericIK:
+    """Newton and Levenberg-Marquardt IK of one frame of one arm.
+
+    Args:
+        chain: the robot description. kinematics: its Pinocchio model.
+        frame: the solved link. windings: the chain's limits. options: tolerances, budget.
+    """
+
+    def __init__(self, chain: KinematicChain, kinematics: KinematicModel, frame: str,
+                 windings: Windings, options: IKOptions):
+        self.chain = chain
+        self.kin = kinematics
+        self.frame = frame
+        self.fid = kinematics.frame_id(frame)
+        self.windings = windings
+        self.options = options
+        self.lower, self.upper = windings.lower, windings.upper
+        self._diag = np.arange(len(self.lower)) * (len(self.lower) + 1)
+        self._rng = np.random.default_rng(options.seed)
+        self._poe: PoeModel | None = None
+        self._chain_arrays: _ChainArrays | None = None
+        try:
+            poe = PoeModel(chain)
+            if poe.joints_moving(frame) == poe.dof:
+                self._chain_arrays = _ChainArrays(
+                    poe.axes, poe.points, poe.revolute.astype(float),
+                    np.ascontiguousarray(chain.frame_pose(frame, np.zeros(chain.dof))))
+        except ValueError:  # not one serial path to the frame: Pinocchio's LM only
+            pass
+
+    def reseed(self, seed: int) -> None:
+        """Restart the random restarts from ``seed``."""
+        self._rng = np.random.default_rng(seed)
+
+    @property
+    def poe(self) -> PoeModel:
+        """The chain's product of exponentials (built on first use)."""
+        if self._poe is None:
+            self._poe = PoeModel(self.chain)
+        return self._poe
+
+    def polish(self, q: Array, rot: Array, pos: Array) -> IKSolution | None:
+        """Newton steps on the exact model from ``q`` (an analytic branch)."""
+        tol_p, tol_r = self.options.position_tolerance, self.options.orientation_tolerance
+        target = self.kin.target(rot, pos)
+        for _ in range(self.options.newton_steps):
+            e, pe, re, jac = self.kin.local_error(q, self.fid, target)
+            if pe < tol_p and re < tol_r:
+                return IKSolution(q, pe, re)
+            _, _, step, info = dgesv(jac, e)
+            if info != 0:  # singular: damped least squares instead
+                step = jac.T @ dgesv(jac @ jac.T + 1e-6 * np.eye(6), e)[2]
+            biggest = float(np.max(np.abs(step)))
+            if biggest > MAX_NEWTON_STEP:  # near a singularity: do not jump across the space
+                step *= MAX_NEWTON_STEP / biggest
+            q = q + step
+        return None
+
+    def clamped(self, q: Array, rot: Array, pos: Array) -> IKSolution | None:
+        """A solution with the joints a hair outside their limits held on the limit: Newton
+        (least squares) on the other joints, kept if it reaches the tolerance. A joint that a
+        step pushes beyond its limit is held there too (an active set), so a target whose
+        solution sits in a corner of the limits, several joints on their limits, is reached."""
+        stuck = (q < self.lower) | (q > self.upper)
+        q = np.clip(q, self.lower, self.upper)
+        target = self.kin.target(rot, pos)
+        for _ in range(2 * self.options.newton_steps):
+            e, pe, re, jac = self.kin.local_error(q, self.fid, target)
+            if pe < self.options.position_tolerance and re < self.options.orientation_tolerance:
+                return IKSolution(q, pe, re)
+            free = ~stuck
+            if not free.any():
+                return None
+            step = np.linalg.lstsq(jac[:, free], e, rcond=None)[0]
+            q = q.copy()
+            q[free] += step
+            out = (q < self.lower - 1e-9) | (q > self.upper + 1e-9)
+            if out.any():
+                q = np.clip(q, self.lower, self.upper)
+                stuck |= out
+        return None
+
+    def search(self, rot: Array, pos: Array, ref: Array, seeded: bool, all_solutions: bool,
+               collision: CollisionWorld | None, start: float, starts: list[Array],
+               collided: list[Array]) -> list[IKSolution]:
+        """LM from the seed, then from ``starts`` (e.g. analytic branches), then from random
+        configurations, until the time budget (from ``start``, perf_counter s) is spent.
+        Solutions in collision are appended to ``collided``."""
+        found: list[IKSolution] = []
+        budget = self.options.time_budget
+        queue = [ref if seeded else (self.lower + self.upper) / 2, *starts]
+        attempt = 0
+        while time.perf_counter() - start < budget:
+            q0 = (np.clip(queue[attempt], self.lower, self.upper) if attempt < len(queue)
+                  else self._rng.uniform(self.lower, self.upper))
+            attempt += 1
+            sol = self.levenberg_marquardt(q0, rot, pos, start + budget)
+            if sol is None:
+                continue
+            qq = self.windings.wind(np.array(sol.q), ref)
+            if self.windings.violation(qq) is not None:
+                continue
+            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
+                     self.options.distinct, collision, collided) and not all_solutions:
+                break
+        return found
+
+    def levenberg_marquardt(self, q: Array, rot: Array, pos: Array, deadline: float,
+                            iterations: int = LM_ITERATIONS) -> IKSolution | None:
+        """Levenberg-Marquardt from ``q``: damping = LM_DAMPING * squared error + LM_FLOOR
+        (large far from the target, vanishing near it), steps capped at MAX_LM_STEP; the
+        joints are free during the descent and wound into their limits at the end."""
+        tol_p, tol_r = self.options.position_tolerance, self.options.orientation_tolerance
+        if self._chain_arrays is not None:  # compiled, on the product of exponentials
+            q = np.array(q, dtype=float)
+            c = self._chain_arrays
+            ok, pe, re = ik_kernel.levenberg_marquardt(
+                q, rot, pos, c.axes, c.points, c.revolute, c.tool, tol_p, tol_r, iterations,
+                LM_DAMPING, LM_FLOOR, MAX_LM_STEP)
+            return IKSolution(q, pe, re) if ok else None
+        target = self.kin.target(rot, pos)
+        diag = self._diag
+        for it in range(iterations):
+            e, pe, re, jac = self.kin.local_error(q, self.fid, target)
+            if pe < tol_p and re < tol_r:
+                return IKSolution(q, pe, re)
+            if it % 8 == 7 and time.perf_counter() > deadline:
+                return None
+            h = jac.T @ jac
+            h.flat[diag] += LM_DAMPING * float(e @ e) + LM_FLOOR
+            _, _, step, info = dgesv(h, jac.T @ e)
+            if info != 0:
+                return None
+            biggest = float(np.max(np.abs(step)))
+            if biggest > MAX_LM_STEP:
+                step *= MAX_LM_STEP / biggest
+            q = q + step
+        return None
+
+    def closest_approach(self, rot: Array, pos: Array, ref: Array) -> float:
+        """How far (m) the frame stays from the target position at best: 4096 random
+        configurations (vectorised forward kinematics), the 8 nearest then refined by damped
+        least squares on position, inside the limits."""
+        samples = self._rng.uniform(self.lower, self.upper, size=(4096, len(self.lower)))
+        poses, _ = self.poe.frame_jacobian(samples, self.frame)
+        gaps = np.linalg.norm(poses[:, :3, 3] - pos, axis=1)
+        best = math.inf
+        starts = [np.clip(ref, self.lower, self.upper), *samples[np.argsort(gaps)[:8]]]
+        for q in starts:
+            for _ in range(60):
+                e, jac = self.kin.pose_error(q, self.fid, rot, pos)
+                ep, jp = e[:3], jac[:3]
+                gap = float(ep @ ep)
+                best = min(best, math.sqrt(gap))
+                damping = 1e-4 + 0.1 * gap  # small steps while far, Newton steps when near
+                step = jp.T @ np.linalg.solve(jp @ jp.T + damping * np.eye(3), ep)
+                q = np.clip(q + step, self.lower, self.upper)
+        return min(best, float(gaps.min()))

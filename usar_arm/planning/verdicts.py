@@ -1,0 +1,140 @@
+"""The compiled collision verdicts of an arm in a scene: the plain arrays :mod:`.bounds` takes
+(the chain as twists, link cylinders, obstacles as boxes, spheres, capsules and mesh hulls, the
+checked pairs), and the batches it answers: CLEAR / CONTACT / UNDECIDED per checked pair, the
+single-query summary, the walk along a joint-space segment, and the lever arms that make the
+walk's skips safe. No python-fcl here (:mod:`.exact` decides the undecided). Metres, radians.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+from numpy.typing import NDArray
+
+from usar_arm.core.model import KinematicChain, Link
+from usar_arm.core.spatial import Array
+from usar_arm.planning import bounds
+from usar_arm.planning.bounds import IndexArray
+from usar_arm.planning.poe import PoeModel
+from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
+
+
+def _scene_arrays(scene: Scene) -> tuple[IndexArray, Array, Array]:
+    """The obstacles as kinds (O,), poses (O, 3, 4) and sizes (O, 3) for the broadphase."""
+    kinds, poses, sizes = [], [], []
+    for o in scene.objects:
+        shape, pose = o.shape, np.asarray(o.pose, float)
+        size = np.zeros(3)
+        if isinstance(shape, Box):
+            kind, size[:] = bounds.BOX, np.asarray(shape.size, float) / 2
+        elif isinstance(shape, Sphere):
+            kind, size[0] = bounds.SPHERE, shape.radius
+        elif isinstance(shape, CylinderShape):
+            kind, size[:2] = bounds.CAPSULE, (shape.radius, shape.length / 2)
+        elif isinstance(shape, Mesh):  # the box that bounds the mesh in its own frame
+            v = np.asarray(shape.vertices, float)
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            centre = np.eye(4)
+            centre[:3, 3] = (lo + hi) / 2
+            kind, size[:], pose = bounds.HULL, (hi - lo) / 2, pose @ centre
+        else:
+            raise TypeError(f"unsupported shape {shape!r}")
+        kinds.append(kind)
+        poses.append(pose[:3])
+        sizes.append(size)
+    return (np.array(kinds, dtype=np.int64), np.array(poses, dtype=float).reshape(-1, 3, 4),
+            np.array(sizes, dtype=float).reshape(-1, 3))
+
+
+class CompiledVerdicts:
+    """The compiled broadphase of the link cylinders of ``links`` (each with geometry; radius
+    and half-length padded, m; cylinder poses in their link ``local`` (L, 4, 4)) in a scene."""
+
+    def __init__(self, chain: KinematicChain, links: list[Link], radius: Array, half: Array,
+                 local: Array, scene: Scene):
+        poe = PoeModel(chain)
+        zero = chain.link_poses(np.zeros(chain.dof))
+        self.chain = chain
+        self.names = [lk.name for lk in links]
+        self.radius, self.half = radius, half
+        self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
+        self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
+        self._revolute = np.ascontiguousarray(poe.revolute, dtype=np.int64).reshape(-1)
+        self._moved_by = np.array([poe.joints_moving(lk.name) for lk in links], dtype=np.int64)
+        self._zero = np.array([zero[lk.name] @ m for lk, m in
+                               zip(links, local, strict=True)]).reshape(-1, 4, 4)
+        self._link_levers: Array | None = None
+        self._kind, self._opose, self._osize = _scene_arrays(scene)
+        self.rr: IndexArray = np.zeros((0, 2), dtype=np.int64)
+        self.rs: IndexArray = np.zeros((0, 2), dtype=np.int64)
+
+    def in_scene(self, scene: Scene) -> CompiledVerdicts:
+        """The same arm in another scene (call :meth:`check_pairs` next)."""
+        other = copy.copy(self)
+        other._kind, other._opose, other._osize = _scene_arrays(scene)
+        return other
+
+    def check_pairs(self, rr: IndexArray, rs: IndexArray) -> None:
+        """Check the robot-robot pairs ``rr`` (P, 2: link, link) and robot-scene pairs ``rs``
+        (Q, 2: link, obstacle), in that order."""
+        self.rr = np.array(rr, dtype=np.int64).reshape(-1, 2)
+        self.rs = np.array(rs, dtype=np.int64).reshape(-1, 2)
+        self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
+                                   self.radius, self.half, self._moved_by, self.rr, self.rs,
+                                   self._kind, self._opose, self._osize)
+
+    def check(self, qs: Array) -> tuple[Array, NDArray[np.int8]]:
+        """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
+        (N, P + Q) verdicts on the checked pairs (:data:`~.bounds.CLEAR`,
+        :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED`)."""
+        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
+
+    def summary(self, q: Array) -> int:
+        """One verdict for configuration ``q``: CLEAR when every pair is, CONTACT when one is,
+        else UNDECIDED."""
+        q = np.asarray(q, dtype=float)
+        return int(bounds.summary(q if q.flags.c_contiguous else np.ascontiguousarray(q),
+                                  *self._packed, bounds.EPS, bounds.MARGIN))
+
+    def walk(self, a: Array, b: Array, steps: int
+             ) -> tuple[int, Array, NDArray[np.int8]]:
+        """:func:`.bounds.walk` from ``a`` to ``b``: the first configuration in proven contact
+        (-1 if none) and the poses and verdicts of those left undecided, in order."""
+        hit, _, _, poses, verdicts = bounds.walk(
+            np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float),
+            int(steps), self.link_levers(), *self._packed, bounds.EPS, bounds.MARGIN)
+        return int(hit), poses, verdicts
+
+    def link_levers(self) -> Array:
+        """Per actuated joint and link cylinder (n, L), how far any point of cylinder k moves
+        per unit of joint j (m/rad, or 1 for a prismatic joint; 0 where joint j does not move
+        cylinder k)."""
+        if self._link_levers is None:
+            joints = self.chain.actuated_joints
+            levers = np.zeros((len(joints), len(self.names)))
+            for k, name in enumerate(self.names):
+                path = self.chain.path_to(name)
+                for i, jt in enumerate(joints):
+                    if jt in path:
+                        levers[i, k] = self._reach(name, path, path.index(jt), k)
+            levers.setflags(write=False)
+            self._link_levers = levers
+        return self._link_levers
+
+    def _reach(self, name: str, path: list, at: int, k: int) -> float:
+        """The lever arm of joint ``path[at]`` on cylinder ``k`` of link ``name``: the joint
+        offsets downstream, the travel of prismatic joints among them, and the cylinder's
+        extent (m; 1 for a prismatic joint)."""
+        if path[at].type.value == "prismatic":
+            return 1.0
+        reach = 0.0
+        for step in path[at + 1:]:
+            reach += float(np.linalg.norm(step.origin.xyz))
+            if step.type.value == "prismatic" and step.limits is not None:
+                reach += max(abs(step.limits.lower), abs(step.limits.upper))
+        geom = next(lk for lk in self.chain.links if lk.name == name).geometry
+        assert geom is not None
+        return reach + float(np.linalg.norm(geom.origin.xyz)) + float(
+            np.hypot(self.radius[k], self.half[k]))
