@@ -77,3 +77,37 @@ def test_two_hundred_random_blends_keep_every_limit_at_1_khz(kr60: Robot) -> Non
         if found:
             bad.append(f"polyline {k}: {found}")
     assert bad == []
+
+
+SLOWER_BLEND = np.array([
+    [-1.5457344421712857, 0.5932662516182505, -0.4605334526435172, 2.2917349064715986,
+     0.6298249938343425, 2.5899468767566485],
+    [-2.101129430160099, 0.61, 0.1880917810972823, 2.9062845158652815, 0.7374817749721083,
+     3.036924112284885],
+    [-2.4077130836430616, 0.44887338346215694, 0.2632369378173972, 2.524745934157783,
+     0.8228011386154351, 3.14],
+    [-2.382345461457965, 0.44403829148446883, 0.2577345402255083, 2.5247242793566214,
+     0.7955122305046565, 3.1213787642006454],
+    [-1.416872067886537, -0.6685284948392353, -0.939885680637621, 2.415459359566622,
+     -0.07097370254374535, 3.14]])
+"""A path (waypoints on joint limits, a short back-step) whose pass-through timing took 1.09x
+as long as resting at every waypoint, before the blend fell back to resting."""
+
+
+def test_a_blend_is_never_slower_than_resting_at_every_waypoint(kr60: Robot) -> None:
+    """Passing through can take longer than stopping (a planner's shelf path at 1.02x, the
+    path above at 1.09x): then the rest-to-rest timing is the answer. That path and 300 seeded
+    random polylines."""
+    from usar_arm.control.timing import stop_at_waypoints
+
+    limits = MotionLimits.from_chain(kr60.chain, 0.5)
+    rng = np.random.default_rng(4)
+    names = kr60.chain.joint_names
+    paths = [SLOWER_BLEND] + [_polyline(rng, kr60.chain.lower(), kr60.chain.upper())
+                              for _ in range(300)]
+    passed_through = 0
+    for path in paths:
+        blend, stop = blended(names, path, limits), stop_at_waypoints(names, path, limits)
+        assert blend.duration <= stop.duration + 1e-9
+        passed_through += blend.fallbacks < len(path) - 2
+    assert passed_through > 150  # most paths do pass through their waypoints

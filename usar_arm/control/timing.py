@@ -299,7 +299,10 @@ def blended(names: tuple[str, ...], waypoints: Array, limits: MotionLimits,
     """Pass through the waypoints without stopping, then re-check every segment.
 
     A segment whose samples (every ``check_step`` s) leave the position limits or hit
-    ``forbidden`` is redone from rest to rest, and its neighbours are retimed to match.
+    ``forbidden`` is redone from rest to rest, and its neighbours are retimed to match. Never
+    slower than resting at every waypoint: where passing through takes longer (a path whose
+    pass-through velocities force long detours of the jerk-limited profile), the rest-to-rest
+    timing is returned, with every interior waypoint counted as a fallback.
     """
     start = time.perf_counter()
     wp = _dedupe(np.asarray(waypoints, float))
@@ -328,6 +331,13 @@ def blended(names: tuple[str, ...], waypoints: Array, limits: MotionLimits,
         fallbacks += 1
     motion = _assemble(names, limits, wp, "blend", segments, time.perf_counter() - start)
     motion.fallbacks = fallbacks
+    if fallbacks < n_wp - 2:
+        straight_segments: list[Segment] = list(lines)
+        rest = _assemble(names, limits, wp, "stop", straight_segments,
+                         time.perf_counter() - start)
+        if rest.duration < motion.duration:
+            rest.fallbacks = n_wp - 2
+            return rest
     return motion
 
 
