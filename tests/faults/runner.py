@@ -16,7 +16,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 _CONTEXT = multiprocessing.get_context("forkserver")
-_CONTEXT.set_forkserver_preload(["usar_arm.cli.main", "tests.faults.runner"])
+# usar_arm.cli.main loads a command's module only when it runs it (a fast --help), so the
+# commands these tests run are preloaded here: their imports (SciPy, Pinocchio, OMPL...) would
+# otherwise count as time between a fault and the exit.
+_CONTEXT.set_forkserver_preload(["usar_arm.cli.main", "usar_arm.cli.urdf_cmd",
+                                 "usar_arm.cli.plan_cmd", "usar_arm.cli.execute_cmd",
+                                 "tests.faults.runner"])
 
 
 @dataclass(frozen=True)
