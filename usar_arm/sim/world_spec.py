@@ -51,11 +51,26 @@ class WorldSpec:
         return None
 
 
+def shipped_worlds() -> tuple[str, ...]:
+    """The names of the world files shipped with the simulator (``default``, ``rooms``)."""
+    folder = resources.files("usar_arm.sim") / "worlds"
+    return tuple(sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".yaml")))
+
+
 def load_world(path: str | Path | None = None) -> WorldSpec:
-    """Load a world file (default: the shipped ``worlds/default.yaml``)."""
-    if path is None:
-        with resources.as_file(resources.files("usar_arm.sim") / "worlds" / "default.yaml") as fp:
+    """Load a world file, or a shipped world by name (default: ``default``, the arms' cell).
+
+    Raises:
+        FileFormatError: the file is not a world file.
+        FileNotFoundError: no such file and no shipped world of that name.
+    """
+    name = "default" if path is None else str(path)
+    if path is None or (name in shipped_worlds() and not Path(name).exists()):
+        with resources.as_file(resources.files("usar_arm.sim") / "worlds" / f"{name}.yaml") as fp:
             return load_world(fp)
+    if not Path(path).is_file():
+        raise FileNotFoundError(f"no world file {name} (shipped worlds: "
+                                f"{', '.join(shipped_worlds())})")
     p = str(path)
     try:
         data = yaml.safe_load(Path(path).read_text())
