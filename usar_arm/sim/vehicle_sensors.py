@@ -37,7 +37,9 @@ TWO_PI = 2.0 * math.pi
 def norm_2pi(a: float) -> float:
     """An angle in [0, 2 pi) (``UnitsConverter.normRad_ZeroTo2PI``)."""
     out = math.fmod(a, TWO_PI)
-    return out + TWO_PI if out < 0 else out
+    if out < 0:
+        out += TWO_PI
+    return 0.0 if out >= TWO_PI else out  # -1e-17 + 2 pi rounds to 2 pi
 
 
 def diff_angle(a: float, b: float) -> float:
