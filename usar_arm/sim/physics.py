@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from usar_arm.core.spatial import Array, invert, quat_from_matrix, rpy_to_matrix, transform
 from usar_arm.sim.heap import release_freed_memory
+from usar_arm.sim.physics_index import ActuatorIndex, RobotEntry, VehicleIndex
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
 from usar_arm.sim.vehicle import VehicleSpec
 from usar_arm.sim.world_spec import SceneryBox
@@ -44,48 +44,77 @@ FRESH_SPEC_AFTER = 50
 for every robot ever deleted from it (mujoco 3.x), which a long-running server must not."""
 
 
-@dataclass
-class _ActuatorIndex:
-    spec: ActuatorSpec
-    joint_names: list[str]
-    actuator_names: list[str]
-    signs: Array
-    qpos_adr: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    dof_adr: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    ctrl_idx: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    tip_site: str = ""
-    tip_site_id: int = -1
-    drives: list[tuple[int, float, float, float]] = field(default_factory=list)
-    """Per joint: ctrl index, sign, low and high limit (USARSim sign), for :meth:`set_targets`."""
-
-
-@dataclass
-class _VehicleIndex:
-    spec: VehicleSpec
-    body: str
-    wheel_joints: dict[str, str]
-    """Wheel name -> joint name."""
-    body_id: int = -1
-    wheel_qpos: dict[str, int] = field(default_factory=dict)
-    wheel_ctrl: dict[str, int] = field(default_factory=dict)
-
-
-@dataclass
-class _RobotEntry:
-    key: str
-    spec: RobotSpec
-    location: tuple[float, ...]
-    rotation: tuple[float, ...]
-    platform_pose: Array
-    actuators: dict[str, _ActuatorIndex]
-    vehicle: _VehicleIndex | None = None
-
-
 def _quat(rot: Array) -> list[float]:
     return [float(v) for v in quat_from_matrix(rot)]
 
 
-def _index_vehicle(m: mujoco.MjModel, d: mujoco.MjData, veh: _VehicleIndex,
+def _add_scenery(world: mujoco.MjsBody, scenery: Sequence[SceneryBox], floor_z: float) -> None:
+    """The floor (a plane facing up, i.e. toward -z: its normal, +z, turned over about x) and
+    the world's boxes, touched by vehicles only."""
+    world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
+                   pos=[0.0, 0.0, floor_z], quat=[0.0, 1.0, 0.0, 0.0],
+                   contype=0, conaffinity=SCENERY_AFFINITY)
+    for i, box in enumerate(scenery):
+        world.add_geom(name=f"scenery/{i}/{box.name}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                       size=list(box.half), pos=list(box.center),
+                       quat=_quat(rpy_to_matrix((0.0, 0.0, box.yaw))),
+                       contype=0, conaffinity=SCENERY_AFFINITY)
+
+
+def _add_vehicle(spec: mujoco.MjSpec, entry: RobotEntry, veh: VehicleSpec, floor_z: float
+                 ) -> VehicleIndex:
+    """A free chassis on its wheels: boxes and bumper masses on one body, one hinge per
+    wheel (positive spin drives forward) with a velocity drive limited to MaxForce.
+
+    The chassis is placed no lower than resting on the floor (INIT's z is the chassis
+    origin, as UDK's CenterItem location)."""
+    loc = list(entry.location)
+    loc[2] = min(loc[2], floor_z - veh.rest_height)
+    name = f"{entry.key}/platform"
+    body = spec.worldbody.add_body(name=name, pos=loc,
+                                         quat=_quat(entry.platform_pose[:3, :3]))
+    body.add_freejoint(name=f"{name}/free")
+    for box in veh.chassis:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(box.half),
+                      pos=list(box.center), mass=box.mass, contype=VEHICLE_CONTYPE,
+                      conaffinity=0)
+    for _, offset, mass in veh.extra_masses:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0, 0], pos=list(offset),
+                      mass=mass, contype=0, conaffinity=0)
+    joints = {}
+    for w in veh.wheels:
+        wheel = body.add_body(name=f"{name}/{w.name}", pos=list(w.offset))
+        jname = f"{name}/{w.name}/spin"
+        wheel.add_joint(name=jname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, -1.0, 0.0],
+                        damping=WHEEL_DAMPING)
+        wheel.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[veh.wheel_radius, 0, 0],
+                       mass=w.mass, contype=VEHICLE_CONTYPE, conaffinity=0,
+                       friction=[WHEEL_FRICTION, 0.005, 0.0001])
+        if w.driven:
+            drive = spec.add_actuator(name=f"{jname}/drive", target=jname,
+                                            trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            drive.set_to_velocity(kv=WHEEL_KV)
+            drive.forcelimited = True
+            drive.forcerange = [-w.max_force, w.max_force]
+        joints[w.name] = jname
+    return VehicleIndex(veh, name, joints)
+
+
+def _joint_state(m: mujoco.MjModel, d: mujoco.MjData
+                 ) -> tuple[dict[str, tuple[float, float]], dict[str, tuple[Array, Array]]]:
+    """Position and velocity of every joint by name: hinges and slides, and free joints."""
+    qpos, free_state = {}, {}
+    for j in range(m.njnt):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
+        qa, da = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            free_state[name] = (d.qpos[qa:qa + 7].copy(), d.qvel[da:da + 6].copy())
+        else:
+            qpos[name] = (d.qpos[qa], d.qvel[da])
+    return qpos, free_state
+
+
+def _index_vehicle(m: mujoco.MjModel, d: mujoco.MjData, veh: VehicleIndex,
                    qpos: dict[str, tuple[float, float]],
                    free_state: dict[str, tuple[Array, Array]], ctrl: dict[str, float]) -> None:
     """Find a vehicle's addresses in a rebuilt model and carry its state over."""
@@ -121,7 +150,7 @@ class PhysicsWorld:
         self.scenery = tuple(scenery)
         self.floor_z = floor_z
         self._spec = self._new_spec()
-        self._robots: dict[str, _RobotEntry] = {}
+        self._robots: dict[str, RobotEntry] = {}
         self._batching = False
         self._removed_since_trim = False
         self._dirty = False
@@ -136,16 +165,7 @@ class PhysicsWorld:
         spec.option.gravity = [0.0, 0.0, GRAVITY if self.gravity else 0.0]
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
         spec.modelname = "usar_arm_world"
-        world = spec.worldbody
-        # The ground faces up, i.e. toward -z: a plane's normal is its +z, turned over about x.
-        world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
-                       pos=[0.0, 0.0, self.floor_z], quat=[0.0, 1.0, 0.0, 0.0],
-                       contype=0, conaffinity=SCENERY_AFFINITY)
-        for i, box in enumerate(self.scenery):
-            world.add_geom(name=f"scenery/{i}/{box.name}", type=mujoco.mjtGeom.mjGEOM_BOX,
-                           size=list(box.half), pos=list(box.center),
-                           quat=_quat(rpy_to_matrix((0.0, 0.0, box.yaw))),
-                           contype=0, conaffinity=SCENERY_AFFINITY)
+        _add_scenery(spec.worldbody, self.scenery, self.floor_z)
         return spec
 
     # ------------------------------------------------------------------ robots
@@ -154,18 +174,18 @@ class PhysicsWorld:
         """Spawn ``spec`` at a world pose (m, roll/pitch/yaw rad); ``key`` must be unique."""
         if key in self._robots:
             raise ValueError(f"robot key {key} already in use")
-        entry = _RobotEntry(key, spec, tuple(float(v) for v in location),
+        entry = RobotEntry(key, spec, tuple(float(v) for v in location),
                             tuple(float(v) for v in rotation),
                             transform(rpy_to_matrix(rotation), location), {})
         self._build(entry)
         self._robots[key] = entry
         self._changed()
 
-    def _build(self, entry: _RobotEntry) -> None:
+    def _build(self, entry: RobotEntry) -> None:
         """Add a robot's bodies, joints and drives to the spec (its indices are set on the next
         rebuild of the model)."""
         if entry.spec.vehicle is not None:
-            entry.vehicle = self._add_vehicle(entry, entry.spec.vehicle)
+            entry.vehicle = _add_vehicle(self._spec, entry, entry.spec.vehicle, self.floor_z)
             return
         platform = self._spec.worldbody.add_body(
             name=f"{entry.key}/platform", pos=list(entry.location),
@@ -176,7 +196,7 @@ class PhysicsWorld:
                            for act in entry.spec.actuators}
 
     def _add_actuator(self, key: str, platform: mujoco.MjsBody, act: ActuatorSpec
-                      ) -> _ActuatorIndex:
+                      ) -> ActuatorIndex:
         prefix = f"{key}/{act.name}"
         mount = act.mount()
         bodies = {act.body: platform.add_body(name=f"{prefix}/{act.body}",
@@ -219,44 +239,7 @@ class PhysicsWorld:
         tip_site = f"{prefix}/tip"
         bodies[last.child].add_site(name=tip_site, pos=tip_rel[:3, 3].tolist(),
                                     quat=_quat(tip_rel[:3, :3]))
-        return _ActuatorIndex(act, joint_names, actuator_names, np.array(signs), tip_site=tip_site)
-
-    def _add_vehicle(self, entry: _RobotEntry, veh: VehicleSpec) -> _VehicleIndex:
-        """A free chassis on its wheels: boxes and bumper masses on one body, one hinge per
-        wheel (positive spin drives forward) with a velocity drive limited to MaxForce.
-
-        The chassis is placed no lower than resting on the floor (INIT's z is the chassis
-        origin, as UDK's CenterItem location)."""
-        loc = list(entry.location)
-        loc[2] = min(loc[2], self.floor_z - veh.rest_height)
-        name = f"{entry.key}/platform"
-        body = self._spec.worldbody.add_body(name=name, pos=loc,
-                                             quat=_quat(entry.platform_pose[:3, :3]))
-        body.add_freejoint(name=f"{name}/free")
-        for box in veh.chassis:
-            body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(box.half),
-                          pos=list(box.center), mass=box.mass, contype=VEHICLE_CONTYPE,
-                          conaffinity=0)
-        for _, offset, mass in veh.extra_masses:
-            body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0, 0], pos=list(offset),
-                          mass=mass, contype=0, conaffinity=0)
-        joints = {}
-        for w in veh.wheels:
-            wheel = body.add_body(name=f"{name}/{w.name}", pos=list(w.offset))
-            jname = f"{name}/{w.name}/spin"
-            wheel.add_joint(name=jname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, -1.0, 0.0],
-                            damping=WHEEL_DAMPING)
-            wheel.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[veh.wheel_radius, 0, 0],
-                           mass=w.mass, contype=VEHICLE_CONTYPE, conaffinity=0,
-                           friction=[WHEEL_FRICTION, 0.005, 0.0001])
-            if w.driven:
-                drive = self._spec.add_actuator(name=f"{jname}/drive", target=jname,
-                                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
-                drive.set_to_velocity(kv=WHEEL_KV)
-                drive.forcelimited = True
-                drive.forcerange = [-w.max_force, w.max_force]
-            joints[w.name] = jname
-        return _VehicleIndex(veh, name, joints)
+        return ActuatorIndex(act, joint_names, actuator_names, np.array(signs), tip_site=tip_site)
 
     @staticmethod
     def _add_mass(body: mujoco.MjsBody, mass: float, ends: list[Array]) -> None:
@@ -319,15 +302,7 @@ class PhysicsWorld:
 
     def _rebuild(self) -> None:
         old_m, old_d = self._model, self._data
-        qpos = {}
-        free_state = {}
-        for j in range(old_m.njnt):
-            name = mujoco.mj_id2name(old_m, mujoco.mjtObj.mjOBJ_JOINT, j)
-            qa, da = old_m.jnt_qposadr[j], old_m.jnt_dofadr[j]
-            if old_m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
-                free_state[name] = (old_d.qpos[qa:qa + 7].copy(), old_d.qvel[da:da + 6].copy())
-            else:
-                qpos[name] = (old_d.qpos[qa], old_d.qvel[da])
+        qpos, free_state = _joint_state(old_m, old_d)
         ctrl = {mujoco.mj_id2name(old_m, mujoco.mjtObj.mjOBJ_ACTUATOR, a): old_d.ctrl[a]
                 for a in range(old_m.nu)}
         self._model = self._spec.compile()
@@ -370,7 +345,7 @@ class PhysicsWorld:
         mujoco.mj_step(self._model, self._data, nstep=n)
         mujoco.mj_kinematics(self._model, self._data)
 
-    def _index(self, key: str, actuator: str) -> _ActuatorIndex:
+    def _index(self, key: str, actuator: str) -> ActuatorIndex:
         return self._robots[key].actuators[actuator]
 
     def set_targets(self, key: str, actuator: str, targets: Sequence[float]) -> None:
