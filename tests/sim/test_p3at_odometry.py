@@ -111,3 +111,25 @@ def test_a_vehicle_keeps_its_pose_and_wheels_through_rebuilds() -> None:
     for _ in range(5):
         d.tick()
     assert d.world.platform_pose("p")[0, 3] - start == pytest.approx(0.05, rel=0.05)
+
+
+def test_set_resets_odometry_and_poses_the_ins_as_their_uc_files() -> None:
+    d = Drive()
+    d.wheels_at(1.3, 1.3)
+    for _ in range(10):
+        d.tick()
+    odo = d.last["Odometry"]
+    assert isinstance(odo, m.Odometry) and odo.pose[0] > 0.1
+    assert d.sensors.command("Odometry", "odometer", "RESET", None) is None
+    assert d.sensors.command("INS", "", "POSE", "1,2,3,0,0,0.5") is None
+    d.last.clear()
+    while "Ins" not in d.last:  # the INS reads every other tick
+        d.tick()
+    odo, ins = d.last["Odometry"], d.last["Ins"]
+    assert isinstance(odo, m.Odometry) and isinstance(ins, m.Ins)
+    assert 0 < odo.pose[0] < 0.03  # at most two ticks of driving since the reset
+    assert ins.location[:2] == pytest.approx((1.0, 2.0), abs=0.03)
+    assert ins.orientation[2] == pytest.approx(0.5, abs=1e-3)
+    assert "no opcode" in str(d.sensors.command("Odometry", "", "SCAN", None))
+    assert "needs" in str(d.sensors.command("INS", "", "POSE", "1,2,nan,0,0,0"))
+    assert "no GroundTruth sensor" in str(d.sensors.command("GroundTruth", "", "RESET", None))

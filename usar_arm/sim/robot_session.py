@@ -153,6 +153,8 @@ class Session:
             self._describe(msg, style)
         elif isinstance(msg, m.Drive) and self.vehicle is not None:
             self.vehicle.drive(msg, world, reject)
+        elif isinstance(msg, m.Set) and self.vehicle is not None:
+            self.vehicle.set(msg, reject)
         elif isinstance(msg, (m.Set, m.Drive)):
             reject("no effector", "%s ignored: a %s has no effectors or drive",
                    type(msg).__name__.upper(), self.robot.platform_type, level=logging.INFO)

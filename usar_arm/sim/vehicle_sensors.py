@@ -73,6 +73,12 @@ class Ins:
         self.prev: Array | None = None
         self.go = False
 
+    def set_pose(self, values: list[float]) -> None:
+        """``SET {Type INS} {Opcode POSE} {Params x,y,z,r,p,y}``: a new estimate, no drift."""
+        self.est = np.asarray(values, dtype=float)
+        self.means = np.zeros(6)
+        self.go = True
+
     def _gauss(self, mean: float) -> float:
         return 0.0 if self.sigma == 0 else float(mean + self.sigma * self.rng.standard_normal())
 
@@ -111,6 +117,10 @@ class Odometry:
         self.radius = spec.wheel_radius
         self.l_dist = spec.front_wheels()[1].offset[1] * 2
         self.old: tuple[float, float, float] | None = None
+        self.x = self.y = self.theta = 0.0
+
+    def reset(self) -> None:
+        """``SET {Type Odometry} {Opcode RESET}``: the pose back to zero."""
         self.x = self.y = self.theta = 0.0
 
     def read(self, t: float, wheels: dict[str, float]) -> m.Odometry | None:
@@ -167,6 +177,32 @@ class VehicleSensors:
         self.ins = [(Ins(s, rng), every(s, 0.2)) for s in spec.sensors_of("INS")]
         self.odometry = [(Odometry(s, spec), every(s, 0.1)) for s in spec.sensors_of("Odometry")]
         self.scanners = [(Scanner(s), every(s, 0.2)) for s in spec.sensors_of("RangeScanner")]
+
+    def command(self, type_: str, name: str, opcode: str, params: str | None) -> str | None:
+        """Act on ``SET {Type type_} {Name name} {Opcode opcode} [{Params params}]`` as the
+        sensors' ``Set`` do (Odometry RESET, INS POSE x,y,z,r,p,y); what went wrong, or None.
+        UDK sends no reply either way."""
+        wanted = type_.upper()
+        targets: list[Ins | Odometry] = [
+            s for s, _ in (self.ins if wanted == "INS" else self.odometry
+                           if wanted == "ODOMETRY" else [])
+            if name == "" or s.mount.name.upper() == name.upper()]
+        if not targets:
+            return f"no {type_} sensor named '{name}' with a SET this simulator supports"
+        for sensor in targets:
+            if isinstance(sensor, Odometry) and opcode.upper() == "RESET":
+                sensor.reset()
+            elif isinstance(sensor, Ins) and opcode.upper() == "POSE":
+                try:
+                    values = [float(v) for v in (params or "").split(",")]
+                except ValueError:
+                    values = []
+                if len(values) != 6 or not all(math.isfinite(v) for v in values):
+                    return f"INS POSE needs {{Params x,y,z,roll,pitch,yaw}}, got {params!r}"
+                sensor.set_pose(values)
+            else:
+                return f"{type_} has no opcode {opcode!r} (Odometry: RESET; INS: POSE)"
+        return None
 
     def read(self, t: float, world: PhysicsWorld, key: str) -> list[m.Message]:
         """The SEN messages due at this tick (time ``t``, s)."""

@@ -59,6 +59,12 @@ class VehicleSession:
                    self.vehicle.max_speed, ", ".join(cmd.clamped), level=logging.INFO)
         world.set_wheel_speeds(self.key, cmd.speeds)
 
+    def set(self, msg: m.Set, reject: Reject) -> None:
+        """Act on a SET line addressed to a sensor (no reply, as UDK)."""
+        problem = self.sensors.command(msg.type, msg.name, msg.opcode, msg.params)
+        if problem is not None:
+            reject("SET refused", "SET ignored: %s", problem[:200], level=logging.INFO)
+
     def describe(self, msg: m.GetConf | m.GetGeo, style: NumberStyle) -> m.Message | None:
         """The CONF or GEO answering ``msg``, or None (no reply)."""
         veh, spec = self.vehicle, self.spec
