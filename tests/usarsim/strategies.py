@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from hypothesis import strategies as st
 
 from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.codec import SEN_TYPES
 
 # Names: what USARSim component and robot names look like (no spaces, braces or commas).
 names = st.text(alphabet=st.characters(whitelist_categories=("Lu", "Ll", "Nd"),
@@ -33,7 +34,8 @@ RESERVED = {"name", "type", "link", "value", "time", "location", "orientation", 
             "mountlink", "tip", "parent", "parentlink", "jointtype", "maxtorque", "minvalue",
             "maxvalue", "maxspeed", "gripper", "sequence", "seq", "battery", "classname",
             "start", "rotation", "opcode", "params", "left", "right", "normalized", "light",
-            "gametype", "level", "timelimit", "startposes"}
+            "gametype", "level", "timelimit", "startposes", "resolution", "fov", "range",
+            "pose"}
 HEADS = {"NFO", "GETSTARTPOSES", "INIT", "GETCONF", "GETGEO", "ACT", "SET", "DRIVE", "CONF",
          "GEO", "ASTA", "STA", "SEN", "EFF"}
 
@@ -82,6 +84,8 @@ class Domain:
     ints: st.SearchStrategy[int]
     names: st.SearchStrategy[str]
     values: st.SearchStrategy[str]
+    ranges: st.SearchStrategy[float] | None = None
+    """Scanner ranges (FloatString(r, 2)); None: the ``fixed`` numbers."""
 
 
 def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
@@ -101,6 +105,10 @@ def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
                           opt() | d.values, opt() | d.ints,
                           st.lists(link_geos, max_size=4).map(tuple), opt() | raw_v, extras)
     pairs = st.lists(st.tuples(d.ints, d.scalar), max_size=8).map(tuple)
+    ranges = st.lists(d.ranges if d.ranges is not None else d.fixed, max_size=12).map(tuple)
+
+    def spelled(word: str) -> st.SearchStrategy[str]:
+        return st.sampled_from([word, word.lower(), word.upper()])
     return {
         "GameInfo": st.builds(m.GameInfo, d.values, d.values, opt() | d.scalar, extras),
         "StartPoses": st.builds(m.StartPoses, st.lists(
@@ -120,8 +128,13 @@ def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
         "Geo": st.builds(m.Geo, d.values, st.lists(geo_items, min_size=1, max_size=3).map(tuple)),
         "Asta": st.builds(m.Asta, d.scalar, d.values, pairs, extras),
         "Sta": st.builds(m.Sta, d.scalar, opt() | d.ints, opt() | d.values, extras),
-        "Sen": st.builds(m.Sen, d.values, d.values, opt() | d.scalar, opt() | fixed_v,
-                         opt() | fixed_v, extras),
+        "Sen": st.builds(m.Sen, d.values.filter(lambda t: t.lower() not in SEN_TYPES),
+                         d.values, opt() | d.scalar, opt() | fixed_v, opt() | fixed_v, extras),
+        "RangeScan": st.builds(m.RangeScan, d.values, d.fixed, d.fixed, ranges, opt() | d.scalar,
+                               spelled("RangeScanner"), extras),
+        "Ins": st.builds(m.Ins, d.values, raw_v, raw_v, opt() | d.scalar, spelled("INS"), extras),
+        "Odometry": st.builds(m.Odometry, d.values, st.tuples(d.scalar, d.scalar, d.scalar),
+                              opt() | d.scalar, spelled("Odometry"), extras),
         "Eff": st.builds(m.Eff, d.values, d.values, opt() | d.scalar, extras),
         "Unknown": st.builds(m.Unknown, d.names.filter(lambda h: h.upper() not in HEADS),
                              st.lists(st.tuples(d.names, d.values), max_size=4).map(tuple)),
@@ -130,7 +143,10 @@ def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
 
 EVERYDAY = Domain(floats, floats, floats, ints, names, values)
 WIDE_DOMAIN = Domain(finite, finite, finite, wide_ints, wide_tokens, wide_values)
-UDK_EXACT_DOMAIN = Domain(udk_scalars, udk_raw, udk_fixed, wide_ints, wide_tokens, wide_values)
+udk_quarters = st.integers(-(2**20), 2**20).map(lambda k: k / 4)
+"""Multiples of 1/4 m (scanner ranges): exact in float32 and in FloatString(r, 2)."""
+UDK_EXACT_DOMAIN = Domain(udk_scalars, udk_raw, udk_fixed, wide_ints, wide_tokens, wide_values,
+                          udk_quarters)
 UDK_ANY_DOMAIN = Domain(udk_float32_range, udk_float32_range, udk_float32_range, wide_ints,
                         wide_tokens, wide_values)
 

@@ -45,8 +45,8 @@ from usar_arm.usarsim.numbers import FULL, UDK, udk_float_string
 
 CORPUS = Path(__file__).resolve().parents[2] / "fuzz" / "corpus" / "codec"
 MESSAGE_TYPES = (m.GameInfo, m.StartPoses, m.GetStartPoses, m.Init, m.GetConf, m.GetGeo, m.Act,
-                 m.Set, m.Drive, m.Conf, m.PlatformConf, m.Geo, m.Asta, m.Sta, m.Sen, m.Eff,
-                 m.Unknown)
+                 m.Set, m.Drive, m.Conf, m.PlatformConf, m.Geo, m.Asta, m.Sta, m.Sen,
+                 m.RangeScan, m.Ins, m.Odometry, m.Eff, m.Unknown)
 
 
 def test_the_strategies_cover_every_message_type() -> None:
@@ -83,7 +83,9 @@ def test_udk_style_round_trips_numbers_it_can_print_exactly(kind: str,
 def _q(kind: str, value: object) -> object:
     """A number (or vector, or None) as the UDK print kind ``kind`` returns it."""
     quantize = {"scalar": UDK.quantize_scalar, "raw": UDK.quantize_raw,
-                "fixed": UDK.quantize_fixed}[kind]
+                "fixed": UDK.quantize_fixed,
+                "fixed2": lambda v: float(UDK.fixed_at(v, 2)),
+                "fixed4": lambda v: float(UDK.fixed_at(v, 4))}[kind]
     if value is None:
         return None
     if isinstance(value, tuple):
@@ -126,6 +128,14 @@ def udk_quantized(msg: m.Message) -> m.Message:
     if isinstance(msg, m.Sen):
         return r(msg, time=_q("scalar", msg.time), location=_q("fixed", msg.location),
                  orientation=_q("fixed", msg.orientation))
+    if isinstance(msg, m.RangeScan):
+        return r(msg, time=_q("scalar", msg.time), resolution=_q("fixed4", msg.resolution),
+                 fov=_q("fixed4", msg.fov), ranges=_q("fixed2", msg.ranges))
+    if isinstance(msg, m.Ins):
+        return r(msg, time=_q("scalar", msg.time), location=_q("raw", msg.location),
+                 orientation=_q("raw", msg.orientation))
+    if isinstance(msg, m.Odometry):
+        return r(msg, time=_q("scalar", msg.time), pose=_q("scalar", msg.pose))
     if isinstance(msg, m.Eff):
         return r(msg, time=_q("scalar", msg.time))
     return msg  # no numbers printed in a style

@@ -8,8 +8,9 @@ import logging
 import signal
 
 from usar_arm.cli.common import add_verbosity, setup_logging, verbosity
-from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE, FileFormatError
 from usar_arm.sim.server import SimOptions, SimServer
+from usar_arm.sim.world_spec import load_world
 
 log = logging.getLogger("usar_arm.sim")
 
@@ -19,7 +20,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "sim", help="run the embedded USARSim-compatible simulator (MuJoCo physics)",
         description="Serve the USARSim UDK protocol on TCP (one robot per connection, up to 64) "
                     "with MuJoCo physics, until Ctrl-C or SIGTERM. Robot classes: USARBot.KR60, "
-                    "USARBot.Fanuc_M16iB20.")
+                    "USARBot.Fanuc_M16iB20, USARBot.P3AT.")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=3000, help="TCP port (default 3000, as UDK)")
     p.add_argument("--speed", type=float, default=1.0,
@@ -28,6 +29,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
                    help="udk: UDK's number formats (GEO locations truncated to mm, orientations "
                         "to 0.01 rad); full: every number round-trips a float64 (extension)")
+    p.add_argument("--world", default=None, metavar="FILE|NAME",
+                   help="world file (YAML: start poses, walls and obstacles) or the name of a "
+                        "shipped one: default (the arms' cell, no walls), rooms (four rooms "
+                        "with doorways and obstacles, for ground vehicles)")
     add_verbosity(p)
     p.set_defaults(handler=run)
 
@@ -40,7 +45,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         log.error("%s", exc)
         return EXIT_INVALID_INPUT
-    server = SimServer(options)
+    try:
+        world = load_world(args.world)
+    except (OSError, FileFormatError) as exc:
+        log.error("%s", exc)
+        return EXIT_INVALID_INPUT
+    server = SimServer(options, world_spec=world)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

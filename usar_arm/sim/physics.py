@@ -12,79 +12,127 @@ This is the only module that imports ``mujoco``.
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import ctypes.util
-from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Sequence
 
 import mujoco
 import numpy as np
 
 from usar_arm.core.spatial import Array, invert, quat_from_matrix, rpy_to_matrix, transform
+from usar_arm.sim.heap import release_freed_memory
+from usar_arm.sim.physics_index import ActuatorIndex, RobotEntry, VehicleIndex
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
+from usar_arm.sim.vehicle import VehicleSpec
+from usar_arm.sim.world_spec import SceneryBox
 
 GRAVITY = 9.81
 """Gravitational acceleration (m/s²), along +z of the z-down world."""
 LINK_RADIUS = 0.05
 """Radius (m) of the capsules that carry each part's mass."""
+SCENERY_AFFINITY = 1
+"""Contact bit of the floor and the scenery boxes: vehicles (contype 1) touch them; the arms
+(contype 0) and vehicles among themselves do not touch anything else."""
+VEHICLE_CONTYPE = 1
+"""Contact type of a vehicle's chassis and wheels."""
+WHEEL_KV = 2.0
+"""Gain (N·m per rad/s) of a wheel's velocity drive, within the wheel's MaxForce."""
+WHEEL_DAMPING = 0.001
+"""Viscous friction of a wheel's axle (N·m·s/rad)."""
+WHEEL_FRICTION = 1.0
+"""Sliding friction coefficient between a wheel and the ground."""
 FRESH_SPEC_AFTER = 50
 """Robot removals after which the MuJoCo spec is built anew: an ``MjSpec`` keeps about 2 KiB
 for every robot ever deleted from it (mujoco 3.x), which a long-running server must not."""
 
 
-def _heap_trimmer() -> Callable[[int], int] | None:
-    """glibc's ``malloc_trim`` (None elsewhere)."""
-    name = ctypes.util.find_library("c")
-    try:
-        trim = getattr(ctypes.CDLL(name), "malloc_trim", None) if name else None
-    except OSError:
-        return None
-    return trim if callable(trim) else None
-
-
-_MALLOC_TRIM = _heap_trimmer()
-
-
-def release_freed_memory() -> None:
-    """Give the heap's free pages back to the system (glibc; elsewhere nothing).
-
-    Every model rebuild frees and reallocates a few MiB; glibc keeps the freed pages and the
-    heap fragments, so a server whose robots come and go grew by ~15 KiB per robot removed
-    (17 MiB over 1,100 spawn/remove cycles, measured) while holding no more live memory.
-    Trimming after a removal keeps it flat; it frees only what is free, so a real leak still
-    shows in the soak test's memory slope.
-    """
-    if _MALLOC_TRIM is not None:
-        _MALLOC_TRIM(0)
-
-
-@dataclass
-class _ActuatorIndex:
-    spec: ActuatorSpec
-    joint_names: list[str]
-    actuator_names: list[str]
-    signs: Array
-    qpos_adr: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    dof_adr: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    ctrl_idx: Array = field(default_factory=lambda: np.zeros(0, dtype=int))
-    tip_site: str = ""
-    tip_site_id: int = -1
-    drives: list[tuple[int, float, float, float]] = field(default_factory=list)
-    """Per joint: ctrl index, sign, low and high limit (USARSim sign), for :meth:`set_targets`."""
-
-
-@dataclass
-class _RobotEntry:
-    key: str
-    spec: RobotSpec
-    location: tuple[float, ...]
-    rotation: tuple[float, ...]
-    platform_pose: Array
-    actuators: dict[str, _ActuatorIndex]
-
-
 def _quat(rot: Array) -> list[float]:
     return [float(v) for v in quat_from_matrix(rot)]
+
+
+def _add_scenery(world: mujoco.MjsBody, scenery: Sequence[SceneryBox], floor_z: float) -> None:
+    """The floor (a plane facing up, i.e. toward -z: its normal, +z, turned over about x) and
+    the world's boxes, touched by vehicles only."""
+    world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
+                   pos=[0.0, 0.0, floor_z], quat=[0.0, 1.0, 0.0, 0.0],
+                   contype=0, conaffinity=SCENERY_AFFINITY)
+    for i, box in enumerate(scenery):
+        world.add_geom(name=f"scenery/{i}/{box.name}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                       size=list(box.half), pos=list(box.center),
+                       quat=_quat(rpy_to_matrix((0.0, 0.0, box.yaw))),
+                       contype=0, conaffinity=SCENERY_AFFINITY)
+
+
+def _add_vehicle(spec: mujoco.MjSpec, entry: RobotEntry, veh: VehicleSpec, floor_z: float
+                 ) -> VehicleIndex:
+    """A free chassis on its wheels: boxes and bumper masses on one body, one hinge per
+    wheel (positive spin drives forward) with a velocity drive limited to MaxForce.
+
+    The chassis is placed no lower than resting on the floor (INIT's z is the chassis
+    origin, as UDK's CenterItem location)."""
+    loc = list(entry.location)
+    loc[2] = min(loc[2], floor_z - veh.rest_height)
+    name = f"{entry.key}/platform"
+    body = spec.worldbody.add_body(name=name, pos=loc,
+                                         quat=_quat(entry.platform_pose[:3, :3]))
+    body.add_freejoint(name=f"{name}/free")
+    for box in veh.chassis:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(box.half),
+                      pos=list(box.center), mass=box.mass, contype=VEHICLE_CONTYPE,
+                      conaffinity=0)
+    for _, offset, mass in veh.extra_masses:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0, 0], pos=list(offset),
+                      mass=mass, contype=0, conaffinity=0)
+    joints = {}
+    for w in veh.wheels:
+        wheel = body.add_body(name=f"{name}/{w.name}", pos=list(w.offset))
+        jname = f"{name}/{w.name}/spin"
+        wheel.add_joint(name=jname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, -1.0, 0.0],
+                        damping=WHEEL_DAMPING)
+        wheel.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[veh.wheel_radius, 0, 0],
+                       mass=w.mass, contype=VEHICLE_CONTYPE, conaffinity=0,
+                       friction=[WHEEL_FRICTION, 0.005, 0.0001])
+        if w.driven:
+            drive = spec.add_actuator(name=f"{jname}/drive", target=jname,
+                                            trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            drive.set_to_velocity(kv=WHEEL_KV)
+            drive.forcelimited = True
+            drive.forcerange = [-w.max_force, w.max_force]
+        joints[w.name] = jname
+    return VehicleIndex(veh, name, joints)
+
+
+def _joint_state(m: mujoco.MjModel, d: mujoco.MjData
+                 ) -> tuple[dict[str, tuple[float, float]], dict[str, tuple[Array, Array]]]:
+    """Position and velocity of every joint by name: hinges and slides, and free joints."""
+    qpos, free_state = {}, {}
+    for j in range(m.njnt):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
+        qa, da = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            free_state[name] = (d.qpos[qa:qa + 7].copy(), d.qvel[da:da + 6].copy())
+        else:
+            qpos[name] = (d.qpos[qa], d.qvel[da])
+    return qpos, free_state
+
+
+def _index_vehicle(m: mujoco.MjModel, d: mujoco.MjData, veh: VehicleIndex,
+                   qpos: dict[str, tuple[float, float]],
+                   free_state: dict[str, tuple[Array, Array]], ctrl: dict[str, float]) -> None:
+    """Find a vehicle's addresses in a rebuilt model and carry its state over."""
+    veh.body_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, veh.body)
+    free = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{veh.body}/free")
+    if f"{veh.body}/free" in free_state:
+        qa, da = m.jnt_qposadr[free], m.jnt_dofadr[free]
+        d.qpos[qa:qa + 7], d.qvel[da:da + 6] = free_state[f"{veh.body}/free"]
+    veh.wheel_qpos, veh.wheel_ctrl = {}, {}
+    for wheel, jname in veh.wheel_joints.items():
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
+        veh.wheel_qpos[wheel] = int(m.jnt_qposadr[j])
+        if jname in qpos:
+            d.qpos[m.jnt_qposadr[j]], d.qvel[m.jnt_dofadr[j]] = qpos[jname]
+        a = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{jname}/drive")
+        if a >= 0:
+            veh.wheel_ctrl[wheel] = a
+            d.ctrl[a] = ctrl.get(f"{jname}/drive", 0.0)
 
 
 class PhysicsWorld:
@@ -95,11 +143,14 @@ class PhysicsWorld:
         gravity: apply gravity (on in UDK).
     """
 
-    def __init__(self, timestep: float = 0.001, gravity: bool = True):
+    def __init__(self, timestep: float = 0.001, gravity: bool = True,
+                 scenery: Sequence[SceneryBox] = (), floor_z: float = 0.0):
         self.timestep = timestep
         self.gravity = gravity
+        self.scenery = tuple(scenery)
+        self.floor_z = floor_z
         self._spec = self._new_spec()
-        self._robots: dict[str, _RobotEntry] = {}
+        self._robots: dict[str, RobotEntry] = {}
         self._batching = False
         self._removed_since_trim = False
         self._dirty = False
@@ -114,6 +165,7 @@ class PhysicsWorld:
         spec.option.gravity = [0.0, 0.0, GRAVITY if self.gravity else 0.0]
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
         spec.modelname = "usar_arm_world"
+        _add_scenery(spec.worldbody, self.scenery, self.floor_z)
         return spec
 
     # ------------------------------------------------------------------ robots
@@ -122,16 +174,19 @@ class PhysicsWorld:
         """Spawn ``spec`` at a world pose (m, roll/pitch/yaw rad); ``key`` must be unique."""
         if key in self._robots:
             raise ValueError(f"robot key {key} already in use")
-        entry = _RobotEntry(key, spec, tuple(float(v) for v in location),
+        entry = RobotEntry(key, spec, tuple(float(v) for v in location),
                             tuple(float(v) for v in rotation),
                             transform(rpy_to_matrix(rotation), location), {})
         self._build(entry)
         self._robots[key] = entry
         self._changed()
 
-    def _build(self, entry: _RobotEntry) -> None:
+    def _build(self, entry: RobotEntry) -> None:
         """Add a robot's bodies, joints and drives to the spec (its indices are set on the next
         rebuild of the model)."""
+        if entry.spec.vehicle is not None:
+            entry.vehicle = _add_vehicle(self._spec, entry, entry.spec.vehicle, self.floor_z)
+            return
         platform = self._spec.worldbody.add_body(
             name=f"{entry.key}/platform", pos=list(entry.location),
             quat=_quat(entry.platform_pose[:3, :3]))
@@ -141,7 +196,7 @@ class PhysicsWorld:
                            for act in entry.spec.actuators}
 
     def _add_actuator(self, key: str, platform: mujoco.MjsBody, act: ActuatorSpec
-                      ) -> _ActuatorIndex:
+                      ) -> ActuatorIndex:
         prefix = f"{key}/{act.name}"
         mount = act.mount()
         bodies = {act.body: platform.add_body(name=f"{prefix}/{act.body}",
@@ -184,7 +239,7 @@ class PhysicsWorld:
         tip_site = f"{prefix}/tip"
         bodies[last.child].add_site(name=tip_site, pos=tip_rel[:3, 3].tolist(),
                                     quat=_quat(tip_rel[:3, :3]))
-        return _ActuatorIndex(act, joint_names, actuator_names, np.array(signs), tip_site=tip_site)
+        return ActuatorIndex(act, joint_names, actuator_names, np.array(signs), tip_site=tip_site)
 
     @staticmethod
     def _add_mass(body: mujoco.MjsBody, mass: float, ends: list[Array]) -> None:
@@ -247,10 +302,7 @@ class PhysicsWorld:
 
     def _rebuild(self) -> None:
         old_m, old_d = self._model, self._data
-        qpos = {}
-        for j in range(old_m.njnt):
-            name = mujoco.mj_id2name(old_m, mujoco.mjtObj.mjOBJ_JOINT, j)
-            qpos[name] = (old_d.qpos[old_m.jnt_qposadr[j]], old_d.qvel[old_m.jnt_dofadr[j]])
+        qpos, free_state = _joint_state(old_m, old_d)
         ctrl = {mujoco.mj_id2name(old_m, mujoco.mjtObj.mjOBJ_ACTUATOR, a): old_d.ctrl[a]
                 for a in range(old_m.nu)}
         self._model = self._spec.compile()
@@ -272,6 +324,8 @@ class PhysicsWorld:
                         d.qpos[idx.qpos_adr[k]], d.qvel[idx.dof_adr[k]] = qpos[name]
                 for k, name in enumerate(idx.actuator_names):
                     d.ctrl[idx.ctrl_idx[k]] = ctrl.get(name, 0.0)
+            if robot.vehicle is not None:
+                _index_vehicle(m, d, robot.vehicle, qpos, free_state, ctrl)
         mujoco.mj_forward(m, d)
 
     # ------------------------------------------------------------------ stepping and state
@@ -291,7 +345,7 @@ class PhysicsWorld:
         mujoco.mj_step(self._model, self._data, nstep=n)
         mujoco.mj_kinematics(self._model, self._data)
 
-    def _index(self, key: str, actuator: str) -> _ActuatorIndex:
+    def _index(self, key: str, actuator: str) -> ActuatorIndex:
         return self._robots[key].actuators[actuator]
 
     def set_targets(self, key: str, actuator: str, targets: Sequence[float]) -> None:
@@ -316,8 +370,39 @@ class PhysicsWorld:
         mujoco.mj_forward(self._model, self._data)
 
     def platform_pose(self, key: str) -> Array:
-        """World pose (4x4) of a robot's platform."""
-        return self._robots[key].platform_pose.copy()
+        """World pose (4x4) of a robot's platform (a vehicle's chassis where it is now)."""
+        entry = self._robots[key]
+        if entry.vehicle is None:
+            return entry.platform_pose.copy()
+        b = entry.vehicle.body_id
+        return transform(self._data.xmat[b].reshape(3, 3).copy(), self._data.xpos[b].copy())
+
+    def set_wheel_speeds(self, key: str, speeds: dict[str, float]) -> None:
+        """Set the target spin (rad/s, positive forward) of a vehicle's driven wheels."""
+        veh = self._robots[key].vehicle
+        assert veh is not None, f"{key} is not a vehicle"
+        for wheel, speed in speeds.items():
+            self._data.ctrl[veh.wheel_ctrl[wheel]] = speed
+
+    def wheel_angles(self, key: str) -> dict[str, float]:
+        """The accumulated spin (rad, positive forward) of every wheel of a vehicle."""
+        veh = self._robots[key].vehicle
+        assert veh is not None, f"{key} is not a vehicle"
+        return {w: float(self._data.qpos[a]) for w, a in veh.wheel_qpos.items()}
+
+    def cast_rays(self, key: str, origin: Array, directions: Array, max_range: float) -> Array:
+        """Distance (m) along each unit direction (n x 3, world) from ``origin`` to the first
+        surface of the world that is not the robot ``key``'s chassis; ``max_range`` where
+        nothing is nearer."""
+        n = len(directions)
+        dist = np.empty(n)
+        geom = np.empty(n, dtype=np.int32)
+        entry = self._robots[key]
+        exclude = entry.vehicle.body_id if entry.vehicle is not None else -1
+        mujoco.mj_multiRay(self._model, self._data, np.asarray(origin, dtype=float),
+                           np.ascontiguousarray(directions, dtype=float).reshape(-1), None, True,
+                           exclude, geom, dist, None, n, max_range)
+        return np.where((geom < 0) | (dist < 0) | (dist > max_range), max_range, dist)
 
     def tip_pose(self, key: str, actuator: str) -> Array:
         """World pose (4x4) of an arm's tip frame."""

@@ -133,4 +133,6 @@ def known_components(spec: RobotSpec) -> list[str]:
     out = [f"Actuator {a.name}" for a in spec.actuators]
     out += [f"{it.type} {it.name}" for it in spec.items]
     out += [f"GroundTruth {a.tip_sensor}" for a in spec.actuators if a.tip_sensor]
+    if spec.vehicle is not None:
+        out += [f"{s.type} {s.name}" for s in spec.vehicle.sensors]
     return out

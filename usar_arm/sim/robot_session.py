@@ -25,6 +25,7 @@ from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.sim import replies
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
+from usar_arm.sim.vehicle_session import VehicleSession
 from usar_arm.sim.world_spec import WorldSpec
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import NumberStyle
@@ -124,6 +125,8 @@ class Session:
     pending: PendingSpawn | None = None
     targets: dict[str, list[float]] = field(default_factory=dict)
     next_status: float = 0.0
+    vehicle: VehicleSession | None = None
+    """The drive and sensors of a spawned ground vehicle (None for an arm)."""
     rejections: Rejections = field(init=False)
     _actuators: dict[str, ActuatorSpec] = field(default_factory=dict)
     _replies: dict[tuple[bool, str, str | None], m.Message | None] = field(default_factory=dict)
@@ -148,6 +151,10 @@ class Session:
                    "UDK does", head[:40])
         elif isinstance(msg, (m.GetConf, m.GetGeo)):
             self._describe(msg, style)
+        elif isinstance(msg, m.Drive) and self.vehicle is not None:
+            self.vehicle.drive(msg, world, reject)
+        elif isinstance(msg, m.Set) and self.vehicle is not None:
+            self.vehicle.set(msg, reject)
         elif isinstance(msg, (m.Set, m.Drive)):
             reject("no effector", "%s ignored: a %s has no effectors or drive",
                    type(msg).__name__.upper(), self.robot.platform_type, level=logging.INFO)
@@ -188,6 +195,8 @@ class Session:
         self.robot, self.robot_name = p.spec, p.name
         self.targets = {a.name: [0.0] * len(a.joints) for a in p.spec.actuators}
         self._actuators = {a.name.lower(): a for a in p.spec.actuators}
+        if p.spec.vehicle is not None:
+            self.vehicle = VehicleSession(self.key, p.spec)
         self.next_status = world.time + replies.SCAN_INTERVAL
         log.info("%s: spawned %s '%s' at %s", self.peer, p.spec.class_name, p.name,
                  ",".join(f"{v:g}" for v in p.location))
@@ -199,7 +208,9 @@ class Session:
         if key in self._replies:  # the answers never change: compute each once
             reply = self._replies[key]
         else:
-            if isinstance(msg, m.GetConf):
+            if self.vehicle is not None:
+                reply = self.vehicle.describe(msg, style)
+            elif isinstance(msg, m.GetConf):
                 reply = replies.conf_reply(self.robot, self.robot_name, msg.type, msg.name)
             else:
                 reply = replies.geo_reply(self.robot, self.robot_name, msg.type, msg.name, style)
@@ -249,6 +260,8 @@ class Session:
             return []
         self.next_status += replies.SCAN_INTERVAL
         t = world.time
+        if self.vehicle is not None:
+            return self.vehicle.status(t, world)
         spec = self.robot
         out: list[m.Message] = [m.Sta(t, spec.battery, spec.platform_type)]
         plat = world.platform_pose(self.key)

@@ -21,6 +21,7 @@ import yaml
 
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.spatial import Array, Vector, exp_so3, invert, rpy_to_matrix, transform
+from usar_arm.sim.vehicle import VehicleSpec, load_vehicle
 
 Vec3 = tuple[float, float, float]
 
@@ -117,6 +118,8 @@ class RobotSpec:
     battery: int
     items: tuple[ItemSpec, ...]
     actuators: tuple[ActuatorSpec, ...]
+    vehicle: VehicleSpec | None = None
+    """The chassis, wheels and sensors of a ground vehicle (None: a static platform)."""
 
     @property
     def short_name(self) -> str:
@@ -248,23 +251,28 @@ def load_robot(path: str | Path) -> RobotSpec:
                            _vec(it.get("direction", [0, 0, 0]), p, f"items[{i}].direction"))
                   for i, it in enumerate(data.get("items", [])))
     actuators = tuple(_load_actuator(a, p, f"actuators[{i}]")
-                      for i, a in enumerate(_req(data, "actuators", p, "robot")))
+                      for i, a in enumerate(data.get("actuators") or []))
+    if not actuators and "vehicle" not in data:
+        raise FileFormatError(p, "a robot needs actuators or a vehicle", field="robot.actuators")
     return RobotSpec(
         class_name=str(_req(data, "class_name", p, "robot")),
         platform_type=str(plat.get("type", "StaticPlatform")),
         steering_type=str(plat.get("steering_type", "None")),
         platform_mass=float(plat.get("mass", 0)),
         battery=int(plat.get("battery", 99999)),
-        items=items, actuators=actuators)
+        items=items, actuators=actuators,
+        vehicle=load_vehicle(data["vehicle"], p) if "vehicle" in data else None)
 
 
-def builtin_robots() -> dict[str, RobotSpec]:
-    """The robot classes shipped with the simulator, by full class name (``USARBot.KR60``)."""
+def builtin_robots(vehicles: bool = False) -> dict[str, RobotSpec]:
+    """The robot classes shipped with the simulator, by full class name (``USARBot.KR60``):
+    the arms, and with ``vehicles`` the ground vehicles too (``USARBot.P3AT``)."""
     out: dict[str, RobotSpec] = {}
     folder = resources.files("usar_arm.sim") / "robots"
     for entry in sorted(folder.iterdir(), key=lambda e: e.name):
         if entry.name.endswith(".yaml"):
             with resources.as_file(entry) as fp:
                 spec = load_robot(fp)
-            out[spec.class_name] = spec
+            if vehicles or spec.vehicle is None:
+                out[spec.class_name] = spec
     return out

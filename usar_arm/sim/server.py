@@ -99,11 +99,12 @@ class SimServer:
                  robots: dict[str, RobotSpec] | None = None,
                  world_spec: WorldSpec | None = None):
         self.options = options or SimOptions()
-        self.robots = robots if robots is not None else builtin_robots()
+        self.robots = robots if robots is not None else builtin_robots(vehicles=True)
         self.world_spec = world_spec or load_world()
         self.style: NumberStyle = STYLES[self.options.wire_precision]
         self.world = PhysicsWorld(timestep=1.0 / self.options.physics_hz,
-                                  gravity=self.options.gravity)
+                                  gravity=self.options.gravity,
+                                  scenery=self.world_spec.boxes, floor_z=self.world_spec.floor_z)
         self.max_connections = MAX_CONNECTIONS
         self._clients: dict[str, Connection] = {}
         """Session key -> the connection that owns the session (``connection.session``)."""

@@ -75,6 +75,22 @@ RAW_VECTOR = Kind("raw vector", lambda r, b: r.vector(b), lambda v, s: s.raw_vec
 """x,y,z printed as raw floats (INIT locations, rotations)."""
 FIXED_VECTOR = Kind("fixed vector", lambda r, b: r.vector(b), lambda v, s: s.fixed_vector(v))
 """x,y,z printed with UnitsConverter.FloatString (sensor poses: truncated)."""
+FIXED4 = Kind("fixed4", BlockReader.number, lambda v, s: s.fixed_at(v, 4))
+"""A FloatString number with UDK's default precision (scanner Resolution and FOV)."""
+SCALAR_VECTOR = Kind("scalar vector", lambda r, b: r.vector(b),
+                     lambda v, s: ",".join(s.scalar(c) for c in v))
+"""x,y,z of raw engine floats joined by commas (odometry Pose: ``xPos $ "," $ yPos ...``)."""
+
+
+def _read_ranges(r: BlockReader, b: RawBlock) -> tuple[float, ...]:
+    """A comma-separated list of finite numbers (a scan's ranges; empty for no rays)."""
+    if not b.value:
+        return ()
+    return tuple(r.number(RawBlock(b.key, part.strip(), b.pos)) for part in b.value.split(","))
+
+
+RANGES = Kind("ranges", _read_ranges, lambda v, s: ",".join(s.fixed_at(x, 2) for x in v))
+"""r1,r2,... printed with FloatString(r, 2) each (RangeScanner.uc)."""
 BOOL = Kind("bool", _read_bool, lambda v, s: str(v).lower())
 BATTERY = Kind("battery", _read_battery, lambda v, s: str(v))
 
@@ -177,6 +193,21 @@ SPECS: tuple[MessageSpec, ...] = (
         Field("Name", "name", example="GroundTruth"),
         Field("Location", "location", FIXED_VECTOR),
         Field("Orientation", "orientation", FIXED_VECTOR))),
+    MessageSpec("SEN", m.RangeScan, _fields(
+        Field("Time", "time", SCALAR), Field("Type", "type", example="RangeScanner"),
+        Field("Name", "name", example="lms200"),
+        Field("Resolution", "resolution", FIXED4, example="0.0174"),
+        Field("FOV", "fov", FIXED4, example="3.1415"),
+        Field("Range", "ranges", RANGES, example="1.25,1.30"))),
+    MessageSpec("SEN", m.Ins, _fields(
+        Field("Time", "time", SCALAR), Field("Type", "type", example="INS"),
+        Field("Name", "name", example="InsTest"),
+        Field("Location", "location", RAW_VECTOR, example="0.00,0.00,0.00"),
+        Field("Orientation", "orientation", RAW_VECTOR, example="0.00,0.00,0.00"))),
+    MessageSpec("SEN", m.Odometry, _fields(
+        Field("Time", "time", SCALAR), Field("Type", "type", example="Odometry"),
+        Field("Name", "name", example="Odometer"),
+        Field("Pose", "pose", SCALAR_VECTOR, example="0.0,0.0,0.0"))),
     MessageSpec("EFF", m.Eff, _fields(
         Field("Time", "time", SCALAR), Field("Type", "type", example="Gripper"),
         Field("Name", "name", example="gripper"))),
@@ -197,7 +228,19 @@ def _parse_conf(r: BlockReader) -> m.Message:
     return _BY_TYPE[kind].parse(r)
 
 
-_BY_HEAD: dict[str, Parse] = {"NFO": _parse_nfo, "CONF": _parse_conf}
+SEN_TYPES: dict[str, type] = {"rangescanner": m.RangeScan, "ins": m.Ins,
+                              "odometry": m.Odometry}
+"""SEN lines with their own message type, by ``Type`` (lower case); any other is a :class:`Sen`."""
+
+
+def _parse_sen(r: BlockReader) -> m.Message:
+    """A SEN line's message type follows its Type block."""
+    b = r.find("Type")
+    kind = SEN_TYPES.get(b.value.lower(), m.Sen) if b is not None else m.Sen
+    return _BY_TYPE[kind].parse(r)
+
+
+_BY_HEAD: dict[str, Parse] = {"NFO": _parse_nfo, "CONF": _parse_conf, "SEN": _parse_sen}
 for _spec in SPECS:
     _BY_HEAD.setdefault(_spec.head, _spec.parse)
 

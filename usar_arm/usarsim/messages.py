@@ -263,6 +263,56 @@ class Sen:
 
 
 @dataclass(frozen=True)
+class RangeScan:
+    """``SEN {Time t} {Type RangeScanner} {Name n} {Resolution r} {FOV f} {Range r1,r2,...}``.
+
+    A laser scan (RangeScanner.uc): ``resolution`` and ``fov`` in radians, ``ranges`` in metres
+    from the scanner's right (+FOV/2) to its left (-FOV/2). UDK prints Resolution and FOV with
+    FloatString (4 decimals) and each range with FloatString(r, 2), truncated.
+    """
+
+    name: str
+    resolution: float
+    fov: float
+    ranges: tuple[float, ...]
+    time: float | None = None
+    type: str = "RangeScanner"
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Ins:
+    """``SEN {Type INS} {Name n} {Location x,y,z} {Orientation r,p,y}`` (INS.uc; no Time in UDK).
+
+    The estimated pose of the platform in the world (m, z down; roll, pitch, yaw in [0, 2 pi)),
+    printed as raw engine vectors (2 decimals).
+    """
+
+    name: str
+    location: Vector3
+    orientation: Vector3
+    time: float | None = None
+    type: str = "INS"
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
+class Odometry:
+    """``SEN {Time t} {Type Odometry} {Name n} {Pose x,y,theta}`` (Odometry.uc).
+
+    The wheel odometry of a skid-steered vehicle: x, y (m) and heading theta (rad) integrated
+    from the front wheels' spin since the sensor started (or its last RESET), in the frame the
+    vehicle had then.
+    """
+
+    name: str
+    pose: Vector3
+    time: float | None = None
+    type: str = "Odometry"
+    extra: tuple[Block, ...] = ()
+
+
+@dataclass(frozen=True)
 class Eff:
     """``EFF {Time t} {Type T} {Name n} {On}|{Off}|{Status ..}``: effector status."""
 
@@ -285,5 +335,5 @@ class Unknown:
 
 Message = (
     GameInfo | StartPoses | GetStartPoses | Init | GetConf | GetGeo | Act | Set | Drive | Conf
-    | PlatformConf | Geo | Asta | Sta | Sen | Eff | Unknown
+    | PlatformConf | Geo | Asta | Sta | Sen | RangeScan | Ins | Odometry | Eff | Unknown
 )

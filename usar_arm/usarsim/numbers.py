@@ -105,6 +105,13 @@ class NumberStyle:
             return full_float(value)
         return udk_float_string(value, self.fixed_precision)
 
+    def fixed_at(self, value: float, precision: int) -> str:
+        """A FloatString(value, precision) number, for fields UDK prints with an explicit
+        precision (scanner ranges: 2; Resolution, FOV, vehicle CONF/GEO: the default 4)."""
+        if self.fixed_precision is None:
+            return full_float(value)
+        return udk_float_string(value, precision)
+
     def fixed_vector(self, values: Sequence[float]) -> str:
         """A vector of FloatString(p) numbers."""
         return join_vector(values, self.fixed)
