@@ -89,10 +89,13 @@ def test_ctrl_c_keeps_the_finished_chunks_writes_nothing_else_and_resume_finishe
         tmp_path: Path) -> None:
     out = tmp_path / "map"
 
+    # 0.08 m: about 100 chunks, some 4 s of work on two workers. At 0.12 m (32 chunks, 1.2 s
+    # after the first one was kept) a test process starved by the workers and another test
+    # sent its Ctrl-C after the job had ended (twice in fresh clones under make test).
     def command(folder: Path, *extra: str) -> list[str]:
         return [str(Path(sys.executable).parent / "usar-arm"), "reach", "--urdf", URDF,
-                "--resolution",
-                "0.12", "--orientations", "16", "--out", str(folder), "-q", *extra]
+                "--resolution", "0.08", "--orientations", "16", "--out", str(folder), "-q",
+                *extra]
 
     argv = command(out, "--workers", "2")
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
