@@ -21,12 +21,14 @@ NOMINAL = KinematicModel(KR60)
 BASE = transform_from_xyz_rpy([0.002, -0.001, 0.0015], [0.003, -0.002, 0.004])
 
 
-def _files(tmp_path: Path, data: list[Measurement]) -> tuple[Path, Path]:
+def _files(tmp_path: Path, data: list[Measurement], measured_in: str = "tracker"
+           ) -> tuple[Path, Path]:
     urdf = tmp_path / "KR60.urdf"
     urdf.write_text(KR60)
     path = tmp_path / "tracker.csv"
     write_measurements(path, MeasurementSet(tuple(data), "tool0",
-                                            joint_names=NOMINAL.joint_names), "mm", "deg")
+                                            joint_names=NOMINAL.joint_names,
+                                            measured_in=measured_in), "mm", "deg")
     return urdf, path
 
 
@@ -104,16 +106,6 @@ def test_readings_where_a_joint_never_moves_warn_which_parameters_they_cannot_id
     assert "only validated over the configurations sampled" in captured.err
 
 
-def _in_base_link(tmp_path: Path, data: list[Measurement]) -> tuple[Path, Path]:
-    urdf = tmp_path / "KR60.urdf"
-    urdf.write_text(KR60)
-    path = tmp_path / "tracker.csv"
-    write_measurements(path, MeasurementSet(tuple(data), "tool0",
-                                            joint_names=NOMINAL.joint_names,
-                                            measured_in="base_link"), "mm", "deg")
-    return urdf, path
-
-
 def test_readings_in_base_link_give_a_urdf_that_reproduces_them_as_written(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Every joint origin off by up to 1 mm / 3 mrad, tool0 measured in base_link: the base
@@ -122,7 +114,7 @@ def test_readings_in_base_link_give_a_urdf_that_reproduces_them_as_written(
     truth = perturbed(KR60, 21, metres=1e-3, radians=3e-3)
     data = readings(truth, "tool0", np.eye(4), random_q(NOMINAL, 50, 5), 6, sigma_m=2e-5,
                     sigma_rad=2e-5)
-    urdf, path = _in_base_link(tmp_path, data)
+    urdf, path = _files(tmp_path, data, "base_link")
     assert "# measured_in: base_link" in path.read_text()
     out = tmp_path / "out"
     assert main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
@@ -161,7 +153,7 @@ def test_readings_in_the_trackers_frame_write_the_registration_beside_the_urdf(
 def test_a_command_line_frame_that_contradicts_the_file_writes_nothing(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     data = readings(KR60, "tool0", np.eye(4), random_q(NOMINAL, 30, 11), 12)
-    urdf, path = _in_base_link(tmp_path, data)
+    urdf, path = _files(tmp_path, data, "base_link")
     code = main(["calibrate", "--measurements", str(path), "--urdf", str(urdf), "--out-dir",
                  str(tmp_path / "out"), "--measured-in", "tracker"])
     assert code == EXIT_INVALID_INPUT
