@@ -61,9 +61,10 @@ def test_every_stage_writes_its_results_with_machine_versions_and_raw_figures(
         for solver, s in case["solvers"].items():
             if "skipped" in s:  # a missing peer venv is reported, never silent
                 assert s["kind"] == "peer" and s["skipped"].strip(), (name, solver)
-                # make test-slow creates every peer's venv first: a peer whose venv is there
-                # and still skipped is a broken comparison, not a missing one
-                assert not (VENVS / _venv_of(solver)).is_dir(), \
+                # make test-slow creates every peer's venv first: a peer said to have no venv
+                # while its venv is there is a broken comparison, not a missing one (a skip by
+                # design, such as Tesseract on the KR60's problems only, says so instead)
+                assert not ("no venv" in s["skipped"] and (VENVS / _venv_of(solver)).is_dir()), \
                     f"{name}/{solver} skipped though its venv exists: {s['skipped']}"
                 continue
             lengths = {len(v) for v in s["raw"].values()}
