@@ -20,7 +20,6 @@ from usar_arm.cli.calibration_text import (
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.fileio import write_atomic
-from usar_arm.core.precision import with_precision
 from usar_arm.description.embedded import describe
 from usar_arm.description.pipeline import DescribeOptions, Description, write_description
 
@@ -112,8 +111,7 @@ def calibrate_robot(args: argparse.Namespace) -> int:
     picture = residual_picture(result, Path(args.out) / f"{desc.chain.name}.calibration.png")
     if args.json:
         print_json({"robot": desc.chain.name, "files": {k: str(p) for k, p in paths.items()},
-                    "picture": str(picture),
-                    "calibration": with_precision(calibrated.discovery["calibration"])})
+                    "picture": str(picture), "calibration": calibrated.discovery["calibration"]})
         return EXIT_OK
     for kind, path in paths.items():
         out(f"wrote {path}  ({kind})")

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm.core.model import JointType, KinematicChain
+from usar_arm.core.precision import with_precision
 from usar_arm.core.spatial import FLIP_X, Array, invert, transform
 from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.sim.robot_spec import ActuatorSpec, builtin_robots
@@ -30,14 +31,15 @@ def accuracy_report(chain: KinematicChain, act: ActuatorSpec, frame: str, sample
     err = _angles(axes, truth[:, :, :3, 2] @ flip.T)
     flange = float(np.max(np.linalg.norm(flange_pose[:, :3, 3] - tip[:, :3, 3] @ flip.T,
                                          axis=1)))
-    # 12 significant digits: the last bits of these maxima depend on which SIMD kernel numpy
-    # picks for the matrix products, and the report is a checked-in golden file.
-    return {"reference": "the embedded simulator's own model (ground truth)",
-            "configurations": samples, "seed": seed,
-            "max_joint_origin_error_m": _digits(origin),
-            "max_joint_axis_error_rad": _digits(float(err.max())),
-            "max_joint_axis_error_at_zero_pose_rad": _digits(float(err[0].max())),
-            "max_flange_error_m": _digits(flange)}
+    # With the precision discovery.json writes (the last bits of these maxima depend on which
+    # SIMD kernel numpy picks for the matrix products), so the report in memory, the one
+    # --json prints and the checked-in golden file agree.
+    return with_precision({"reference": "the embedded simulator's own model (ground truth)",
+                           "configurations": samples, "seed": seed,
+                           "max_joint_origin_error_m": origin,
+                           "max_joint_axis_error_rad": float(err.max()),
+                           "max_joint_axis_error_at_zero_pose_rad": float(err[0].max()),
+                           "max_flange_error_m": flange})
 
 
 def _angles(a: Array, b: Array) -> Array:
@@ -100,11 +102,6 @@ def _chain_frames(chain: KinematicChain, q: Array) -> tuple[Array, Array, Array]
             frame = frame @ _turn(axis, q[:, k], jt.type is JointType.PRISMATIC)
         poses[jt.child] = frame
     return frames, axes, poses[chain.frames.get("flange", "flange")]
-
-
-def _digits(value: float) -> float:
-    """``value`` rounded to 12 significant digits."""
-    return float(f"{value:.12g}")
 
 
 def urdf_accuracy(urdf: str, options: DescribeOptions, samples: int = 1000) -> dict[str, Any]:
