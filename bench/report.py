@@ -34,7 +34,8 @@ STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "discovery": "Discovery + URDF", "execution": "Execution (embedded simulator)",
                 "calibrate": "Calibration on the wire",
                 "workspace": "Workspace: reachability maps and base placement",
-                "planners": "OMPL planners for the MoveIt package"}
+                "planners": "OMPL planners for the MoveIt package",
+                "ros": "ROS 2 node (usar-arm ros)"}
 
 
 # ------------------------------------------------------------------------------ sections
@@ -258,10 +259,46 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
             "). Its cycle through the targets on the embedded simulator (as-learnt KR60):", "",
             *table(["move", "plan ms", "motion s", "true mm", "true mrad"], cycle), ""]
 
+def ros_section(doc: dict[str, Any]) -> list[str]:
+    """The live ROS 2 node as its own rclpy client in another process saw it."""
+    if not doc["cases"]:
+        return [f"Skipped: {doc['settings'].get('skipped', 'no figures')}.", ""]
+    r = doc["cases"]["KR60"]
+    js, goals, refused, node = r["joint_states"], r["goals"], r["refused_goals"], r["node"]
+    lat, acc = js["latency_ms"], goals["accept_ms"]
+    over = goals["node_over_time"]
+    rows = [
+        ["/joint_states rate", f"{js['rate_hz']:.2f} Hz over {js['seconds']:.0f} s, "
+                               f"{js['dropped']} missing, longest gap {js['max_gap_s']:.3f} s"],
+        ["ASTA arrival -> subscriber", f"p50 {lat['p50']:.2f} ms, p99 {lat['p99']:.2f} ms, "
+                                       f"max {lat['max']:.1f} ms"],
+        ["tool0 from /tf vs FK", f"{r['tf']['tool0_max_error_m']:.1e} m, "
+                                 f"{r['tf']['tool0_max_rotation_error']:.1e} "
+                                 f"({r['tf']['messages_checked']} messages)"],
+        ["goal accepted", f"{goals['goals']} goals: p50 {acc['p50']:.1f} ms, "
+                          f"p99 {acc['p99']:.1f} ms; error codes {goals['error_codes']}"],
+        ["refused goal answered", f"p50 {refused['refused_result_ms']['p50']:.1f} ms, "
+                                  f"p99 {refused['refused_result_ms']['p99']:.1f} ms"],
+        ["node CPU idle / executing", f"{node['cpu_idle_fraction_of_a_core']:.1%} / "
+                                      f"{node['cpu_executing_fraction_of_a_core']:.1%} of a "
+                                      "core (the embedded simulator included)"],
+        ["node memory, threads", " -> ".join(f"{s['rss_mb']:.1f} MB/{s['threads']:.0f}"
+                                             for s in (over[0], over[min(1, len(over) - 1)],
+                                                       over[-1]))
+         + f" (start, after {over[min(1, len(over) - 1)]['t_s']:.0f} s, "
+           f"after {over[-1]['t_s']:.0f} s of goals)"],
+    ]
+    return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
+            "in another process with its own Pinocchio FK, on a private domain on localhost; "
+            f"load average at its end {r['load_average_1min_at_end']:.1f} on "
+            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), ""]
+
+
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
-            "workspace": workspace_section, "planners": planners_section}
+            "workspace": workspace_section, "planners": planners_section,
+            "ros": ros_section}
 
 
 def _load(doc: dict[str, Any]) -> str:

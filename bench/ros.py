@@ -1,265 +1,104 @@
-"""The ROS 2 stage: `usar-arm ros` (embedded KR60) measured from another process by its own
-rclpy client, on a private ROS domain on localhost.
+"""The ROS 2 stage: the live node (``usar-arm ros``, embedded KR60) measured by
+``bench/ros_probe.py``, an rclpy client of its own in another process.
 
-    python bench/ros.py [--seconds 60] [--json bench/results/ros.json]
-
-Measures:
-
-* /joint_states: messages per second and gaps (a gap above 1.8 ASTA periods is a dropped
-  line); latency from the ASTA line's arrival in the node (the message's stamp) to this
-  subscriber (p50, p99, max), both read on the machine's system clock;
-* /tf: tool0 composed from tf_static and each tf message against Pinocchio's FK of the joint
-  state with the same stamp (this instrument's own FK: it shares no code with the node's tf);
-* FollowJointTrajectory: time from sending a goal to its acceptance, and to the error code
-  of a refused goal (unknown joint), over many goals;
-* the node's CPU (its /proc times) at idle and while executing goals every 2 s, and its
-  resident memory and thread count every 30 s of that (``--goal-seconds 600``: the
-  10-minute run).
-
-Needs the ros extra and its message build (usar-arm ros --setup).
+The probe runs in a subprocess of the interpreter that runs the benchmark (the test venv, where
+the ``ros`` extra and its message build live), so that ``bench/run.py`` itself never imports
+rclpy. Quick mode watches /joint_states for 10 s and sends goals for 20 s; the full run watches
+60 s and sends goals every 2 s for 10 minutes (the memory and thread growth target).
+Without the ``ros`` extra or its message build the stage is reported as skipped, with the
+reason the probe gave.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+import common
+from common import Context
 
-from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.ros.build import ensure_importable
-
-ensure_importable()
-
-import rclpy  # noqa: E402
-from control_msgs.action import FollowJointTrajectory  # noqa: E402
-from rclpy.action import ActionClient  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
-from std_msgs.msg import String  # noqa: E402
-from tf2_msgs.msg import TFMessage  # noqa: E402
-from trajectory_msgs.msg import JointTrajectoryPoint  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
-ACTION = "KR60Arm_controller/follow_joint_trajectory"
-TICKS = os.sysconf("SC_CLK_TCK")
+PROBE = Path(__file__).resolve().with_name("ros_probe.py")
+WINDOWS = {"quick": (10.0, 20.0), "full": (60.0, 600.0)}
+"""(joint_states window, goal period) in seconds per mode."""
+DOMAIN = 78
+"""ROS_DOMAIN_ID of the benchmark's node and probe (the tests lease others)."""
 
 
-def _proc(pid: int) -> dict[str, float]:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    status = Path(f"/proc/{pid}/status").read_text()
-    rss = next(int(line.split()[1]) for line in status.splitlines() if line.startswith("VmRSS"))
-    return {"cpu_s": (int(fields[11]) + int(fields[12])) / TICKS, "rss_mb": rss / 1024,
-            "threads": int(fields[17])}
-
-
-def _matrix(t: Any) -> np.ndarray:
-    tr, q = t.transform.translation, t.transform.rotation
-    x, y, z, w = q.x, q.y, q.z, q.w
-    out = np.eye(4)
-    out[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                   [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                   [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    out[:3, 3] = (tr.x, tr.y, tr.z)
-    return out
-
-
-class Probe:
-    """The client: records every message it receives with its receipt time."""
-
-    def __init__(self) -> None:
-        self.node = rclpy.create_node("usar_arm_bench")
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.urdf = ""
-        self.static: list[Any] = []
-        self.states: list[tuple[float, Any]] = []
-        self.tf: list[Any] = []
-        self.node.create_subscription(String, "robot_description",
-                                      lambda m: setattr(self, "urdf", m.data), latched)
-        self.node.create_subscription(TFMessage, "tf_static", self.static.append, latched)
-        self.node.create_subscription(JointState, "joint_states",
-                                      lambda m: self.states.append((time.time(), m)), 1000)
-        self.node.create_subscription(TFMessage, "tf", self.tf.append, 1000)
-        self.action = ActionClient(self.node, FollowJointTrajectory, ACTION)
-
-    def spin(self, seconds: float, until: Any = None) -> None:
-        end = time.monotonic() + seconds
-        while time.monotonic() < end and not (until and until()):
-            rclpy.spin_once(self.node, timeout_sec=0.01)
-
-    def wait(self, future: Any, timeout: float) -> Any:
-        self.spin(timeout, future.done)
-        if not future.done():
-            raise TimeoutError(f"no answer within {timeout} s")
-        return future.result()
-
-
-def _goal(names: list[str], q: np.ndarray, seconds: float) -> FollowJointTrajectory.Goal:
-    goal = FollowJointTrajectory.Goal()
-    goal.trajectory.joint_names = names
-    point = JointTrajectoryPoint(positions=q.tolist())
-    point.time_from_start.sec = int(seconds)
-    point.time_from_start.nanosec = int((seconds % 1) * 1e9)
-    goal.trajectory.points.append(point)
-    return goal
-
-
-def _goals(probe: Probe, names: list[str], seconds: float, refused: bool) -> dict[str, Any]:
-    """Goals every 2 s (small moves back and forth), or refused ones; latencies in ms."""
-    accept, refuse, codes, errors = [], [], [], []
-    end = time.monotonic() + seconds
-    home = np.array(probe.states[-1][1].position)
-    away = home + np.array([0.2, -0.1, 0.1, 0.2, 0.2, 0.2])
-    k = 0
-    while time.monotonic() < end:
-        q = np.array(probe.states[-1][1].position)
-        if refused:
-            goal = _goal([*names[:5], "joint_x"], q, 1.0)
-        else:  # back and forth between two fixed configurations
-            goal = _goal(names, away if k % 2 == 0 else home, 1.5)
-            k += 1
-        begin = time.perf_counter()
-        handle = probe.wait(probe.action.send_goal_async(goal), 10)
-        accept.append((time.perf_counter() - begin) * 1000)
-        result = probe.wait(handle.get_result_async(), 30)
-        if refused:
-            refuse.append((time.perf_counter() - begin) * 1000)
-        codes.append(result.result.error_code)
-        if result.result.error_code != 0 and not refused and len(errors) < 5:
-            errors.append(result.result.error_string)
-        probe.spin(max(0.0, 2.0 - (time.perf_counter() - begin)) if not refused else 0.05)
-    out = {"goals": len(accept), "accept_ms": _stats(accept), "latencies": accept,
-           "error_codes": {str(c): codes.count(c) for c in sorted(set(codes))}, "errors": errors}
-    if refused:
-        out["refused_result_ms"] = _stats(refuse)
-    return out
-
-
-def _stats(values: list[float]) -> dict[str, float]:
-    a = np.asarray(values, float)
-    return {"n": len(a), "p50": float(np.percentile(a, 50)), "p99": float(np.percentile(a, 99)),
-            "max": float(a.max())} if len(a) else {"n": 0}
-
-
-def _tf_error(probe: Probe, model: KinematicModel) -> dict[str, Any]:
-    static = {t.child_frame_id: (t.header.frame_id, _matrix(t))
-              for m in probe.static for t in m.transforms}
-    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for _, m in probe.states}
-    worst_m = worst_rad = 0.0
-    checked = 0
-    for msg in probe.tf:
-        tree = dict(static)
-        tree.update({t.child_frame_id: (t.header.frame_id, _matrix(t)) for t in msg.transforms})
-        state = states.get((msg.transforms[0].header.stamp.sec,
-                            msg.transforms[0].header.stamp.nanosec))
-        if state is None or "tool0" not in tree or "link_6" not in tree:
-            continue
-        pose, frame = np.eye(4), "tool0"
-        while frame != "base_link":
-            parent, matrix = tree[frame]
-            pose, frame = matrix @ pose, parent
-        fk = model.frame_pose(np.array(state.position), "tool0")
-        worst_m = max(worst_m, float(np.max(np.abs(pose[:3, 3] - fk[:3, 3]))))
-        worst_rad = max(worst_rad, float(np.max(np.abs(pose[:3, :3] - fk[:3, :3]))))
-        checked += 1
-    return {"messages_checked": checked, "tool0_max_error_m": worst_m,
-            "tool0_max_rotation_error": worst_rad}
-
-
-def _joint_states(records: list[tuple[float, Any]]) -> dict[str, Any]:
-    stamps = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for _, m in records])
-    received = np.array([t for t, _ in records])
-    gaps = np.diff(stamps)
-    period = float(np.median(gaps))
-    seconds = float(stamps[-1] - stamps[0])
-    return {"messages": len(records), "seconds": seconds,
-            "rate_hz": (len(records) - 1) / seconds,
-            # the ASTA lines the window should hold at the stream's period, less those received
-            # (a late line followed by an early one is not a drop)
-            "dropped": max(0, round(seconds / period) + 1 - len(records)),
-            "late_gaps_over_1.8_periods": int(np.sum(gaps > 1.8 * period)),
-            "max_gap_s": float(gaps.max()),
-            "latency_ms": _stats(((received - stamps) * 1000).tolist())}
-
-
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--seconds", type=float, default=60.0, help="joint_states window (s)")
-    ap.add_argument("--json", type=Path, default=None, help="write the results here")
-    ap.add_argument("--goal-seconds", type=float, default=30.0,
-                    help="how long goals are sent every 2 s (600: the 10-minute run)")
-    ap.add_argument("--domain", type=int, default=77, help="ROS_DOMAIN_ID (default 77)")
-    a = ap.parse_args(argv)
-    os.environ["ROS_DOMAIN_ID"] = str(a.domain)
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    node = subprocess.Popen([sys.executable, "-m", "usar_arm", "ros", "-q"], cwd=ROOT)
-    rclpy.init()
-    probe = Probe()
+def _probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
+    seconds, goal_seconds = WINDOWS[ctx.mode]
+    out = ctx.work / "ros_probe.json"
+    budget = 240 + seconds + goal_seconds * 1.5
     try:
-        probe.spin(180, lambda: bool(probe.urdf and probe.static and probe.states))
-        model = KinematicModel(probe.urdf)
-        names = list(probe.states[-1][1].name)
-        start = _proc(node.pid)
-        probe.states.clear()
-        probe.tf.clear()
-        before = _proc(node.pid)["cpu_s"]
-        probe.spin(a.seconds)
-        idle_cpu = (_proc(node.pid)["cpu_s"] - before) / a.seconds
-        streams = _joint_states(probe.states)
-        tf = _tf_error(probe, model)
-        before = _proc(node.pid)["cpu_s"]
-        t0 = time.perf_counter()
-        chunks, samples = [], [{"t_s": 0.0, **_proc(node.pid)}]
-        while time.perf_counter() - t0 < a.goal_seconds - 1:  # in 30 s chunks
-            chunks.append(_goals(probe, names, min(30.0, a.goal_seconds), refused=False))
-            samples.append({"t_s": time.perf_counter() - t0, **_proc(node.pid)})
-        busy_cpu = (_proc(node.pid)["cpu_s"] - before) / (time.perf_counter() - t0)
-        moving = {"goals": sum(c["goals"] for c in chunks),
-                  "accept_ms": _stats([v for c in chunks for v in c["latencies"]]),
-                  "error_codes": {k: sum(c["error_codes"].get(k, 0) for c in chunks)
-                                  for k in sorted({k for c in chunks for k in c["error_codes"]})},
-                  "errors": [e for c in chunks for e in c["errors"]][:5],
-                  "node_over_time": [{k: round(v, 3) for k, v in x.items() if k != "cpu_s"}
-                                     for x in samples]}
-        refused = _goals(probe, names, 5.0, refused=True)
-        refused.pop("latencies")
-        refused.pop("errors")
-        end = _proc(node.pid)
-        doc = {"stage": "ros", "joint_states": streams, "tf": tf, "goals": moving,
-               "refused_goals": refused,
-               "node": {"cpu_idle_fraction_of_a_core": idle_cpu,
-                        "cpu_executing_fraction_of_a_core": busy_cpu,
-                        "rss_mb_start": start["rss_mb"], "rss_mb_end": end["rss_mb"],
-                        "threads_start": start["threads"], "threads_end": end["threads"]},
-               "targets": {"joint_states_latency_p99_ms<=2": streams["latency_ms"]["p99"] <= 2,
-                           "joint_states_none_dropped": streams["dropped"] == 0,
-                           "tf_equals_fk_1e-9": tf["tool0_max_error_m"] <= 1e-9
-                           and tf["tool0_max_rotation_error"] <= 1e-9,
-                           "goal_accept_p99_ms<=20": moving["accept_ms"]["p99"] <= 20
-                           and refused["accept_ms"]["p99"] <= 20},
-               "load_average_1min_at_end": os.getloadavg()[0], "cpus": os.cpu_count(),
-               "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-    finally:
-        probe.node.destroy_node()
-        rclpy.shutdown()
-        node.send_signal(signal.SIGINT)
-        code = node.wait(60)
-    doc["node"]["exit_code"] = code
-    text = json.dumps(doc, indent=1)
-    print(text)
-    if a.json:
-        a.json.parent.mkdir(parents=True, exist_ok=True)
-        a.json.write_text(text + "\n")
-    return 0
+        done = subprocess.run(
+            [sys.executable, str(PROBE), "--seconds", str(seconds), "--goal-seconds",
+             str(goal_seconds), "--domain", str(DOMAIN), "--json", str(out)],
+            capture_output=True, text=True, timeout=budget, env={**os.environ})
+    except subprocess.TimeoutExpired:
+        return None, f"the probe did not finish within {budget:.0f} s"
+    if done.returncode != 0 or not out.is_file():
+        tail = (done.stderr.strip().splitlines() or ["(no output)"])[-1]
+        return None, f"probe exit code {done.returncode}: {tail}"
+    return common.read_json(out), ""
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def _targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    js, tf, goals, refused = (doc["joint_states"], doc["tf"], doc["goals"],
+                              doc["refused_goals"])
+    t = common.target
+    out = [
+        t("/joint_states: ASTA arrival -> subscriber in another process, p99",
+          js["latency_ms"].get("p99"), 2.0, "<=", "ms"),
+        t(f"/joint_states: lines missing over {js['seconds']:.0f} s", js["dropped"], 0, "<=",
+          "messages"),
+        t("/tf: tool0 composed vs FK of the joint state (position)",
+          tf["tool0_max_error_m"], 1e-9, "<=", "m", "the probe's own Pinocchio FK"),
+        t("/tf: tool0 composed vs FK of the joint state (rotation matrix entries)",
+          tf["tool0_max_rotation_error"], 1e-9, "<=", "(unit-less)"),
+        t("FollowJointTrajectory: goal accepted, p99", goals["accept_ms"].get("p99"), 20.0,
+          "<=", "ms", f"{goals['goals']} goals, every 2 s"),
+        t("FollowJointTrajectory: goals ending SUCCESSFUL",
+          goals["error_codes"].get("0", 0) / max(goals["goals"], 1), 1.0, ">=", "fraction",
+          "path and goal tolerances as the goals give them"),
+        t("FollowJointTrajectory: refused goal (unknown joint) answered, p99",
+          refused["refused_result_ms"].get("p99"), 20.0, "<=", "ms"),
+    ]
+    if len(goals["node_over_time"]) < 3:  # quick mode: too short to judge growth
+        return out
+    return [
+        *out,
+        t("Node memory growth while executing goals, after the first 30 s",
+          _growth(goals["node_over_time"], "rss_mb"), 2.0, "<=", "MB",
+          f"{goal_seconds_of(goals):.0f} s of goals; the first goals load the executor"),
+        t("Node thread growth while executing goals, after the first 30 s",
+          _growth(goals["node_over_time"], "threads"), 0, "<=", "threads"),
+    ]
+
+
+def goal_seconds_of(goals: dict[str, Any]) -> float:
+    """How long goals were sent (s): the last sample's time."""
+    return float(goals["node_over_time"][-1]["t_s"])
+
+
+def _growth(samples: list[dict[str, float]], key: str) -> float | None:
+    """Growth of ``key`` from the sample after the first 30 s chunk to the last (None with
+    fewer than three samples: too short a run to tell)."""
+    return None if len(samples) < 3 else samples[-1][key] - samples[1][key]
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Run the probe and return the stage document (cases hold its figures as measured)."""
+    started = time.perf_counter()
+    seconds, goal_seconds = WINDOWS[ctx.mode]
+    settings = {"joint_states_window_s": seconds, "goal_period_s": goal_seconds,
+                "ros_domain_id": DOMAIN, "probe": "bench/ros_probe.py"}
+    doc, reason = _probe(ctx)
+    if doc is None:
+        common.log(f"ros stage skipped: {reason}")
+        return common.stage_document("ros", ctx.mode, {**settings, "skipped": reason}, {}, [],
+                                     started)
+    return common.stage_document("ros", ctx.mode, settings, {"KR60": doc}, _targets(doc),
+                                 started)

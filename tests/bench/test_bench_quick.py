@@ -84,3 +84,19 @@ def test_the_report_has_the_targets_table_and_every_plot_it_shows(
     assert shown, "no plot in the report"
     for name in shown:
         assert (folder / name).read_bytes()[:8] == PNG, name
+
+
+@pytest.mark.slow
+def test_the_ros_stage_measures_the_live_node_from_another_process(
+        quick_run: tuple[Path, str]) -> None:
+    doc = json.loads((quick_run[0] / "ros.json").read_text())
+    assert doc["stage"] == "ros" and doc["mode"] == "quick"
+    assert "skipped" not in doc["settings"], doc["settings"]  # make test installs the extra
+    node = doc["cases"]["KR60"]
+    assert node["joint_states"]["messages"] > 50 and node["tf"]["messages_checked"] > 0
+    assert node["goals"]["goals"] >= 5
+    for t in doc["targets"]:
+        measured, bound = t["measured"], t["threshold"]
+        holds = measured <= bound if t["better"] == "<=" else measured >= bound
+        assert t["pass"] == holds, t
+    assert "## ROS 2 node (usar-arm ros)" in (quick_run[0] / "README.md").read_text()

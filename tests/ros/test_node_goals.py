@@ -68,7 +68,7 @@ def test_a_goal_is_reached_with_feedback(client: Client) -> None:
     status, result = client.result(handle)
     assert (status, result.error_code) == (GoalStatus.STATUS_SUCCEEDED, SUCCESSFUL), \
         result.error_string
-    # A sanity bound (the 20 ms target is bench/ros.py's, on an idle machine).
+    # A sanity bound (the 20 ms target is the ros benchmark stage's, on an idle machine).
     assert accepted_after < 1.0, f"accepted after {accepted_after:.3f} s"
     assert np.max(np.abs(joints(client) - q1)) < 0.002
     # One per ASTA: 25 in 2.5 s at 10 Hz, fewer when a loaded simulator runs slow.
