@@ -1,0 +1,178 @@
+"""The plain arrays the compiled broadphase (:mod:`.bounds`) takes, prepared once per collision
+world: the chain as joints (axis, point, revolute), each link cylinder's row (radius, half-length,
+inner balls, bounding sphere, moving joints), each obstacle's row, the checked pairs and the
+obstacles' sphere tree (:mod:`.scene_tree`); and the compiled forward kinematics of the link
+cylinders over those arrays (product of exponentials, space frame, as :mod:`.poe`). Metres,
+radians.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from usar_arm.core.spatial import Array
+from usar_arm.planning import scene_tree
+from usar_arm.planning.jit import kernel
+
+IndexArray = np.ndarray[Any, np.dtype[np.int64]]
+"""Integer arrays (pair indices, kinds)."""
+
+BOX, SPHERE, CAPSULE, HULL = 0, 1, 2, 3
+"""Obstacle kinds: an oriented box (half extents), a sphere (radius), a cylinder (radius,
+half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding box (it can
+clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
+
+RADIUS, HALF, RHO, REACH, BOUND, MOVED = range(6)
+LINK_WIDTH = 6
+"""Columns of the per-link array: the cylinder's radius and half-length (m), the radius of the
+balls inside it and how far their centres reach from its centre along the axis, the radius of a
+sphere around it, and how many joints move it."""
+
+O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
+    0, 3, 6, 9, 12, 15, 16, 17)
+OBSTACLE_WIDTH = 20
+"""Columns of the per-obstacle array: size (3), the enclosing segment's start and direction,
+the inner balls' segment's start and direction, their radius, the radius of a sphere about the
+centre that contains the obstacle, and the centre (3)."""
+
+
+@kernel
+def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
+    """The per-link array (L, LINK_WIDTH) of cylinders of ``radius``/``half`` (m)."""
+    out = np.empty((radius.shape[0], LINK_WIDTH))
+    for k in range(radius.shape[0]):
+        rho = min(radius[k], half[k])
+        out[k, RADIUS], out[k, HALF], out[k, RHO] = radius[k], half[k], rho
+        out[k, REACH] = half[k] - rho
+        out[k, BOUND] = math.sqrt(radius[k] * radius[k] + half[k] * half[k])
+        out[k, MOVED] = moved_by[k]
+    return out
+
+
+@kernel
+def prepare_obstacles(kind: IndexArray, pose: Array, size: Array) -> tuple[Array, Array]:
+    """The per-obstacle array (S, OBSTACLE_WIDTH) and the obstacles' axes as rows (S, 3, 3)
+    of obstacles of ``kind`` at ``pose`` (S, 3, 4) with ``size`` (S, 3) (see :func:`classify`).
+    """
+    n_obj = kind.shape[0]
+    out = np.zeros((n_obj, OBSTACLE_WIDTH))
+    axes = np.empty((n_obj, 3, 3))
+    for s in range(n_obj):
+        for a in range(3):
+            out[s, O_SIZE + a] = size[s, a]
+        if kind[s] == CAPSULE:
+            out[s, O_RHO] = min(size[s, 0], size[s, 1])
+            out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2)
+        elif kind[s] == SPHERE:
+            out[s, O_RHO] = size[s, 0]
+            out[s, O_BOUND] = size[s, 0]
+        else:
+            out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2 + size[s, 2] ** 2)
+        for a in range(3):
+            for b in range(3):
+                axes[s, a, b] = pose[s, b, a]
+            centre, z = pose[s, a, 3], pose[s, a, 2]
+            out[s, O_CENTRE + a] = centre
+            out[s, O_START + a] = centre
+            out[s, O_IN_START + a] = centre
+            if kind[s] == CAPSULE:
+                out[s, O_START + a] = centre - z * size[s, 1]
+                out[s, O_DIR + a] = 2.0 * z * size[s, 1]
+                out[s, O_IN_START + a] = centre - z * (size[s, 1] - out[s, O_RHO])
+                out[s, O_IN_DIR + a] = 2.0 * z * (size[s, 1] - out[s, O_RHO])
+    return out, axes
+
+
+@kernel
+def poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array,
+                out: Array) -> None:
+    """:func:`link_poses` of one configuration ``q`` (n,) into ``out`` (L, 3, 4), with
+    ``frames`` (n + 1, 3, 4) as scratch: no allocation, for the hot loops."""
+    n = q.shape[0]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+    t0 = t1 = t2 = 0.0
+    frames[0] = 0.0
+    frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
+    for i in range(n):
+        w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
+        if joints[i, 6] > 0.5:
+            a = q[i]
+            sn, co = math.sin(a), math.cos(a)
+            v = 1.0 - co
+            e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
+            e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
+            e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
+            p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
+            # t += R p - (R E) p = R (p - E p)
+            d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
+            d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
+            d2 = p2 - (e20 * p0 + e21 * p1 + e22 * p2)
+            t0 += r00 * d0 + r01 * d1 + r02 * d2
+            t1 += r10 * d0 + r11 * d1 + r12 * d2
+            t2 += r20 * d0 + r21 * d1 + r22 * d2
+            r00, r01, r02 = (r00 * e00 + r01 * e10 + r02 * e20, r00 * e01 + r01 * e11
+                             + r02 * e21, r00 * e02 + r01 * e12 + r02 * e22)
+            r10, r11, r12 = (r10 * e00 + r11 * e10 + r12 * e20, r10 * e01 + r11 * e11
+                             + r12 * e21, r10 * e02 + r11 * e12 + r12 * e22)
+            r20, r21, r22 = (r20 * e00 + r21 * e10 + r22 * e20, r20 * e01 + r21 * e11
+                             + r22 * e21, r20 * e02 + r21 * e12 + r22 * e22)
+        else:
+            x = q[i]
+            t0 += (r00 * w0 + r01 * w1 + r02 * w2) * x
+            t1 += (r10 * w0 + r11 * w1 + r12 * w2) * x
+            t2 += (r20 * w0 + r21 * w1 + r22 * w2) * x
+        f = frames[i + 1]
+        f[0, 0], f[0, 1], f[0, 2], f[0, 3] = r00, r01, r02, t0
+        f[1, 0], f[1, 1], f[1, 2], f[1, 3] = r10, r11, r12, t1
+        f[2, 0], f[2, 1], f[2, 2], f[2, 3] = r20, r21, r22, t2
+    for k in range(zero.shape[0]):
+        f = frames[int(links[k, MOVED])]
+        for row in range(3):
+            for col in range(4):
+                out[k, row, col] = (f[row, 0] * zero[k, 0, col] + f[row, 1] * zero[k, 1, col]
+                                    + f[row, 2] * zero[k, 2, col])
+            out[k, row, 3] += f[row, 3]
+
+
+@kernel
+def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
+    """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
+
+    ``joints`` (n, 7): each joint's axis and a point on it at the zero configuration, then 1
+    for revolute or 0 for prismatic; ``zero`` (L, 4, 4) each body's pose at zero; ``links``
+    (L, LINK_WIDTH) with how many joints (a prefix of the chain) move each body at MOVED.
+    """
+    n_cfg, n = qs.shape
+    out = np.empty((n_cfg, zero.shape[0], 3, 4))
+    frames = np.empty((n + 1, 3, 4))  # rotation | position after the first i joints
+    for c in range(n_cfg):
+        poses_into(qs[c], joints, zero, links, frames, out[c])
+    return out
+
+
+Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array, Array,
+               IndexArray, IndexArray, IndexArray]
+
+
+def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: Array,
+         half: Array, moved_by: IndexArray, rr: IndexArray, rs: IndexArray, kind: IndexArray,
+         pose: Array, size: Array) -> Packed:
+    """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once."""
+    joints = np.ascontiguousarray(np.hstack([
+        axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))
+    links = prepare_links(np.ascontiguousarray(radius, dtype=float),
+                          np.ascontiguousarray(half, dtype=float),
+                          np.ascontiguousarray(moved_by, dtype=np.int64))
+    pairs = np.ascontiguousarray(np.vstack([rr.reshape(-1, 2), rs.reshape(-1, 2)]),
+                                 dtype=np.int64)
+    kind = np.ascontiguousarray(kind, dtype=np.int64)
+    obstacles, obstacle_axes = prepare_obstacles(kind, np.ascontiguousarray(pose, dtype=float),
+                                                 np.ascontiguousarray(size, dtype=float))
+    tree, nodes, order = scene_tree.build(obstacles[:, O_CENTRE:O_CENTRE + 3],
+                                          obstacles[:, O_BOUND])
+    pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
+    return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
+            obstacles, obstacle_axes, tree, nodes, order, pair_of)
