@@ -9,14 +9,7 @@ from pathlib import Path
 
 from usar_arm.arm.tour_calibration import WireCalibration, calibrate_description
 from usar_arm.calibrate.identify import CalibrationOptions
-from usar_arm.cli.calibration_text import (
-    calibration_options,
-    identifiability_line,
-    milli,
-    residual_line,
-    tool_point_line,
-    warn_lost,
-)
+from usar_arm.cli import calibration_text as text
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.fileio import write_atomic
@@ -58,18 +51,19 @@ def calibrate(desc: Description, options: DescribeOptions, poses: int, scene: st
     cal = result.calibration
     say(f"calibrated {desc.chain.name} from {result.readings} readings in {result.seconds:.1f} "
         f"s ({cal.quantisation}, {len(cal.rejected)} rejected)")
-    say(identifiability_line(cal))
-    warn_lost(cal)
-    say(residual_line("fitted", fit, " (from each reading's interval middle)"))
-    say(residual_line("held out", val))
+    say(text.identifiability_line(cal))
+    text.warn_lost(cal)
+    say(text.residual_line("fitted", fit, " (from each reading's interval middle)"))
+    say(text.residual_line("held out", val))
     truth = calibrated.discovery.get("accuracy_vs_simulator")
     before = calibrated.discovery["calibration"].get("as_learnt_accuracy_vs_simulator")
     if truth and before:
         say(f"  against the simulator's own model ({truth['configurations']} configurations): "
-            f"flange {milli(before['max_flange_error_m'])} -> {milli(truth['max_flange_error_m'])} "
-            f"mm, joint axes {milli(before['max_joint_axis_error_rad'])} -> "
-            f"{milli(truth['max_joint_axis_error_rad'])} mrad")
-    say(tool_point_line(cal, result.tool_point))
+            f"flange {text.milli(before['max_flange_error_m'])} -> "
+            f"{text.milli(truth['max_flange_error_m'])} "
+            f"mm, joint axes {text.milli(before['max_joint_axis_error_rad'])} -> "
+            f"{text.milli(truth['max_joint_axis_error_rad'])} mrad")
+    say(text.tool_point_line(cal, result.tool_point))
     return calibrated, result
 
 
@@ -103,7 +97,7 @@ def calibrate_robot(args: argparse.Namespace) -> int:
     desc = describe(options)
     calibrated, result = calibrate(desc, options, args.poses, args.scene, args.seed,
                                    err if args.json else out, args.readings,
-                                   calibration_options(args))
+                                   text.calibration_options(args))
     paths = write_description(calibrated, args.out)
     recorded = write_readings(result, args.out, desc.chain.name)
     if recorded is not None:

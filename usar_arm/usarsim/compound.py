@@ -5,7 +5,7 @@ its format side by side here; :mod:`.codec` registers them next to the field-tab
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from usar_arm.core.errors import ProtocolError
@@ -165,6 +165,26 @@ def parse_platform_conf(r: BlockReader) -> m.PlatformConf:
     )
 
 
+def format_platform_conf(msg: m.Message, s: NumberStyle) -> str:
+    """The wire text of :class:`~.messages.PlatformConf` (UDK leaves a trailing space)."""
+    assert isinstance(msg, m.PlatformConf)
+    parts = [block("Name", msg.name), block("Type", msg.type), *blocks(msg.fields)]
+    return line("CONF", parts).replace(CRLF, " " + CRLF)
+
+
+def format_conf(msg: m.Message, s: NumberStyle) -> str:
+    """The wire text of :class:`~.messages.Conf`."""
+    assert isinstance(msg, m.Conf)
+    return line("CONF", [block("Type", msg.type)] + [_conf_item(i, s) for i in msg.items])
+
+
+def _keyed(r: BlockReader, skip: RawBlock) -> Iterator[tuple[str, RawBlock]]:
+    """The line's blocks but ``skip`` (its ``{Type ..}``), each with its lower-case key."""
+    for b in r.blocks:
+        if b is not skip:
+            yield b.key.lower(), b
+
+
 def parse_conf(r: BlockReader) -> m.Conf:
     """``CONF {Type T} {Name a} ... {Link i} ...``: per-component fields and link groups."""
     type_block = r.require("Type", "Actuator")
@@ -197,10 +217,7 @@ def parse_conf(r: BlockReader) -> m.Conf:
         name, fields, links = None, [], []
 
     link_keys = ("jointtype", "maxtorque", "minvalue", "maxvalue", "maxspeed")
-    for b in r.blocks:
-        k = b.key.lower()
-        if b is type_block:
-            continue
+    for k, b in _keyed(r, type_block):
         if k == "name":
             close_item()
             name = b.value
@@ -217,19 +234,6 @@ def parse_conf(r: BlockReader) -> m.Conf:
             fields.append((b.key, b.value))
     close_item()
     return m.Conf(type_block.value, tuple(items))
-
-
-def format_platform_conf(msg: m.Message, s: NumberStyle) -> str:
-    """The wire text of :class:`~.messages.PlatformConf` (UDK leaves a trailing space)."""
-    assert isinstance(msg, m.PlatformConf)
-    parts = [block("Name", msg.name), block("Type", msg.type), *blocks(msg.fields)]
-    return line("CONF", parts).replace(CRLF, " " + CRLF)
-
-
-def format_conf(msg: m.Message, s: NumberStyle) -> str:
-    """The wire text of :class:`~.messages.Conf`."""
-    assert isinstance(msg, m.Conf)
-    return line("CONF", [block("Type", msg.type)] + [_conf_item(i, s) for i in msg.items])
 
 
 def parse_geo(r: BlockReader) -> m.Geo:
@@ -261,10 +265,7 @@ def parse_geo(r: BlockReader) -> m.Geo:
             items.append(m.GeoItem(links=tuple(links), extra=tuple(item_extra), **item))
         item, links, item_extra = None, [], []
 
-    for b in r.blocks:
-        k = b.key.lower()
-        if b is type_block:
-            continue
+    for k, b in _keyed(r, type_block):
         if k == "name":
             close_item()
             item = {"name": b.value}

@@ -144,10 +144,8 @@ def analytic_solutions(rots: Array, poss: Array, c: Array, lo: Array, hi: Array,
                 continue
             ok, _, _ = ik_kernel.polish(q, rots[m], poss[m], axes, points, rev, tool, tol_p,
                                         tol_r, steps, max_step)
-            if not ok:
-                continue
-            if _store(q, m, kept, rots, poss, lo, hi, rev, wide, mid, axes, points, tool,
-                      distinct, err, jac, q_out, manip_out, margin_out):
+            if ok and _store(q, m, kept, rots, poss, lo, hi, rev, wide, mid, axes, points,
+                             tool, distinct, err, jac, q_out, manip_out, margin_out):
                 kept += 1
         count_out[m] = kept
 
