@@ -28,6 +28,7 @@ from report_format import (
     table,
 )
 from report_plan import plan_section, planners_section, timing_section
+from report_summary import summary_lines
 
 STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "plan": "Motion planning", "timing": "Time-parameterisation",
@@ -366,6 +367,8 @@ def generate(folder: Path, total_seconds: float | None = None) -> Path:
                   *SECTIONS[stage](doc)]
     path = folder / "README.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    (folder / "summary.md").write_text("\n".join(summary_lines(docs, run)) + "\n",
+                                       encoding="utf-8")
     common.log(f"report: {path} and {len(images)} plot(s)")
     return path
 

@@ -198,10 +198,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--goal-seconds", type=float, default=30.0,
                     help="how long goals are sent every 2 s (600: the 10-minute run)")
     ap.add_argument("--domain", type=int, default=77, help="ROS_DOMAIN_ID (default 77)")
+    ap.add_argument("--sim-port", type=int, default=0,
+                    help="run the simulator as its own process (usar-arm sim on this port) and "
+                         "the node as its client, as with a USARSim server; default: the "
+                         "node's embedded simulator, in the node's process")
     a = ap.parse_args(argv)
     os.environ["ROS_DOMAIN_ID"] = str(a.domain)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    node = subprocess.Popen([sys.executable, "-m", "usar_arm", "ros", "-q"], cwd=ROOT)
+    sim = None
+    where: list[str] = []
+    if a.sim_port:
+        sim = subprocess.Popen([sys.executable, "-m", "usar_arm", "sim", "-q", "--port",
+                                str(a.sim_port)], cwd=ROOT)
+        time.sleep(3.0)  # the server listens within a second; the node retries its connect
+        where = ["--host", "127.0.0.1", "--port", str(a.sim_port)]
+    node = subprocess.Popen([sys.executable, "-m", "usar_arm", "ros", "-q", *where], cwd=ROOT)
     rclpy.init()
     probe = Probe()
     try:
@@ -253,7 +264,12 @@ def main(argv: list[str] | None = None) -> int:
         rclpy.shutdown()
         node.send_signal(signal.SIGINT)
         code = node.wait(60)
+        if sim is not None:
+            sim.send_signal(signal.SIGINT)
+            sim.wait(30)
     doc["node"]["exit_code"] = code
+    doc["simulator"] = (f"usar-arm sim in its own process (port {a.sim_port})" if a.sim_port
+                        else "embedded, in the node's process")
     text = json.dumps(doc, indent=1)
     print(text)
     if a.json:
