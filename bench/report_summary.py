@@ -17,8 +17,8 @@ TITLES = {"ik": "IK", "collision": "Collision", "plan": "Planning",
 
 
 def _median(summary: dict[str, Any]) -> float | None:
-    times = summary.get("time_verified_s") or summary.get("time_all_s") or {}
-    return times.get("median")
+    """The median time of the verified answers (s), None without any."""
+    return (summary.get("time_verified_s") or {}).get("median")
 
 
 def _cell(s: dict[str, Any]) -> str:
@@ -31,8 +31,8 @@ def _cell(s: dict[str, Any]) -> str:
 
 def _peer_cell(name: str, s: dict[str, Any], ratios: dict[str, Any]) -> str:
     ratio = ratios.get(name, {}).get(OURS, {}).get("median")
-    text = f"{name}: {_cell(s)}"
-    return text + (f" ({ratio:.3g}x)" if ratio is not None and "skipped" not in s else "")
+    shown = ratio is not None and _median(s.get("summary", {})) is not None
+    return f"{name}: {_cell(s)}" + (f" ({ratio:.3g}x)" if shown else "")
 
 
 def _case_rows(stage: str, doc: dict[str, Any]) -> list[list[str]]:
