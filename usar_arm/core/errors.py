@@ -8,6 +8,7 @@ code the CLI uses for it, so that a script can tell failures apart without parsi
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 
 # Exit codes of the `usar-arm` command (documented in `usar-arm --help`).
@@ -441,3 +442,32 @@ class ResumeMismatchError(InvalidInputError):
             f"{folder} holds finished chunks of another job ({what}; kept key {found_key}, "
             f"this job's {key}): they would give another job's answers. Run without --resume "
             "to start over, or resume with the same input and settings")
+
+
+# --------------------------------------------------------------------------- ground vehicles
+
+
+class NonFiniteCommandError(InvalidInputError):
+    """A velocity command (or a vehicle parameter it is mapped with) is NaN or infinite.
+
+    Attributes:
+        values: name -> the value given (m/s, rad/s, m), every one that was checked.
+    """
+
+    def __init__(self, values: dict[str, float]):
+        self.values = dict(values)
+        bad = ", ".join(f"{k} = {v}" for k, v in self.values.items() if not math.isfinite(v))
+        super().__init__(f"a drive command needs finite numbers; got {bad}")
+
+
+class VehicleParameterError(InvalidInputError):
+    """A vehicle parameter (wheel radius, separation, maximum wheel speed) is not positive.
+
+    Attributes:
+        name: the parameter. value: what it was (m or rad/s).
+    """
+
+    def __init__(self, name: str, value: float):
+        self.name = name
+        self.value = value
+        super().__init__(f"the vehicle's {name} must be a positive number, got {value}")
