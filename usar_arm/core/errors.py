@@ -471,3 +471,21 @@ class VehicleParameterError(InvalidInputError):
         self.name = name
         self.value = value
         super().__init__(f"the vehicle's {name} must be a positive number, got {value}")
+
+
+class NotAVehicleError(InvalidInputError):
+    """The spawned robot is no ground vehicle the drive command can steer (its GETCONF/GETGEO
+    {Type Robot} lacks a wheel radius, a wheel separation or a maximum speed).
+
+    Attributes:
+        robot: the class asked for. platform_type: what the robot's CONF says it is.
+        missing: the fields that were not there.
+    """
+
+    def __init__(self, robot: str, platform_type: str, missing: Sequence[str]):
+        self.robot = robot
+        self.platform_type = platform_type
+        self.missing = tuple(missing)
+        super().__init__(f"{robot} is a {platform_type}, not a ground vehicle that can be "
+                         f"driven: its CONF/GEO {{Type Robot}} has no {', '.join(self.missing)} "
+                         "(a skid-steered vehicle such as USARBot.P3AT has them)")
