@@ -3,10 +3,11 @@
 Pure pursuit (Coulter 1992): the vehicle steers onto the circle through its position that
 touches its heading and passes through the *lookahead point*, the point of the path a lookahead
 distance beyond the vehicle's projection on it. The curvature is ``2 y / d^2`` (``y`` the
-lookahead point's lateral offset in the vehicle frame, ``d`` its distance). A point behind the
-vehicle (beyond :data:`TURN_IN_PLACE_RAD` off the heading) is faced first by turning on the spot,
-which a skid-steered vehicle can do. All in REP-103 (x forward, y left, yaw counter-clockwise),
-metres, seconds, radians. Pure: no wire, no clock.
+lookahead point's lateral offset in the vehicle frame, ``d`` its distance). A point further off
+the heading than ``turn_in_place_rad`` is faced first by turning on the spot, which a
+skid-steered vehicle can do: a skidding vehicle turns far less than its wheel speeds say (the
+embedded P3AT about a fifth), so arcs alone would overshoot every corner. All in REP-103 (x
+forward, y left, yaw counter-clockwise), metres, seconds, radians. Pure: no wire, no clock.
 """
 
 from __future__ import annotations
@@ -16,9 +17,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from usar_arm.core.errors import InvalidInputError
-
-TURN_IN_PLACE_RAD = math.pi / 2
-"""A lookahead point further off the heading than this is faced by turning on the spot."""
 
 
 @dataclass(frozen=True)
@@ -30,15 +28,19 @@ class PursuitOptions:
         max_speed_mps: forward speed (m/s) asked for; the wheel limits may lower it.
         goal_tolerance_m: the last waypoint counts as reached within this distance (m).
         turn_rate_rps: yaw rate (rad/s) of a turn on the spot.
+        turn_in_place_rad: the lookahead point's bearing (rad) beyond which the vehicle stops
+            and turns on the spot.
     """
 
     lookahead_m: float = 0.5
     max_speed_mps: float = 0.5
     goal_tolerance_m: float = 0.1
     turn_rate_rps: float = 1.0
+    turn_in_place_rad: float = 0.5
 
     def __post_init__(self) -> None:
-        for name in ("lookahead_m", "max_speed_mps", "goal_tolerance_m", "turn_rate_rps"):
+        for name in ("lookahead_m", "max_speed_mps", "goal_tolerance_m", "turn_rate_rps",
+                     "turn_in_place_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InvalidInputError(f"pursuit {name} must be a positive number, got {value}")
@@ -117,8 +119,7 @@ class PurePursuit:
         c, sn = math.cos(yaw), math.sin(yaw)
         ahead = c * (tx - x) + sn * (ty - y)
         lateral = -sn * (tx - x) + c * (ty - y)
-        if math.atan2(lateral, ahead) > TURN_IN_PLACE_RAD or \
-                math.atan2(lateral, ahead) < -TURN_IN_PLACE_RAD:
+        if abs(math.atan2(lateral, ahead)) > opts.turn_in_place_rad:
             return 0.0, math.copysign(opts.turn_rate_rps, lateral)
         d2 = ahead * ahead + lateral * lateral
         v = min(opts.max_speed_mps, max(self.length_m - s, math.dist((x, y), goal)))
