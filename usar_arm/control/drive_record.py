@@ -143,3 +143,27 @@ def drift(source: str, estimate: PoseTrack, truth: PoseTrack) -> Drift | None:
     distance = truth.length_m()
     percent = 100 * position / distance if distance > 0 else math.nan
     return Drift(source, position, heading, percent, distance)
+
+
+def laser_hits(record: DriveRecord, every: int = 1) -> Array:
+    """Where the scanner's rays ended (m, map frame, (k, 2)), each scan placed by the ground
+    truth at its stamp (interpolated) and the scanner's mount; rays at the maximum range (no
+    hit) are left out. ``every``: use every n-th scan."""
+    scanner, truth = record.vehicle.scanner, record.truth
+    if scanner is None or len(truth) < 2 or not record.scans:
+        return np.zeros((0, 2))
+    yaw_track = np.unwrap(truth.pose[:, 2])
+    out = []
+    for scan in record.scans[::every]:
+        n = len(scan.ranges)
+        ranges = np.asarray(scan.ranges, dtype=float)
+        angles = -scan.fov / 2 + np.arange(n) * (scan.fov / (n - 1) if n > 1 else 0.0)
+        keep = (ranges < scanner.max_range) & (ranges >= scanner.min_range)
+        local = np.stack([ranges * np.cos(angles), ranges * np.sin(angles),
+                          np.zeros(n), np.ones(n)])[:, keep]
+        x, y = (float(np.interp(scan.t, truth.t, truth.pose[:, i])) for i in (0, 1))
+        yaw = float(np.interp(scan.t, truth.t, yaw_track))
+        c, s = math.cos(yaw), math.sin(yaw)
+        base = np.array([[c, -s, 0, x], [s, c, 0, y], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+        out.append((base @ scanner.mount @ local)[:2].T)
+    return np.concatenate(out) if out else np.zeros((0, 2))

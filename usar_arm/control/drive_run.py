@@ -148,6 +148,8 @@ class Driver:
                     progress(min(total, round(pursuit.progress_m(pose[0], pose[1]) * 100)),
                              total)
                 command = pursuit.command(*pose)
+                if pursuit.done and progress is not None:
+                    progress(total, total)
                 return None if pursuit.done else command
 
             return self._run(recorder, step, budget, waypoints)

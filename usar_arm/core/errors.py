@@ -489,3 +489,18 @@ class NotAVehicleError(InvalidInputError):
         super().__init__(f"{robot} is a {platform_type}, not a ground vehicle that can be "
                          f"driven: its CONF/GEO {{Type Robot}} has no {', '.join(self.missing)} "
                          "(a skid-steered vehicle such as USARBot.P3AT has them)")
+
+
+class OutsideWorldError(InvalidInputError):
+    """A waypoint lies outside the world's walls or inside one of its boxes.
+
+    Attributes:
+        index: the waypoint's 1-based position. point: its x, y (m, map frame).
+        where: what it is outside of, or inside.
+    """
+
+    def __init__(self, index: int, point: tuple[float, float], where: str):
+        self.index = index
+        self.point = point
+        self.where = where
+        super().__init__(f"waypoint {index} ({point[0]:g}, {point[1]:g}) m lies {where}")
