@@ -50,7 +50,7 @@ def plot_drive(path: str | Path, record: DriveRecord, scenery: Scenery | None,
     lines = [f"{title}: {record.truth.length_m():.2f} m driven"
              + ("" if record.reached else " (goal not reached)")
              + (" (interrupted)" if record.interrupted else "")]
-    lines += [f"{d.source.replace('ins', 'INS')} drift: {d.position_m:.3f} m ({d.percent_of_distance:.2f} % of "
+    lines += [f"{d.source} drift: {d.position_m:.3f} m ({d.percent_of_distance:.2f} % of "
               f"distance), heading {d.heading_rad:+.3f} rad" for d in drifts]
     ax.set_title("\n".join(lines), fontsize=10)
     legend = ax.legend(loc="best", fontsize=8, framealpha=0.9)
