@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from usar_arm.control.skid import body_velocity, wheel_speeds
-from usar_arm.core.errors import NonFiniteCommandError, VehicleParameterError
+from usar_arm.core.vehicle_errors import NonFiniteCommandError, VehicleParameterError
 
 P3AT = {"radius": 0.098, "separation": 0.36, "max_speed": 1.2999}
 speeds = st.floats(-5.0, 5.0, allow_nan=False)

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from usar_arm.control.pursuit import Segment
-from usar_arm.core.errors import FileFormatError, InvalidInputError, OutsideWorldError
+from usar_arm.core.errors import FileFormatError, InvalidInputError
+from usar_arm.core.vehicle_errors import OutsideWorldError
 from usar_arm.core.world_file import Scenery
 from usar_arm.core.yamlio import line_of, load_yaml
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from usar_arm.core.errors import NonFiniteCommandError, VehicleParameterError
+from usar_arm.core.vehicle_errors import NonFiniteCommandError, VehicleParameterError
 
 
 class WheelSpeeds(NamedTuple):

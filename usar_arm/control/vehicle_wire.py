@@ -13,13 +13,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from usar_arm.core.errors import NotAVehicleError, ResponseTimeoutError
+from usar_arm.core.errors import ResponseTimeoutError
 from usar_arm.core.spatial import (
     Array,
     transform_from_xyz_rpy,
     zdown_to_zup_point,
     zdown_to_zup_transform,
 )
+from usar_arm.core.vehicle_errors import NotAVehicleError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 
