@@ -208,3 +208,41 @@ def test_an_arm_is_refused_as_no_ground_vehicle(tmp_path: Path) -> None:
     done = usar_arm("drive", "--robot", "KR60", "--waypoints", "1,-1.5", cwd=tmp_path)
     assert done.returncode == EXIT_INVALID_INPUT, done.stderr
     assert "not a ground vehicle" in done.stderr and "WheelRadius" in done.stderr
+
+
+def test_a_velocity_script_is_played_and_recorded(tmp_path: Path) -> None:
+    (tmp_path / "s.csv").write_text("duration,v,w\n3,0.1,0\n3,0,0.5\n")
+    done = usar_arm("drive", "--script", "s.csv", "--speed", "4", "-o", "bag", "--picture", "",
+                    "--json", "-q", cwd=tmp_path)
+    assert done.returncode == EXIT_OK, done.stderr
+    result = json.loads(done.stdout)
+    assert result["reached"] and result["written"] == {"bag": "bag"}
+    assert result["duration_s"] == pytest.approx(6.0, abs=0.3)
+    assert 0.2 < result["distance_m"] < 0.35  # 3 s at 0.1 m/s, then a turn on the spot
+    commands = [m for _, m in _read(tmp_path / "bag")["/cmd_vel"]]
+    assert {(c.linear.x, c.angular.z) for c in commands} == {(0.1, 0.0), (0.0, 0.5),
+                                                              (0.0, 0.0)}
+    assert (commands[-1].linear.x, commands[-1].angular.z) == (0.0, 0.0)
+
+
+def test_ctrl_c_stops_the_vehicle_and_keeps_the_record(tmp_path: Path) -> None:
+    """SIGINT mid-drive: exit 130, the bag and the picture are written, the last command
+    sent is a stop."""
+    import signal
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "usar_arm", "drive", "--waypoints", "4,-1",
+                             "-o", "bag"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    first = proc.stderr.readline()  # the progress bar's first line: the drive has begun
+    assert "%" in first, first
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "interrupted" in stderr and "wrote bag bag" in stdout
+    assert (tmp_path / "drive.png").is_file()
+    commands = [m for _, m in _read(tmp_path / "bag")["/cmd_vel"]]
+    assert len(commands) >= 2 and commands[0].linear.x > 0
+    assert (commands[-1].linear.x, commands[-1].angular.z) == (0.0, 0.0)
