@@ -17,7 +17,12 @@ import numpy as np
 import pytest
 import yaml
 
-from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNKNOWN_ROBOT
+from usar_arm.core.errors import (
+    EXIT_INVALID_INPUT,
+    EXIT_OK,
+    EXIT_UNAVAILABLE,
+    EXIT_UNKNOWN_ROBOT,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 ROOMS = ROOT / "usar_arm" / "sim" / "worlds" / "rooms.yaml"
@@ -77,7 +82,8 @@ def test_the_bag_reads_back_with_every_topic_its_types_and_increasing_stamps(
         assert types == TOPICS
         assert all(c.msgdef.data for c in reader.connections)  # definitions travel in the bag
         stamps: dict[str, list[int]] = {t: [] for t in TOPICS}
-        last, scan = 0, None
+        last = 0
+        scan: Any = None
         for conn, stamp, raw in reader.messages():
             assert stamp >= last
             last = stamp
@@ -246,3 +252,31 @@ def test_ctrl_c_stops_the_vehicle_and_keeps_the_record(tmp_path: Path) -> None:
     commands = [m for _, m in _read(tmp_path / "bag")["/cmd_vel"]]
     assert len(commands) >= 2 and commands[0].linear.x > 0
     assert (commands[-1].linear.x, commands[-1].angular.z) == (0.0, 0.0)
+
+
+def test_a_running_server_is_driven_through_host_and_port(tmp_path: Path) -> None:
+    from usar_arm.sim.server import SimOptions, SimServer
+    from usar_arm.sim.world_spec import load_world
+
+    server = SimServer(SimOptions(port=0, speed=4.0), world_spec=load_world("rooms"))
+    port = server.start()
+    try:
+        done = usar_arm("drive", "--host", "127.0.0.1", "--port", str(port), "--waypoints",
+                        "1.0,-1.5", "--start-position", "RobotStart1", "--json", "-q",
+                        cwd=tmp_path)
+    finally:
+        server.stop()
+    assert done.returncode == EXIT_OK, done.stderr
+    assert json.loads(done.stdout)["reached"]
+
+
+def test_an_unreachable_server_gets_one_line_and_exit_69(tmp_path: Path) -> None:
+    import socket
+
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    done = usar_arm("drive", "--host", "127.0.0.1", "--port", str(port), "--waypoints",
+                    "1,-1.5", "--timeout", "2", cwd=tmp_path)
+    assert done.returncode == EXIT_UNAVAILABLE, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

@@ -15,6 +15,12 @@ P3AT = {"radius": 0.098, "separation": 0.36, "max_speed": 1.2999}
 speeds = st.floats(-5.0, 5.0, allow_nan=False)
 
 
+def test_a_clamped_pair_never_rounds_above_the_limit() -> None:
+    """0.5 m/s straight: x * (max / |x|) is 1.2999000000000003 in floating point."""
+    left, right, clamped = wheel_speeds(0.5, 0.0, **P3AT)
+    assert clamped and left == right == P3AT["max_speed"]
+
+
 def test_standing_still_spins_no_wheel() -> None:
     assert wheel_speeds(0.0, 0.0, **P3AT) == (0.0, 0.0, False)
 
@@ -36,7 +42,7 @@ def test_clamping_keeps_direction_and_ratio_and_never_exceeds_the_max(v: float, 
     left, right, clamped = wheel_speeds(v, w, **P3AT)
     raw_left = (v - w * 0.18) / 0.098
     raw_right = (v + w * 0.18) / 0.098
-    assert max(abs(left), abs(right)) <= P3AT["max_speed"] * (1 + 1e-12)
+    assert max(abs(left), abs(right)) <= P3AT["max_speed"]  # exactly: what DRIVE may send
     assert clamped == (max(abs(raw_left), abs(raw_right)) > P3AT["max_speed"])
     # same direction: the clamped pair is a positive multiple of the raw pair
     assert math.copysign(1, left) == math.copysign(1, raw_left) or raw_left == 0

@@ -57,7 +57,13 @@ def wheel_speeds(v: float, w: float, radius: float, separation: float,
     if largest <= max_speed:
         return WheelSpeeds(left, right, False)
     scale = max_speed / largest
-    return WheelSpeeds(left * scale, right * scale, True)
+    # (the larger spin is set to the limit exactly: x * (max / |x|) may round above it)
+    return WheelSpeeds(_at_most(left * scale, max_speed), _at_most(right * scale, max_speed),
+                       True)
+
+
+def _at_most(spin: float, limit: float) -> float:
+    return math.copysign(min(abs(spin), limit), spin)
 
 
 def body_velocity(left: float, right: float, radius: float,
