@@ -149,7 +149,11 @@ def _write(args: argparse.Namespace, record: DriveRecord, drifts: list[Drift],
     if args.picture:
         from usar_arm.export.drive_plot import plot_drive  # matplotlib: only when drawing
 
-        plot_drive(args.picture, record, scenery, drifts, title=record.vehicle.name)
+        steering = "a script" if args.script else {
+            "truth": "the ground truth", "odometry": "the odometry", "ins": "the INS"
+        }[args.localisation]
+        plot_drive(args.picture, record, scenery, drifts,
+                   title=f"{record.vehicle.name} steered on {steering}")
         written["picture"] = args.picture
     return written
 
