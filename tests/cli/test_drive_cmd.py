@@ -80,6 +80,7 @@ def test_the_bag_reads_back_with_every_topic_its_types_and_increasing_stamps(
     with Reader(bag) as reader:
         types = {c.topic: c.msgtype for c in reader.connections}
         assert types == TOPICS
+        counts = {c.topic: c.msgcount for c in reader.connections}  # (from metadata.yaml)
         assert all(c.msgdef.data for c in reader.connections)  # definitions travel in the bag
         stamps: dict[str, list[int]] = {t: [] for t in TOPICS}
         last = 0
@@ -90,6 +91,7 @@ def test_the_bag_reads_back_with_every_topic_its_types_and_increasing_stamps(
             stamps[conn.topic].append(stamp)
             if conn.topic == "/scan" and scan is None:
                 scan = store.deserialize_cdr(raw, conn.msgtype)
+    assert counts == {topic: len(stamped) for topic, stamped in stamps.items()}
     assert len(stamps["/tf_static"]) == 1
     for topic in ("/tf", "/odom", "/ground_truth", "/scan", "/cmd_vel"):
         assert len(stamps[topic]) > 10, topic
