@@ -21,7 +21,7 @@ COMMANDS: dict[str, str] = {
     "ik": "ik_cmd", "plan": "plan_cmd", "execute": "execute_cmd", "calibrate": "calibrate_cmd",
     "tesseract-config": "tesseract_cmd", "reach": "reach_cmd", "place": "place_cmd",
     "batch": "batch_cmd", "render": "picture_cmds", "plot": "picture_cmds",
-    "view": "picture_cmds", "ros": "ros_cmd"}
+    "view": "picture_cmds", "ros": "ros_cmd", "drive": "drive_cmd"}
 """Each command and the module of ``usar_arm.cli`` that defines it, in the order of --help (a
 test checks it against what the modules register)."""
 
@@ -42,7 +42,8 @@ SUMMARIES: dict[str, str] = {
     "plot": "plot a trajectory's joints against their limits as a PNG",
     "view": "replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
     "ros": "serve the arm on ROS 2: robot_description, joint_states, tf, "
-           "FollowJointTrajectory"}
+           "FollowJointTrajectory",
+    "drive": "drive a ground vehicle (P3AT) by waypoints or a script; bag, picture, drift"}
 """Each command's line in --help, as its module registers it (a test checks they agree): what
 ``usar-arm --help`` shows without loading the commands."""
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -10,6 +11,7 @@ from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosit
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
+from usar_arm.core.world_file import load_scenery
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Scene
 from usar_arm.planning.scene_file import load_scene
@@ -20,12 +22,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
         "render", help="draw the arm (and a trajectory's tool path) in its scene as a PNG",
         description="A PNG of the arm's URDF cylinders at --joints (default: home, or the "
                     "trajectory's end), the scene's obstacles, and the tool0 path of "
-                    "--trajectory with its start pose as a ghost. Headless (matplotlib).")
+                    "--trajectory with its start pose as a ghost; or, with --world, a world "
+                    "file's top view. Headless (matplotlib).")
     r.add_argument("--joints", type=float, nargs="+", metavar="Q", help="configuration to draw")
     r.add_argument("--scene", default=None, metavar="FILE",
                    help="a scene YAML file, or one of empty, table, shelf, cage")
     r.add_argument("--trajectory", default=None, metavar="TRAJ.json",
                    help="draw its tool0 path (a trajectory from plan --out)")
+    r.add_argument("--world", default=None, metavar="FILE|NAME",
+                   help="draw this world file (or shipped world: default, rooms) alone, top "
+                        "view in metres; no robot is drawn")
     r.add_argument("--out", required=True, metavar="PNG", help="the picture to write")
     r.add_argument("--size", type=int, nargs=2, default=(1000, 800), metavar=("W", "H"),
                    help="pixels (default 1000 800)")
@@ -82,6 +88,8 @@ def run_render(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     if min(args.size) < 100:
         raise InvalidInputError(f"--size must be at least 100 x 100 pixels, got {args.size}")
+    if args.world is not None:
+        return _render_world(args)
     scene = _scene(args.scene)
     traj = Trajectory.load(args.trajectory) if args.trajectory else None
     robot = robot_from_args(args)
@@ -103,6 +111,18 @@ def run_render(args: argparse.Namespace) -> int:
     render_arm(args.out, chain, q, scene, path, ghosts=ghosts, size=tuple(args.size),
                view=tuple(args.view))
     out(f"wrote {args.out}")
+    return EXIT_OK
+
+
+def _render_world(args: argparse.Namespace) -> int:
+    from usar_arm.export.world_plot import render_world  # matplotlib: only when drawing
+
+    try:
+        scenery = load_scenery(args.world)
+    except FileNotFoundError as exc:
+        raise InvalidInputError(str(exc)) from None
+    render_world(args.out, scenery, title=Path(args.world).stem, size=tuple(args.size))
+    out(f"wrote {args.out} ({len(scenery.boxes)} boxes)")
     return EXIT_OK
 
 

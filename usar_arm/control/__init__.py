@@ -12,6 +12,7 @@ from usar_arm.core.lazy import exports
 if TYPE_CHECKING:
     from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
     from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
+    from usar_arm.control.skid import WheelSpeeds, wheel_speeds
     from usar_arm.control.timing import TimedMotion
     from usar_arm.control.tip import TipReading, TipSensor
     from usar_arm.control.trajectory import LimitReport, MotionLimits, Trajectory, check_limits
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
 _HOMES = {
     "executor": ("ExecutionOptions", "ExecutionReport", "Executor"),
     "motion": ("MotionOptions", "MotionPlan", "plan_motion"),
+    "skid": ("WheelSpeeds", "wheel_speeds"),
     "timing": ("TimedMotion",),
     "tip": ("TipReading", "TipSensor"),
     "trajectory": ("LimitReport", "MotionLimits", "Trajectory", "check_limits"),
@@ -27,6 +29,6 @@ _HOMES = {
 
 __all__ = ["ExecutionOptions", "ExecutionReport", "Executor", "LimitReport", "MotionLimits",
            "MotionOptions", "MotionPlan", "TimedMotion", "TipReading", "TipSensor", "Trajectory",
-           "check_limits", "plan_motion"]
+           "WheelSpeeds", "check_limits", "plan_motion", "wheel_speeds"]
 
 __getattr__ = exports(__name__, _HOMES)

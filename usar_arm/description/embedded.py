@@ -16,12 +16,14 @@ from usar_arm.description.pipeline import DescribeOptions, Description, describe
 from usar_arm.discover.interview import DiscoveryRecord, discover
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
+from usar_arm.sim.world_spec import load_world
 from usar_arm.usarsim.client import UsarClient
 
 
-def known_classes() -> tuple[str, ...]:
-    """The robot classes the embedded simulator can spawn (package-qualified)."""
-    return tuple(sorted(builtin_robots()))
+def known_classes(vehicles: bool = False) -> tuple[str, ...]:
+    """The robot classes the embedded simulator can spawn (package-qualified): the arms, and
+    with ``vehicles`` the ground vehicles too."""
+    return tuple(sorted(builtin_robots(vehicles=vehicles)))
 
 
 def start_simulator(wire_precision: str = "udk", speed: float = 1.0) -> SimServer:
@@ -33,10 +35,12 @@ def start_simulator(wire_precision: str = "udk", speed: float = 1.0) -> SimServe
 
 
 @contextlib.contextmanager
-def embedded_simulator(wire_precision: str = "udk", **kwargs: Any) -> Iterator[SimServer]:
-    """The embedded simulator on a free loopback port, for the duration of a ``with`` block."""
+def embedded_simulator(wire_precision: str = "udk", world: str | None = None,
+                       **kwargs: Any) -> Iterator[SimServer]:
+    """The embedded simulator on a free loopback port, for the duration of a ``with`` block;
+    ``world``: a world file or the name of a shipped one (default: the arms' cell)."""
     server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,
-                                  **kwargs))
+                                  **kwargs), world_spec=load_world(world))
     server.start()
     try:
         yield server

@@ -202,8 +202,8 @@ def _check_target(target: Path, overwrite: bool) -> None:
                                 f"overwrite=True")
 
 
-class _Messages:
-    """Builds the bag's messages with one typestore."""
+class BagMessages:
+    """Builds a bag's messages with one typestore (``types``: name -> message class)."""
 
     def __init__(self, distro: str, start_ns: int):
         self.store = get_typestore(DISTROS[distro][0])
@@ -265,7 +265,7 @@ TOPICS: dict[str, tuple[str, Qos]] = {
 
 
 def _messages(chain: KinematicChain, urdf: str, planned: Trajectory,
-              executed: ExecutedSamples | None, build: _Messages, joint_state_rate: float,
+              executed: ExecutedSamples | None, build: BagMessages, joint_state_rate: float,
               tf_rate: float) -> dict[str, list[tuple[int, Any]]]:
     """topic -> [(offset ns, message)] for every topic the bag gets."""
     names = list(planned.joint_names)
@@ -293,13 +293,14 @@ def _messages(chain: KinematicChain, urdf: str, planned: Trajectory,
     return out
 
 
-def _write(bag: Path, version: Literal[8, 9], build: _Messages,
-           messages: dict[str, list[tuple[int, Any]]]) -> None:
-    """Write a new rosbag2 folder ``bag``: connections in TOPICS order, messages by stamp."""
+def _write(bag: Path, version: Literal[8, 9], build: BagMessages,
+           messages: dict[str, list[tuple[int, Any]]], topics: dict[str, tuple[str, Qos]]
+           ) -> None:
+    """Write a new rosbag2 folder ``bag``: connections in message order, messages by stamp."""
     records: list[tuple[int, int, Connection, memoryview]] = []
     with Writer(bag, version=version, storage_plugin=StoragePlugin.MCAP) as writer:
         for order, (topic, stamped) in enumerate(messages.items()):
-            msgtype, qos = TOPICS[topic]
+            msgtype, qos = topics[topic]
             conn = writer.add_connection(topic, msgtype, typestore=build.store,
                                          offered_qos_profiles=[qos])
             records += [(build.start_ns + t, order, conn,
@@ -355,22 +356,36 @@ def write_bag(path: str | Path, chain: KinematicChain, urdf: str, planned: Traje
     _check(chain, urdf, planned, executed, start_ns,
            {"joint_state_rate": joint_state_rate, "tf_rate": tf_rate}, distro)
     _check_target(target, overwrite)
-    build = _Messages(distro, int(start_ns))
+    build = BagMessages(distro, int(start_ns))
     messages = _messages(chain, urdf, planned, executed, build, joint_state_rate, tf_rate)
+    return write_topics(target, TOPICS, messages, build, overwrite=overwrite, distro=distro)
+
+
+def write_topics(target: Path, topics: dict[str, tuple[str, Qos]],
+                 messages: dict[str, list[tuple[int, Any]]], build: BagMessages, *,
+                 overwrite: bool, distro: str) -> BagSummary:
+    """Write ``messages`` (topic -> [(offset ns from ``build.start_ns``, message)], topics in
+    connection order; types and QoS from ``topics``) as a new rosbag2 folder (MCAP) at
+    ``target``, atomically: a staging folder beside it, renamed into place.
+
+    Raises:
+        InvalidInputError: ``target`` exists (and ``overwrite`` is False, or it is no bag).
+    """
+    _check_target(target, overwrite)
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_leftovers(target)  # staging folders of writers that were killed
     staging = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), suffix=".tmp",
                                     dir=target.parent))
     try:
         bag = staging / target.name  # rosbags names the .mcap file after the folder
-        _write(bag, DISTROS[distro][1], build, messages)
+        _write(bag, DISTROS[distro][1], build, messages, topics)
         _check_target(target, overwrite)  # again: something may have appeared meanwhile
         _move_into_place(bag, target, staging)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    last = max(t for stamped in messages.values() for t, _ in stamped)
+    last = max((t for stamped in messages.values() for t, _ in stamped), default=0)
     return BagSummary(target, {topic: len(stamped) for topic, stamped in messages.items()},
-                      last / _NS, int(start_ns))
+                      last / _NS, int(build.start_ns))
 
-
-__all__ = ["DISTROS", "BagSummary", "ExecutedSamples", "write_bag"]
+__all__ = ["DISTROS", "LATCHED_QOS", "STREAM_QOS", "BagMessages", "BagSummary",
+           "ExecutedSamples", "write_bag", "write_topics"]

@@ -5,30 +5,18 @@ and boxes: walls, furniture, obstacles, each a centre, half sizes and a yaw, all
 radians in the USARSim frame (x forward, y right, z down; a box standing on the floor has a
 negative centre z). Ground vehicles drive on the floor and collide with the boxes; the range
 scanner sees them; the arms ignore both.
+
+The file format and the scenery are read by :mod:`usar_arm.core.world_file`.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
-from typing import Any
-
-import yaml
 
 from usar_arm.core.errors import FileFormatError
+from usar_arm.core.world_file import SceneryBox, parse_boxes, read_world_file, shipped_worlds
 from usar_arm.usarsim.messages import StartPose
-
-
-@dataclass(frozen=True)
-class SceneryBox:
-    """A static box of the world: name, centre (m), half sizes (m), yaw about z (rad)."""
-
-    name: str
-    center: tuple[float, float, float]
-    half: tuple[float, float, float]
-    yaw: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -51,12 +39,6 @@ class WorldSpec:
         return None
 
 
-def shipped_worlds() -> tuple[str, ...]:
-    """The names of the world files shipped with the simulator (``default``, ``rooms``)."""
-    folder = resources.files("usar_arm.sim") / "worlds"
-    return tuple(sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".yaml")))
-
-
 def load_world(path: str | Path | None = None) -> WorldSpec:
     """Load a world file, or a shipped world by name (default: ``default``, the arms' cell).
 
@@ -64,18 +46,7 @@ def load_world(path: str | Path | None = None) -> WorldSpec:
         FileFormatError: the file is not a world file.
         FileNotFoundError: no such file and no shipped world of that name.
     """
-    name = "default" if path is None else str(path)
-    if path is None or (name in shipped_worlds() and not Path(name).exists()):
-        with resources.as_file(resources.files("usar_arm.sim") / "worlds" / f"{name}.yaml") as fp:
-            return load_world(fp)
-    if not Path(path).is_file():
-        raise FileNotFoundError(f"no world file {name} (shipped worlds: "
-                                f"{', '.join(shipped_worlds())})")
-    p = str(path)
-    try:
-        data = yaml.safe_load(Path(path).read_text())
-    except yaml.YAMLError as exc:
-        raise FileFormatError(p, f"not valid YAML: {exc}") from None
+    p, data = read_world_file(path)
     poses = []
     for i, sp in enumerate(data.get("start_poses", [])):
         try:
@@ -90,24 +61,7 @@ def load_world(path: str | Path | None = None) -> WorldSpec:
         poses.append(StartPose(str(sp["name"]), loc, rot))  # type: ignore[arg-type]
     return WorldSpec(str(data.get("gametype", "BotDeathMatch")), str(data.get("level", "")),
                      float(data.get("time_limit", 0)), tuple(poses),
-                     _boxes(data.get("boxes") or [], p), float(data.get("floor_z", 0.0)))
+                     parse_boxes(data.get("boxes") or [], p), float(data.get("floor_z", 0.0)))
 
 
-def _boxes(entries: list[Any], path: str) -> tuple[SceneryBox, ...]:
-    out = []
-    for i, b in enumerate(entries):
-        try:
-            center = tuple(float(v) for v in b["center"])
-            half = tuple(float(v) for v in b["half"])
-            yaw = float(b.get("yaw", 0.0))
-        except (KeyError, TypeError, ValueError, AttributeError):
-            raise FileFormatError(path, "expected center [x,y,z], half [hx,hy,hz] and an "
-                                  "optional yaw", field=f"boxes[{i}]") from None
-        if len(center) != 3 or len(half) != 3 or min(half) <= 0:
-            raise FileFormatError(path, "center and half need three numbers, half sizes > 0",
-                                  field=f"boxes[{i}]")
-        if not all(math.isfinite(v) for v in (*center, *half, yaw)):
-            raise FileFormatError(path, "numbers must be finite", field=f"boxes[{i}]")
-        out.append(SceneryBox(str(b.get("name", f"box{i}")), center, half,  # type: ignore[arg-type]
-                              yaw))
-    return tuple(out)
+__all__ = ["SceneryBox", "WorldSpec", "load_world", "shipped_worlds"]

@@ -1,0 +1,72 @@
+"""The errors of driving a ground vehicle: commands, vehicle parameters, waypoints.
+
+Subclasses of :class:`~usar_arm.core.errors.InvalidInputError` (exit code 65), kept beside the
+error tree because ``core/errors.py`` is at the project's module size limit; like every error
+of the tree, each carries its evidence as attributes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from usar_arm.core.errors import InvalidInputError
+
+
+class NonFiniteCommandError(InvalidInputError):
+    """A velocity command (or a vehicle parameter it is mapped with) is NaN or infinite.
+
+    Attributes:
+        values: name -> the value given (m/s, rad/s, m), every one that was checked.
+    """
+
+    def __init__(self, values: dict[str, float]):
+        self.values = dict(values)
+        bad = ", ".join(f"{k} = {v}" for k, v in self.values.items() if not math.isfinite(v))
+        super().__init__(f"a drive command needs finite numbers; got {bad}")
+
+
+class VehicleParameterError(InvalidInputError):
+    """A vehicle parameter (wheel radius, separation, maximum wheel speed) is not positive.
+
+    Attributes:
+        name: the parameter. value: what it was (m or rad/s).
+    """
+
+    def __init__(self, name: str, value: float):
+        self.name = name
+        self.value = value
+        super().__init__(f"the vehicle's {name} must be a positive number, got {value}")
+
+
+class NotAVehicleError(InvalidInputError):
+    """The spawned robot is no ground vehicle the drive command can steer (its GETCONF/GETGEO
+    {Type Robot} lacks a wheel radius, a wheel separation or a maximum speed).
+
+    Attributes:
+        robot: the class asked for. platform_type: what the robot's CONF says it is.
+        missing: the fields that were not there.
+    """
+
+    def __init__(self, robot: str, platform_type: str, missing: Sequence[str]):
+        self.robot = robot
+        self.platform_type = platform_type
+        self.missing = tuple(missing)
+        super().__init__(f"{robot} is a {platform_type}, not a ground vehicle that can be "
+                         f"driven: its CONF/GEO {{Type Robot}} has no {', '.join(self.missing)} "
+                         "(a skid-steered vehicle such as USARBot.P3AT has them)")
+
+
+class OutsideWorldError(InvalidInputError):
+    """A waypoint lies outside the world's walls or inside one of its boxes.
+
+    Attributes:
+        index: the waypoint's 1-based position. point: its x, y (m, map frame).
+        where: what it is outside of, or inside.
+    """
+
+    def __init__(self, index: int, point: tuple[float, float], where: str):
+        self.index = index
+        self.point = point
+        self.where = where
+        super().__init__(f"waypoint {index} ({point[0]:g}, {point[1]:g}) m lies {where}")
