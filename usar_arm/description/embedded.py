@@ -24,6 +24,12 @@ def known_classes() -> tuple[str, ...]:
     return tuple(sorted(builtin_robots()))
 
 
+def vehicle_classes() -> tuple[str, ...]:
+    """The ground vehicle classes the embedded simulator can spawn (package-qualified)."""
+    return tuple(sorted(name for name, spec in builtin_robots(vehicles=True).items()
+                        if spec.vehicle is not None))
+
+
 def start_simulator(wire_precision: str = "udk", speed: float = 1.0) -> SimServer:
     """A started embedded simulator on a free loopback port (stop it with ``stop()``)."""
     server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,

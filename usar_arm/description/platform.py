@@ -1,0 +1,88 @@
+"""A ground vehicle's description, learnt over the wire and written: ``usar-arm urdf --robot P3AT``.
+
+Which path a robot takes (arm or platform) is decided by its class (a ground vehicle class of
+the embedded simulator), and the spawned robot's ``CONF {Type GroundVehicle}`` is checked before
+anything is learnt. The arm path (:mod:`.pipeline`) is untouched by this module.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.core.platform import REP105_FRAMES, PlatformDescription, PlatformFrames
+from usar_arm.core.version import __version__
+from usar_arm.description.embedded import embedded_simulator, vehicle_classes
+from usar_arm.discover.interview import DiscoveryRecord
+from usar_arm.discover.platform import learn_platform
+from usar_arm.urdf.platform import platform_urdf, validate_platform
+from usar_arm.usarsim.client import UsarClient
+
+
+@dataclass(frozen=True)
+class PlatformResult:
+    """A learnt, validated platform: its description, URDF and the raw exchanges."""
+
+    description: PlatformDescription
+    urdf: str
+    record: DiscoveryRecord
+    frames: PlatformFrames = REP105_FRAMES
+
+    def discovery_json(self) -> str:
+        """``<Robot>.platform.json``: what was learnt and the lines it was learnt from."""
+        data: dict[str, Any] = {
+            "usar_arm_version": __version__,
+            "robot": {"class": self.record.robot_class, "start": self.record.start,
+                      "host": self.record.host},
+            "platform": dataclasses.asdict(self.description),
+            "footprint_radius_m": self.description.footprint_radius,
+            "exchanges": [{"request": e.request, "reply": e.reply}
+                          for e in self.record.exchanges]}
+        return json.dumps(data, indent=2, sort_keys=True) + "\n"
+
+
+def is_ground_vehicle(robot_class: str) -> bool:
+    """Whether ``robot_class`` is described as a ground vehicle: the class decides (one of the
+    embedded simulator's vehicle classes, such as ``USARBot.P3AT``), with a remote server too,
+    so that the arm path keeps its exchanges unchanged; the platform path then checks the
+    spawned robot's ``CONF {Type GroundVehicle}`` and stops if it is not one."""
+    qualified = robot_class if "." in robot_class else f"USARBot.{robot_class}"
+    return qualified.lower() in (c.lower() for c in vehicle_classes())
+
+
+def learn(robot_class: str, host: str | None = None, port: int = 3000,
+          start: str | None = None, timeout: float = 5.0, wire_precision: str = "udk",
+          frames: PlatformFrames = REP105_FRAMES) -> PlatformResult:
+    """Spawn the vehicle (the embedded simulator when ``host`` is None), learn it and build its
+    validated URDF (nothing is written)."""
+    known = vehicle_classes() if host is None else ()
+    if host is None:
+        with embedded_simulator(wire_precision) as server:
+            assert server.port is not None
+            with UsarClient("127.0.0.1", server.port, timeout=timeout) as client:
+                record, desc = learn_platform(client, robot_class, start, timeout, known)
+    else:
+        with UsarClient(host, port, timeout=timeout) as client:
+            record, desc = learn_platform(client, robot_class, start, timeout)
+    return described(record, desc, frames)
+
+
+def described(record: DiscoveryRecord, desc: PlatformDescription,
+              frames: PlatformFrames = REP105_FRAMES) -> PlatformResult:
+    """The validated URDF of a learnt platform."""
+    urdf = platform_urdf(desc, frames)
+    validate_platform(desc, urdf, frames)
+    return PlatformResult(desc, urdf, record, frames)
+
+
+def write_platform(result: PlatformResult, out_dir: str | Path) -> dict[str, Path]:
+    """Write ``<Robot>.urdf`` and ``<Robot>.platform.json``, each atomically (the URDF first)."""
+    name = result.description.name
+    files = {f"{name}.urdf": result.urdf, f"{name}.platform.json": result.discovery_json()}
+    paths = write_tree_atomic(out_dir, files)
+    by_name = {p.name: p for p in paths}
+    return {"urdf": by_name[f"{name}.urdf"], "platform": by_name[f"{name}.platform.json"]}
