@@ -16,6 +16,7 @@ from usar_arm.description.pipeline import DescribeOptions, Description, describe
 from usar_arm.discover.interview import DiscoveryRecord, discover
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
+from usar_arm.sim.world_spec import load_world
 from usar_arm.usarsim.client import UsarClient
 
 
@@ -30,10 +31,13 @@ def vehicle_classes() -> tuple[str, ...]:
                         if spec.vehicle is not None))
 
 
-def start_simulator(wire_precision: str = "udk", speed: float = 1.0) -> SimServer:
-    """A started embedded simulator on a free loopback port (stop it with ``stop()``)."""
+def start_simulator(wire_precision: str = "udk", speed: float = 1.0,
+                    world: str | None = None) -> SimServer:
+    """A started embedded simulator on a free loopback port (stop it with ``stop()``), serving
+    the shipped world ``world`` (default: the arms' cell)."""
     server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,
-                                  speed=speed))
+                                  speed=speed),
+                       world_spec=load_world(world) if world is not None else None)
     server.start()
     return server
 

@@ -16,7 +16,7 @@ from typing import Any
 from usar_arm.core.fileio import write_tree_atomic
 from usar_arm.core.platform import REP105_FRAMES, PlatformDescription, PlatformFrames
 from usar_arm.core.version import __version__
-from usar_arm.description.embedded import embedded_simulator, vehicle_classes
+from usar_arm.description.embedded import embedded_simulator, start_simulator, vehicle_classes
 from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.discover.platform import learn_platform
 from usar_arm.urdf.platform import platform_urdf, validate_platform
@@ -86,3 +86,36 @@ def write_platform(result: PlatformResult, out_dir: str | Path) -> dict[str, Pat
     paths = write_tree_atomic(out_dir, files)
     by_name = {p.name: p for p in paths}
     return {"urdf": by_name[f"{name}.urdf"], "platform": by_name[f"{name}.platform.json"]}
+
+
+class LivePlatform:
+    """A spawned vehicle kept alive for a driver: its connection (and the embedded simulator
+    when no host is given) and its learnt description. Close it to destroy the robot.
+
+    Args: as :func:`learn`; ``world`` names the embedded simulator's world (default ``rooms``,
+    the shipped world for ground vehicles).
+    """
+
+    def __init__(self, robot_class: str, host: str | None = None, port: int = 3000,
+                 start: str | None = None, timeout: float = 5.0, wire_precision: str = "udk",
+                 frames: PlatformFrames = REP105_FRAMES, world: str = "rooms"):
+        self.server = start_simulator(wire_precision, world=world) if host is None else None
+        try:
+            address = ("127.0.0.1", self.server.port) if self.server is not None else (host, port)
+            assert address[0] is not None and address[1] is not None
+            self.client = UsarClient(address[0], address[1], timeout=timeout)
+            self.client.connect()
+            known = vehicle_classes() if host is None else ()
+            record, desc = learn_platform(self.client, robot_class, start, timeout, known)
+            self.result = described(record, desc, frames)
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        """Close the connection (the robot is destroyed) and stop the embedded simulator."""
+        client = getattr(self, "client", None)
+        if client is not None:
+            client.close()
+        if self.server is not None:
+            self.server.stop()
