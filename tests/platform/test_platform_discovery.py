@@ -4,12 +4,14 @@ wheels and sensor frames; hidden and unknown sensors are reported, Ackermann ref
 
 from __future__ import annotations
 
+import json
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 
+from usar_arm.cli.main import main
 from usar_arm.core.errors import DescriptionError, UnsupportedSteeringError, ValidationError
 from usar_arm.core.platform import SEED_FRAMES
 from usar_arm.description.embedded import embedded_simulator
@@ -126,3 +128,17 @@ def test_a_broken_description_is_refused_listing_the_problem(learnt: PlatformRes
     with pytest.raises(ValidationError, match="wheel radius must be > 0"):
         described(learnt.record, bad)
     assert math.isclose(learnt.description.footprint_radius, math.hypot(0.222, 0.205))
+
+
+def test_the_urdf_command_describes_a_ground_vehicle(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["urdf", "--robot", "P3AT", "-o", str(tmp_path), "--json", "-q"])
+    assert code == 0
+    facts = json.loads(capsys.readouterr().out)
+    assert (facts["steering"], facts["wheel_radius_m"], facts["max_wheel_speed_rad_s"]) == (
+        "SkidSteered", 0.098, 1.2999)
+    assert {s["frame"] for s in facts["sensors"]} == {"gndtruth_link", "instest_link",
+                                                     "lms200_link", "odometer_link"}
+    assert facts["hidden_sensors"] == [] and facts["unknown_sensors"] == []
+    assert Path(facts["files"]["urdf"]).read_text().startswith('<?xml version="1.0"?>')
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["P3AT.platform.json", "P3AT.urdf"]

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -40,9 +41,9 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Client, 
         assert code == 0, node.text()[-3000:]
 
 
-def _truth(client: Client, seconds: float = 1.0) -> Any:
-    got = client.collect(Odometry, "ground_truth", seconds, until=lambda ms: bool(ms))
-    assert got, "no ground_truth"
+def _truth(client: Client, seconds: float = 1.0, topic: str = "ground_truth") -> Any:
+    got = client.collect(Odometry, topic, seconds, until=lambda ms: bool(ms))
+    assert got, f"no {topic}"
     return got[-1][1]
 
 
@@ -104,14 +105,18 @@ def test_scan_odom_truth_tf_and_clock(session: tuple[Client, str, NodeProcess]) 
 def test_cmd_vel_moves_forward_and_turns_left_then_the_timeout_stops_it(
         session: tuple[Client, str, NodeProcess]) -> None:
     client, _, node = session
-    start = _truth(client)
+    start, odom_start = _truth(client), _truth(client, topic="odom")
     _drive(client, 0.1, 0.0, 2.0)
-    moved = _truth(client)
+    moved, odom = _truth(client), _truth(client, topic="odom")
     heading = _yaw(start)
     dx = moved.pose.pose.position.x - start.pose.pose.position.x
     dy = moved.pose.pose.position.y - start.pose.pose.position.y
     forward = dx * math.cos(heading) + dy * math.sin(heading)
     assert forward > 0.1, (dx, dy, heading)
+    # odom (the INS) saw the same move: forward along its x, which starts on the heading
+    odom_dx = odom.pose.pose.position.x - odom_start.pose.pose.position.x
+    odom_dy = odom.pose.pose.position.y - odom_start.pose.pose.position.y
+    assert odom_dx == pytest.approx(forward, abs=0.03) and abs(odom_dy) < 0.03
     _drive(client, 0.0, 0.5, 1.5)  # counter-clockwise (REP-103): the yaw grows
     turned = _truth(client)
     assert math.remainder(_yaw(turned) - _yaw(moved), math.tau) > 0.1
@@ -132,3 +137,28 @@ def test_a_nan_command_is_refused_and_the_robot_stops(
     while "cmd_vel refused" not in node.text() and time.monotonic() < deadline:
         time.sleep(0.1)
     assert "cmd_vel refused, the robot stops" in node.text()
+
+
+def test_seed_frames_and_wheel_odometry(tmp_path: Path) -> None:
+    """--frames seed (the 2012 names) with odom from the Odometry sensor: odom -> base_link,
+    sensors under their USARSim names, no base_footprint."""
+    domain = domain_id()
+    node = NodeProcess(domain, ["--robot", "P3AT", "--frames", "seed", "--ros-args", "-p",
+                                "odom_sensor:=Odometer"], tmp_path / "node.log")
+    client = Client(domain)
+    try:
+        urdf = client.description()
+        assert '"base_footprint"' not in urdf and '"lms200"' in urdf
+        got = client.collect_many({"scan": LaserScan, "odom": Odometry}, 1.0)
+        static = client.collect(TFMessage, "tf_static", 10.0, LATCHED, until=lambda ms: bool(ms))
+    finally:
+        client.close()
+        code = node.stop()
+    assert code == 0, node.text()[-3000:]
+    assert "odom (from Odometer)" in node.text()
+    assert got["scan"][-1][1].header.frame_id == "lms200"
+    odom = got["odom"][-1][1]
+    assert (odom.header.frame_id, odom.child_frame_id) == ("odom", "base_link")
+    pairs = {(t.header.frame_id, t.child_frame_id) for t in static[0][1].transforms}
+    assert pairs == {("base_link", "GndTruth"), ("base_link", "InsTest"),
+                     ("base_link", "lms200")}

@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from array import array
 from dataclasses import dataclass
 
 import numpy as np
@@ -184,7 +185,8 @@ class Streams:
         out = LaserScan(angle_min=fields.angle_min, angle_max=fields.angle_max,
                         angle_increment=fields.angle_increment, time_increment=0.0,
                         scan_time=fields.scan_time, range_min=fields.range_min,
-                        range_max=fields.range_max, ranges=list(fields.ranges))
+                        range_max=fields.range_max,
+                        ranges=array("f", fields.ranges))  # no per-item checks
         out.header.stamp = self._stamp(rec, msg.time)
         out.header.frame_id = self.frames.sensor(sensor)
         self.scan_pub.publish(out)
