@@ -3,9 +3,10 @@ own rclpy client, on a private ROS domain on localhost.
 
     python bench/ros_platform.py [--seconds 20] [--json bench/results/ros_platform.json]
 
-The node talks to an embedded simulator (``rooms`` world) that this script starts, through a
-TCP relay of this script's own: the relay forwards every byte both ways and notes the moment
-each DRIVE line from the node passes it. Measures:
+The node talks to a simulator (``usar-arm sim --world rooms``, a process of its own, so that its
+physics never holds this process's interpreter) through a TCP relay of this script's own: the
+relay forwards every byte both ways and notes the moment each DRIVE line from the node passes
+it. Measures:
 
 * /scan: messages per second, ranges per scan, and latency from the SEN line's arrival in the
   node (the message's stamp, without --use-sim-time) to this subscriber (p50, p99, max);
@@ -33,7 +34,6 @@ from typing import Any
 import common
 import numpy as np
 
-from usar_arm.description.embedded import start_simulator
 from usar_arm.ros.build import ensure_importable
 
 ensure_importable()
@@ -95,6 +95,24 @@ def _left(line: str) -> float:
     return float(line[start:line.index("}", start)])
 
 
+def _simulator() -> tuple[subprocess.Popen[bytes], int]:
+    """``usar-arm sim --world rooms`` on a free port, once it accepts connections."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    sim = subprocess.Popen([sys.executable, "-m", "usar_arm", "sim", "--world", "rooms",
+                            "--port", str(port), "-q"], cwd=ROOT)
+    end = time.monotonic() + 120
+    while time.monotonic() < end:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return sim, port
+        except OSError:
+            time.sleep(0.2)
+    sim.kill()
+    raise TimeoutError(f"usar-arm sim did not listen on port {port} within 120 s")
+
+
 def _proc_cpu(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / TICKS
@@ -131,9 +149,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     os.environ["ROS_DOMAIN_ID"] = str(a.domain)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    server = start_simulator(world="rooms")
-    assert server.port is not None
-    relay = Relay(server.port)
+    sim, port = _simulator()
+    relay = Relay(port)
     node = subprocess.Popen([sys.executable, "-m", "usar_arm", "ros", "--robot", "P3AT", "-q",
                              "--host", "127.0.0.1", "--port", str(relay.port)], cwd=ROOT)
     rclpy.init()
@@ -175,7 +192,8 @@ def main(argv: list[str] | None = None) -> int:
         node.send_signal(signal.SIGINT)
         code = node.wait(60)
         relay.listener.close()
-        server.stop()
+        sim.send_signal(signal.SIGINT)
+        sim.wait(60)
     doc["node_exit_code"] = code
     print(json.dumps(common.plain(doc), indent=1))
     if a.json:
