@@ -8,6 +8,7 @@ import time
 
 from tests.platform.test_platform_discovery import CONF, GEO
 from tests.usarsim.fake_server import FakeServer, read_line
+from usar_arm.description.platform import is_ground_vehicle
 from usar_arm.discover.platform import learn_platform
 from usar_arm.urdf.platform import platform_urdf, validate_platform
 from usar_arm.usarsim.client import UsarClient
@@ -56,3 +57,14 @@ def test_hidden_and_unknown_sensors_are_reported_not_guessed() -> None:
     urdf = platform_urdf(desc)
     validate_platform(desc, urdf)
     assert "INS Secret" in urdf and '"secret_link"' not in urdf
+
+
+def test_a_remote_class_the_simulator_does_not_know_is_judged_by_its_status_line() -> None:
+    with FakeServer(_script) as srv:
+        assert is_ground_vehicle("USARBot.Kenaf", "127.0.0.1", srv.port, timeout=3.0)
+
+
+def test_known_classes_decide_without_a_connection() -> None:
+    # port 9 (discard) has nobody listening: a connection attempt would raise
+    assert is_ground_vehicle("P3AT", "127.0.0.1", 9)
+    assert not is_ground_vehicle("KR60", "127.0.0.1", 9)

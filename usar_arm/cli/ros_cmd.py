@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     ensure_importable()
     from usar_arm.description.platform import is_ground_vehicle
 
-    if is_ground_vehicle(args.robot):
+    if is_ground_vehicle(args.robot, args.host, args.port):
         return _run_platform(args)
     from usar_arm.ros.node import NodeOptions
     from usar_arm.ros.node import run as run_node

@@ -94,7 +94,7 @@ def _print_table(desc: Description) -> None:
 def run_urdf(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     options = options_from(args)
-    if is_ground_vehicle(options.robot_class):
+    if is_ground_vehicle(options.robot_class, options.host, options.port, options.timeout):
         return run_platform_urdf(args, options)
     if args.readings is not None and args.no_calibrate:
         raise InvalidInputError("--readings calibrates; it cannot go with --no-calibrate")

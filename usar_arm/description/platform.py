@@ -1,8 +1,9 @@
 """A ground vehicle's description, learnt over the wire and written: ``usar-arm urdf --robot P3AT``.
 
-Which path a robot takes (arm or platform) is decided by its class (a ground vehicle class of
-the embedded simulator), and the spawned robot's ``CONF {Type GroundVehicle}`` is checked before
-anything is learnt. The arm path (:mod:`.pipeline`) is untouched by this module.
+Which path a robot takes (arm or platform) is decided by its class when the embedded simulator
+knows it, else (a remote server) by the spawned robot's first status line
+(:func:`is_ground_vehicle`); the platform path checks the robot's ``CONF {Type GroundVehicle}``
+before anything is learnt. The arm path (:mod:`.pipeline`) is untouched by this module.
 """
 
 from __future__ import annotations
@@ -16,11 +17,18 @@ from typing import Any
 from usar_arm.core.fileio import write_tree_atomic
 from usar_arm.core.platform import REP105_FRAMES, PlatformDescription, PlatformFrames
 from usar_arm.core.version import __version__
-from usar_arm.description.embedded import embedded_simulator, start_simulator, vehicle_classes
-from usar_arm.discover.interview import DiscoveryRecord
-from usar_arm.discover.platform import learn_platform
+from usar_arm.description.embedded import (
+    embedded_simulator,
+    known_classes,
+    start_simulator,
+    vehicle_classes,
+)
+from usar_arm.discover.interview import DiscoveryRecord, spawn_robot
+from usar_arm.discover.platform import GROUND_VEHICLE, learn_platform
 from usar_arm.urdf.platform import platform_urdf, validate_platform
+from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
+from usar_arm.usarsim.codec import parse_line
 
 
 @dataclass(frozen=True)
@@ -45,13 +53,25 @@ class PlatformResult:
         return json.dumps(data, indent=2, sort_keys=True) + "\n"
 
 
-def is_ground_vehicle(robot_class: str) -> bool:
-    """Whether ``robot_class`` is described as a ground vehicle: the class decides (one of the
-    embedded simulator's vehicle classes, such as ``USARBot.P3AT``), with a remote server too,
-    so that the arm path keeps its exchanges unchanged; the platform path then checks the
-    spawned robot's ``CONF {Type GroundVehicle}`` and stops if it is not one."""
+def is_ground_vehicle(robot_class: str, host: str | None = None, port: int = 3000,
+                      timeout: float = 5.0) -> bool:
+    """Whether ``robot_class`` is described as a ground vehicle.
+
+    A class the embedded simulator knows decides by itself (``USARBot.P3AT`` is a vehicle, the
+    arms are not), so the arm path keeps its exchanges unchanged; a class it does not know, on a
+    remote server, is spawned once on a connection of its own and its first status line
+    decides (``STA {Type GroundVehicle}``). The platform path then checks the spawned robot's
+    ``CONF {Type GroundVehicle}`` before it learns anything.
+    """
     qualified = robot_class if "." in robot_class else f"USARBot.{robot_class}"
-    return qualified.lower() in (c.lower() for c in vehicle_classes())
+    if qualified.lower() in (c.lower() for c in vehicle_classes()):
+        return True
+    if host is None or qualified.lower() in (c.lower() for c in known_classes()):
+        return False
+    with UsarClient(host, port, timeout=timeout) as client:
+        record, _ = spawn_robot(client, qualified, timeout=timeout)
+    first = parse_line(record.exchanges[-1].reply)
+    return isinstance(first, m.Sta) and first.type == GROUND_VEHICLE
 
 
 def learn(robot_class: str, host: str | None = None, port: int = 3000,
