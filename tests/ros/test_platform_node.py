@@ -162,3 +162,10 @@ def test_seed_frames_and_wheel_odometry(tmp_path: Path) -> None:
     pairs = {(t.header.frame_id, t.child_frame_id) for t in static[0][1].transforms}
     assert pairs == {("base_link", "GndTruth"), ("base_link", "InsTest"),
                      ("base_link", "lms200")}
+
+
+def test_an_arms_option_with_a_vehicle_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    from usar_arm.cli.main import main
+
+    assert main(["ros", "--robot", "P3AT", "--controller", "x"]) == 65
+    assert "--controller is an arm's option; P3AT is a ground vehicle" in capsys.readouterr().err

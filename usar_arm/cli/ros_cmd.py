@@ -5,13 +5,13 @@ from __future__ import annotations
 import argparse
 
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
-from usar_arm.core.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser(
         "ros", help="serve the arm on ROS 2: robot_description, joint_states, tf, "
-                    "FollowJointTrajectory",
+                    "FollowJointTrajectory (a ground vehicle: cmd_vel, odom, scan)",
         description="Spawn ROBOT (the embedded simulator unless --host), learn it, and serve it "
                     "as a ROS 2 robot until Ctrl-C or SIGTERM (the arm then holds; exit 0): "
                     "robot_description, joint_states (one per ASTA), tf_static/tf, "
@@ -91,8 +91,18 @@ def run(args: argparse.Namespace) -> int:
     return code
 
 
+ARM_ONLY = (("scene", None), ("controller", None), ("frame_prefix", ""), ("rate", 100.0))
+"""Options that mean something for an arm only, with their defaults."""
+
+
 def _run_platform(args: argparse.Namespace) -> int:
     from usar_arm.ros.platform_node import PlatformNodeOptions
+
+    for name, default in ARM_ONLY:
+        if getattr(args, name) != default:
+            raise InvalidInputError(f"--{name.replace('_', '-')} is an arm's option; "
+                                    f"{args.robot} is a ground vehicle (its options: --frames, "
+                                    "--odom-sensor, --cmd-timeout; docs/ros.md section 8)")
     from usar_arm.ros.platform_node import run as run_node
 
     options = PlatformNodeOptions(
