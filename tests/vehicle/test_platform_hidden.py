@@ -6,7 +6,7 @@ from __future__ import annotations
 import socket
 import time
 
-from tests.platform.test_platform_discovery import CONF, GEO
+from tests.vehicle.test_platform_discovery import CONF, GEO
 from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm.description.platform import is_ground_vehicle
 from usar_arm.discover.platform import learn_platform
