@@ -24,7 +24,8 @@ from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser(
-        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits",
+        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits "
+                     "(a ground vehicle: its URDF)",
         description="The successor of the 2012 usar_urdf node: spawn ROBOT on a USARSim server "
                     "(the embedded simulator unless --host), read its actuator's CONF and GEO, "
                     "and write <Robot>.urdf, <Robot>.srdf, <Robot>.joint_limits.yaml and "
