@@ -32,6 +32,7 @@ from rclpy.executors import (  # noqa: E402
     MultiThreadedExecutor,
     SingleThreadedExecutor,
 )
+from rclpy.experimental import EventsExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
@@ -41,7 +42,7 @@ from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
 
-__all__ = ["LATCHED", "ActionServer", "CancelResponse", "Clock", "Duration",
+__all__ = ["LATCHED", "ActionServer", "CancelResponse", "Clock", "Duration", "EventsExecutor",
            "ExternalShutdownException", "FollowJointTrajectory", "GoalResponse", "JointState",
            "JointTrajectory", "JointTrajectoryPoint", "LaserScan", "MultiThreadedExecutor",
            "Node", "Odometry", "Parameter", "ReentrantCallbackGroup", "SingleThreadedExecutor",

@@ -35,10 +35,10 @@ from usar_arm.description.platform import LivePlatform
 from usar_arm.ros.api import (
     LATCHED,
     Clock,
+    EventsExecutor,
     LaserScan,
     Node,
     Odometry,
-    SingleThreadedExecutor,
     String,
     TFMessage,
     Time,
@@ -289,7 +289,7 @@ def serve(node: Node, live: LivePlatform, options: PlatformNodeOptions, frames: 
              "joint_states is not published", desc.name)
     log.info("serving %s: cmd_vel, odom (from %s), scan, ground_truth, tf", desc.name,
              streams.odom_name)
-    spin = SingleThreadedExecutor()  # cmd_vel and the timeout timer: no thread hand-offs
+    spin = EventsExecutor()  # cmd_vel and the timeout timer, dispatched in C++ (rclpy's)
     spin.add_node(node)
     try:
         spin_until(spin, stop)
