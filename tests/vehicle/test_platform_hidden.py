@@ -6,8 +6,8 @@ from __future__ import annotations
 import socket
 import time
 
-from tests.vehicle.test_platform_discovery import CONF, GEO
 from tests.usarsim.fake_server import FakeServer, read_line
+from tests.vehicle.test_platform_discovery import CONF, GEO
 from usar_arm.description.platform import is_ground_vehicle
 from usar_arm.discover.platform import learn_platform
 from usar_arm.urdf.platform import platform_urdf, validate_platform

@@ -44,6 +44,7 @@ from usar_arm.ros.api import (
     Time,
     Twist,
     declared_options,
+    rclpy,
     ros_time,
     run_ros,
     spin_until,
@@ -133,13 +134,19 @@ class Streams:
         self.clock = node.create_publisher(Clock, "/clock", 10) if use_sim_time else None
         self.sim_time = 0.0
         self.counts = {"scan": 0, "odom": 0, "ground_truth": 0}
+        self.failures: set[str] = set()
 
     def on_line(self, rec: Received) -> None:
-        """The connection's subscriber (its reader thread); never raises."""
+        """The connection's subscriber (its reader thread); never raises: a failure is logged
+        as a warning the first time of its kind (a context shutting down: at debug level)."""
         try:
             self._handle(rec)
         except Exception as exc:  # a publisher of a context shutting down, a bad number
-            log.debug("line not published: %s", exc)
+            kind = type(exc).__name__
+            quiet = kind in self.failures or not rclpy.ok()
+            self.failures.add(kind)
+            log.log(logging.DEBUG if quiet else logging.WARNING,
+                    "%s line not published: %s: %s", rec.line[:40], kind, exc)
 
     def _stamp(self, rec: Received, sim: float | None) -> Time:
         if self.use_sim_time:
