@@ -28,7 +28,8 @@ test checks it against what the modules register)."""
 SUMMARIES: dict[str, str] = {
     "demo": "the main job: describe the KR60 and run a pick-and-place cycle",
     "sim": "run the embedded USARSim-compatible simulator (MuJoCo physics)",
-    "urdf": "spawn a robot, learn its arm over the wire, write URDF/SRDF/limits",
+    "urdf": "spawn a robot, learn its arm over the wire, write URDF/SRDF/limits "
+                "(a ground vehicle: its URDF)",
     "moveit-config": "write a complete MoveIt 2 config package for a robot",
     "ik": "inverse kinematics: joint values that put tool0 at a pose",
     "plan": "plan a collision-free, jerk-limited motion to a pose or joint values",
@@ -42,7 +43,7 @@ SUMMARIES: dict[str, str] = {
     "plot": "plot a trajectory's joints against their limits as a PNG",
     "view": "replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
     "ros": "serve the arm on ROS 2: robot_description, joint_states, tf, "
-           "FollowJointTrajectory",
+           "FollowJointTrajectory (a ground vehicle: cmd_vel, odom, scan)",
     "drive": "drive a ground vehicle (P3AT) by waypoints or a script; bag, picture, drift"}
 """Each command's line in --help, as its module registers it (a test checks they agree): what
 ``usar-arm --help`` shows without loading the commands."""

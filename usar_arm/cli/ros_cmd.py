@@ -5,13 +5,13 @@ from __future__ import annotations
 import argparse
 
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
-from usar_arm.core.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK, InvalidInputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser(
         "ros", help="serve the arm on ROS 2: robot_description, joint_states, tf, "
-                    "FollowJointTrajectory",
+                    "FollowJointTrajectory (a ground vehicle: cmd_vel, odom, scan)",
         description="Spawn ROBOT (the embedded simulator unless --host), learn it, and serve it "
                     "as a ROS 2 robot until Ctrl-C or SIGTERM (the arm then holds; exit 0): "
                     "robot_description, joint_states (one per ASTA), tf_static/tf, "
@@ -44,6 +44,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
                         "full (every number exact; ignored with --host)")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="command rate of the executor (default 100 Hz)")
+    v = p.add_argument_group("ground vehicles (--robot P3AT): cmd_vel, odom, scan, "
+                             "ground_truth, tf (docs/ros.md, Mobile platform)")
+    v.add_argument("--frames", choices=("rep105", "seed"), default="rep105",
+                   help="frame names: rep105 (map/odom/base_footprint/base_link, default) or "
+                        "seed (the 2012 usar_urdf node's: base_link root, sensors by name)")
+    v.add_argument("--odom-sensor", default="", metavar="NAME",
+                   help="the sensor odom comes from (default: the first INS)")
+    v.add_argument("--cmd-timeout", type=float, default=0.5, metavar="S",
+                   help="stop the vehicle when no cmd_vel came for S seconds (default 0.5)")
     add_verbosity(p)
     p.add_argument("--ros-args", nargs=argparse.REMAINDER, default=[], metavar="ARG",
                    help="ROS arguments, last on the line: -p name:=value, -r from:=to, "
@@ -65,6 +74,10 @@ def run(args: argparse.Namespace) -> int:
     from usar_arm.ros.build import ensure_importable
 
     ensure_importable()
+    from usar_arm.description.platform import is_ground_vehicle
+
+    if is_ground_vehicle(args.robot, args.host, args.port):
+        return _run_platform(args)
     from usar_arm.ros.node import NodeOptions
     from usar_arm.ros.node import run as run_node
 
@@ -75,4 +88,28 @@ def run(args: argparse.Namespace) -> int:
                           wire_precision=args.wire_precision)
     code = run_node(options, list(args.ros_args))
     err("usar-arm ros: stopped; the arm held its position")
+    return code
+
+
+ARM_ONLY = (("scene", None), ("controller", None), ("frame_prefix", ""), ("rate", 100.0))
+"""Options that mean something for an arm only, with their defaults."""
+
+
+def _run_platform(args: argparse.Namespace) -> int:
+    from usar_arm.ros.platform_node import PlatformNodeOptions
+
+    for name, default in ARM_ONLY:
+        if getattr(args, name) != default:
+            raise InvalidInputError(f"--{name.replace('_', '-')} is an arm's option; "
+                                    f"{args.robot} is a ground vehicle (its options: --frames, "
+                                    "--odom-sensor, --cmd-timeout; docs/ros.md section 8)")
+    from usar_arm.ros.platform_node import run as run_node
+
+    options = PlatformNodeOptions(
+        robot_type=args.robot, host=args.host or "", port=args.port,
+        start=args.start_position or "", use_sim_time=args.use_sim_time, frames=args.frames,
+        odom_sensor=args.odom_sensor, cmd_timeout=args.cmd_timeout,
+        wire_precision=args.wire_precision)
+    code = run_node(options, list(args.ros_args))
+    err("usar-arm ros: stopped; the vehicle was stopped")
     return code

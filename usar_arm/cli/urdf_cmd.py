@@ -12,27 +12,32 @@ from usar_arm.cli.default_calibration import (
     describe_calibrated,
 )
 from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
+from usar_arm.cli.platform_urdf import run_platform_urdf
 from usar_arm.cli.robot_args import add_description_args, add_server_args, options_from
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.fileio import write_atomic, write_tree_atomic
 from usar_arm.description.pipeline import Description, write_description
+from usar_arm.description.platform import is_ground_vehicle
 from usar_arm.urdf.moveit import moveit_files, package_name
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser(
-        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits",
+        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits "
+                     "(a ground vehicle: its URDF)",
         description="The successor of the 2012 usar_urdf node: spawn ROBOT on a USARSim server "
                     "(the embedded simulator unless --host), read its actuator's CONF and GEO, "
                     "and write <Robot>.urdf, <Robot>.srdf, <Robot>.joint_limits.yaml and "
                     "<Robot>.discovery.json (the raw lines received and the chain built from "
                     "them). An arm with a tip pose sensor is calibrated first (a tour through "
-                    "--poses poses reading it; --no-calibrate skips it). Every file is "
-                    "validated first and written atomically.")
+                    "--poses poses reading it; --no-calibrate skips it). A ground vehicle "
+                    "(CONF {Type GroundVehicle}, e.g. P3AT) gets <Robot>.urdf (base_footprint, "
+                    "base_link, four wheels, a frame per sensor) and <Robot>.platform.json "
+                    "instead. Every file is validated first and written atomically.")
     add_server_args(p)
     add_description_args(p)
-    p.add_argument("--out-dir", default="robots/generated", metavar="DIR",
+    p.add_argument("-o", "--out-dir", default="robots/generated", metavar="DIR",
                    help="where to write (default robots/generated)")
     add_calibration_args(p)
     p.add_argument("--readings", default=None, metavar="FILE",
@@ -90,6 +95,8 @@ def _print_table(desc: Description) -> None:
 def run_urdf(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     options = options_from(args)
+    if is_ground_vehicle(options.robot_class, options.host, options.port, options.timeout):
+        return run_platform_urdf(args, options)
     if args.readings is not None and args.no_calibrate:
         raise InvalidInputError("--readings calibrates; it cannot go with --no-calibrate")
     err(f"discovering {options.robot_class} on "

@@ -183,6 +183,11 @@ class DescriptionError(UsarArmError):
     exit_code = EXIT_BAD_DESCRIPTION
 
 
+class UnsupportedSteeringError(DescriptionError):
+    """A ground vehicle whose steering usar-arm cannot describe or drive (the message names its
+    steering type and the supported ones)."""
+
+
 class ValidationError(DescriptionError):
     """A generated description failed one or more checks; every problem is listed."""
 

@@ -26,10 +26,19 @@ def known_classes(vehicles: bool = False) -> tuple[str, ...]:
     return tuple(sorted(builtin_robots(vehicles=vehicles)))
 
 
-def start_simulator(wire_precision: str = "udk", speed: float = 1.0) -> SimServer:
-    """A started embedded simulator on a free loopback port (stop it with ``stop()``)."""
+def vehicle_classes() -> tuple[str, ...]:
+    """The ground vehicle classes the embedded simulator can spawn (package-qualified)."""
+    return tuple(sorted(name for name, spec in builtin_robots(vehicles=True).items()
+                        if spec.vehicle is not None))
+
+
+def start_simulator(wire_precision: str = "udk", speed: float = 1.0,
+                    world: str | None = None) -> SimServer:
+    """A started embedded simulator on a free loopback port (stop it with ``stop()``), serving
+    the shipped world ``world`` (default: the arms' cell)."""
     server = SimServer(SimOptions(host="127.0.0.1", port=0, wire_precision=wire_precision,
-                                  speed=speed))
+                                  speed=speed),
+                       world_spec=load_world(world) if world is not None else None)
     server.start()
     return server
 

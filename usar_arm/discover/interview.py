@@ -78,31 +78,8 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
         UnknownStartError, UnknownRobotError, UnknownComponentError, ConnectionLostError,
         DescriptionError: each says what was wrong and what the server offers.
     """
-    if "." not in robot_class:
-        robot_class = f"USARBot.{robot_class}"
-    record = DiscoveryRecord(client.host, client.port, robot_class, start)
-
-    def ask(msg: m.Message, accept_type: type, name: str | None = None) -> m.Message:
-        type_ = msg.type if isinstance(msg, (m.GetConf, m.GetGeo)) else ""
-        rec = client.request(msg, _matches(accept_type, type_, name), timeout)
-        record.exchanges.append(Exchange(format_message(msg).strip(), rec.line))
-        return rec.message
-
-    poses = ask(m.GetStartPoses(), m.StartPoses)
-    assert isinstance(poses, m.StartPoses)
-    if start is None:
-        start = poses.names[0] if poses.poses else None
-    elif not any(n.lower() == start.lower() for n in poses.names):
-        raise UnknownStartError(start, poses.names)
-    record.start = start
-    name = robot_name or robot_class.split(".")[-1]
-    log.info("spawning %s '%s' at %s", robot_class, name, start or "the origin")
-    first = client.spawn(robot_class, name, start=start,
-                         location=None if start else (0.0, 0.0, 0.0),
-                         rotation=None if start else (0.0, 0.0, 0.0),
-                         timeout=timeout, known_classes=known_classes)
-    record.exchanges.append(Exchange(f"INIT {{ClassName {robot_class}}} {{Name {name}}}"
-                                     + (f" {{Start {start}}}" if start else ""), first.line))
+    record, ask = spawn_robot(client, robot_class, robot_name, start, timeout, known_classes)
+    robot_class = record.robot_class
     actuators = _listen_for_actuators(client, robot_class, timeout)
     record.components = client.known_components()
     if not actuators:
@@ -133,6 +110,48 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
     record.arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
     return record
 
+
+Ask = Callable[..., m.Message]
+"""``ask(request, reply type, name=None, wait=None)``: one request (``wait``: its own timeout,
+s), its reply kept in the record."""
+
+
+def spawn_robot(client: UsarClient, robot_class: str, robot_name: str | None = None,
+                start: str | None = None, timeout: float | None = None,
+                known_classes: tuple[str, ...] = ()) -> tuple[DiscoveryRecord, Ask]:
+    """Check the start position, spawn ``robot_class`` and wait for its first status line.
+
+    Returns the record (the exchanges so far) and the ``ask`` function that adds each later
+    request and reply to it. Raises as :func:`discover`.
+    """
+    if "." not in robot_class:
+        robot_class = f"USARBot.{robot_class}"
+    record = DiscoveryRecord(client.host, client.port, robot_class, start)
+
+    def ask(msg: m.Message, accept_type: type, name: str | None = None,
+            wait: float | None = None) -> m.Message:
+        type_ = msg.type if isinstance(msg, (m.GetConf, m.GetGeo)) else ""
+        rec = client.request(msg, _matches(accept_type, type_, name),
+                             timeout if wait is None else wait)
+        record.exchanges.append(Exchange(format_message(msg).strip(), rec.line))
+        return rec.message
+
+    poses = ask(m.GetStartPoses(), m.StartPoses)
+    assert isinstance(poses, m.StartPoses)
+    if start is None:
+        start = poses.names[0] if poses.poses else None
+    elif not any(n.lower() == start.lower() for n in poses.names):
+        raise UnknownStartError(start, poses.names)
+    record.start = start
+    name = robot_name or robot_class.split(".")[-1]
+    log.info("spawning %s '%s' at %s", robot_class, name, start or "the origin")
+    first = client.spawn(robot_class, name, start=start,
+                         location=None if start else (0.0, 0.0, 0.0),
+                         rotation=None if start else (0.0, 0.0, 0.0),
+                         timeout=timeout, known_classes=known_classes)
+    record.exchanges.append(Exchange(f"INIT {{ClassName {robot_class}}} {{Name {name}}}"
+                                     + (f" {{Start {start}}}" if start else ""), first.line))
+    return record, ask
 
 def _listen_for_actuators(client: UsarClient, robot_class: str, timeout: float | None
                           ) -> list[str]:

@@ -2,8 +2,10 @@
 
 * :mod:`.build`: builds the message packages the package index lacks into a cache (no rclpy);
 * :mod:`.goals`, :mod:`.frames`, :mod:`.runner`: the driver's rules as plain Python (goal
-  checks, the transform tree, running goals on usar-arm's executor);
-* :mod:`.node`: the only module that imports rclpy and ROS message packages.
+  checks, the transform tree, running goals on usar-arm's executor); :mod:`.drive` and
+  :mod:`.platform_state` those of a ground vehicle (cmd_vel to wheel speeds, odometry, scans);
+* :mod:`.api`: the only module that imports rclpy and ROS message packages;
+* :mod:`.node` (an arm) and :mod:`.platform_node` (a ground vehicle): the nodes.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ _HOMES = {
     "runner": ("GoalRunner",),
 }
 """The module of each public name, imported on first use (usar_arm.core.lazy). The node itself
-(:mod:`.node`, rclpy) is run by ``usar-arm ros``; none of these names imports rclpy."""
+(:mod:`.node`, :mod:`.platform_node`) is run by ``usar-arm ros``; none of these names imports
+rclpy."""
 
 __all__ = ["BuiltInterfaces", "CheckedGoal", "GoalRejected", "GoalRunner", "RosSetupError",
            "TrajectoryGoal", "TransformTree", "check_goal", "setup"]

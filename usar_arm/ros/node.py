@@ -1,7 +1,7 @@
 """The live ROS 2 node (``usar-arm ros``): the simulated arm as a ROS 2 robot.
 
-The one module of usar-arm that imports rclpy and ROS message packages (the generated
-tf2_msgs and control_msgs come from the cache :mod:`usar_arm.ros.build` fills). It serves:
+Every ROS name comes from :mod:`usar_arm.ros.api` (the one module that imports rclpy and the
+message packages). It serves:
 
 * ``robot_description`` (std_msgs/String, reliable, transient local): the learnt URDF;
 * ``joint_states`` (sensor_msgs/JointState): one per ASTA line, published on the line's
@@ -33,36 +33,36 @@ import numpy as np
 from usar_arm import Arm
 from usar_arm.core.errors import UsarArmError
 from usar_arm.core.spatial import Array
-from usar_arm.ros.build import ensure_importable
-from usar_arm.ros.frames import Edge, TransformTree, quaternion, world_from_platform
+from usar_arm.ros.api import (
+    LATCHED,
+    ActionServer,
+    CancelResponse,
+    Clock,
+    FollowJointTrajectory,
+    GoalResponse,
+    JointState,
+    JointTrajectory,
+    JointTrajectoryPoint,
+    MultiThreadedExecutor,
+    Node,
+    ReentrantCallbackGroup,
+    String,
+    TFMessage,
+    declared_options,
+    run_ros,
+    spin_until,
+)
+from usar_arm.ros.api import ros_seconds as _seconds
+from usar_arm.ros.api import ros_time as _time
+from usar_arm.ros.api import transform_message as _transform
+from usar_arm.ros.frames import Edge, TransformTree, world_from_platform
 from usar_arm.ros.goals import GoalRejected, TrajectoryGoal, check_goal
 from usar_arm.ros.runner import GoalRunner, Job, Outcome
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
 
-ensure_importable()  # the generated packages below come from the cache
-
-import rclpy  # noqa: E402
-from builtin_interfaces.msg import Duration, Time  # noqa: E402
-from control_msgs.action import FollowJointTrajectory  # noqa: E402
-from geometry_msgs.msg import TransformStamped  # noqa: E402
-from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: E402
-from rclpy.callback_groups import ReentrantCallbackGroup  # noqa: E402
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor  # noqa: E402
-from rclpy.node import Node  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
-from rosgraph_msgs.msg import Clock  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
-from std_msgs.msg import String  # noqa: E402
-from tf2_msgs.msg import TFMessage  # noqa: E402
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
-
 log = logging.getLogger("usar_arm.ros")
 
-LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
-"""robot_description and tf_static: late joiners get the last message."""
 RESULT_KEPT_S = 60
 """How long a finished goal's result is kept for a client to fetch (s; rclpy's default, 900 s,
 lets the node's memory grow with every goal for 15 minutes)."""
@@ -94,28 +94,6 @@ class NodeOptions:
     scene: str = ""
     wire_precision: str = "udk"
     node_name: str = "usar_arm"
-
-
-def _time(seconds: float) -> Time:
-    sec = math.floor(seconds)
-    return Time(sec=int(sec), nanosec=min(999_999_999, round((seconds - sec) * 1e9)))
-
-
-def _seconds(stamp: Time | Duration) -> float:
-    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
-
-
-def _transform(edge: Edge, stamp: Time) -> TransformStamped:
-    msg = TransformStamped()
-    msg.header.stamp = stamp
-    msg.header.frame_id = edge.parent
-    msg.child_frame_id = edge.child
-    p = edge.matrix[:3, 3]
-    msg.transform.translation.x, msg.transform.translation.y = float(p[0]), float(p[1])
-    msg.transform.translation.z = float(p[2])
-    r = msg.transform.rotation
-    r.x, r.y, r.z, r.w = quaternion(edge.matrix[:3, :3])
-    return msg
 
 
 def goal_from_message(trajectory: JointTrajectory, path: list[Any] | None = None,
@@ -329,17 +307,6 @@ class TrajectoryInterfaces:
         log.info("joint_trajectory message: %s", outcome.message)
 
 
-def _parameters(node: Node, options: NodeOptions) -> NodeOptions:
-    """The options as the node's parameters have them (``--ros-args -p`` overrides)."""
-    values: dict[str, Any] = {}
-    for name, default in vars(options).items():
-        if name in ("node_name", "use_sim_time"):
-            continue
-        values[name] = node.declare_parameter(name, default).value
-    sim_time = bool(node.get_parameter("use_sim_time").value)
-    return NodeOptions(**values, use_sim_time=sim_time, node_name=options.node_name)
-
-
 def _world_from_root(arm: Arm) -> Array:
     """Where the robot stands: its platform's GroundTruth pose (REP-103), else identity."""
     sensor = arm.tip_sensor()
@@ -383,10 +350,7 @@ def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> 
     log.info("serving %s: %s/follow_joint_trajectory, joint_states, tf", arm.robot.actuator,
              controller)
     try:
-        while rclpy.ok() and not stop.is_set():
-            spin.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        spin_until(spin, stop)
     finally:
         runner.stopping = "the node is shutting down"
         runner.stop_active("the node is shutting down")
@@ -403,23 +367,13 @@ def run(options: NodeOptions, ros_args: list[str] | None = None,
         stop: threading.Event | None = None) -> int:
     """Start ROS, learn the arm, serve until Ctrl-C/SIGTERM (or ``stop``); 0 on a clean
     stop (the arm holds)."""
-    rclpy.init(args=["usar-arm", "--ros-args", *(ros_args or [])])
-    node = Node(options.node_name, parameter_overrides=[
-        Parameter("use_sim_time", value=True)] if options.use_sim_time else [])
-    arm: Arm | None = None
-    try:
-        chosen = _parameters(node, options)
+    def body(node: Node) -> int:
+        chosen = declared_options(node, options)
         arm = Arm.connect(chosen.robot_type, host=chosen.host or None, port=chosen.port,
                           start=chosen.start or None, wire_precision=chosen.wire_precision)
-        return serve(node, arm, chosen, stop or threading.Event())
-    except Exception:
-        if not rclpy.ok():  # Ctrl-C/SIGTERM while starting: a clean stop
-            log.info("stopped while starting")
-            return 0
-        raise
-    finally:
-        if arm is not None:
+        try:
+            return serve(node, arm, chosen, stop or threading.Event())
+        finally:
             arm.close()
-        node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+
+    return run_ros(options.node_name, options.use_sim_time, ros_args, body)

@@ -27,7 +27,9 @@ wire_log = logging.getLogger("usar_arm.usarsim.wire")
 
 STATUS_HEADS = frozenset({"ASTA", "STA", "SEN", "EFF", "MISSTA"})
 """Command words of the unsolicited status lines: a malformed one does not fail a request."""
-_STREAMS = (m.Asta, m.Sta, m.Sen, m.Eff)
+_SENSOR_LINES = (m.Sen, m.RangeScan, m.Ins, m.Odometry)
+"""Every SEN line (the typed ones too): cached under ``("SEN", name)``."""
+_STREAMS = (m.Asta, m.Sta, m.Eff, *_SENSOR_LINES)
 _REPLIES = (m.StartPoses, m.Conf, m.PlatformConf, m.Geo)
 _COMMAND_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _WARN_BAD_LINES = 5
@@ -123,11 +125,15 @@ class Inbox:
         """Wake a waiting request (the connection closed)."""
         self.replies.put(None)
 
-    def _on_stream(self, rec: Received, msg: m.Asta | m.Sta | m.Sen | m.Eff) -> None:
+    def _on_stream(self, rec: Received,
+                   msg: m.Asta | m.Sta | m.Sen | m.Eff | m.RangeScan | m.Ins | m.Odometry
+                   ) -> None:
         if isinstance(msg, m.Asta):
             key, component = ("ASTA", msg.name), f"Actuator {msg.name}"
         elif isinstance(msg, m.Sta):
             key, component = ("STA", ""), ""
+        elif isinstance(msg, _SENSOR_LINES):
+            key, component = ("SEN", msg.name), f"{msg.type} {msg.name}"
         else:
             key, component = (type(msg).__name__.upper(), msg.name), f"{msg.type} {msg.name}"
         with self.cond:

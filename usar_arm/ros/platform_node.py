@@ -1,0 +1,328 @@
+"""The live ROS 2 node of a ground vehicle (``usar-arm ros --robot P3AT``, docs/ros.md).
+
+It spawns and learns the vehicle (:class:`~usar_arm.description.platform.LivePlatform`) and
+serves, every ROS name from :mod:`usar_arm.ros.api`:
+
+* ``cmd_vel`` (geometry_msgs/Twist): linear.x, angular.z -> one DRIVE line per message
+  (:func:`~usar_arm.ros.drive.wheel_speeds`, clamped keeping the ratio); a NaN or infinite
+  command stops the robot; without a command for ``cmd_timeout`` s the robot is stopped;
+* ``odom`` (nav_msgs/Odometry, odom -> base_footprint) and the same transform on ``tf``, from
+  the sensor ``odom_sensor`` names (default: the first INS);
+* ``scan`` (sensor_msgs/LaserScan) per range scanner line, in the scanner's frame;
+* ``ground_truth`` (nav_msgs/Odometry) and ``truth/map -> truth/base_footprint`` on ``tf``: the
+  simulator's GroundTruth sensor, a tree of its own that never meets SLAM's map;
+* ``tf_static``: base_footprint -> base_link and every sensor mount; ``robot_description``
+  (transient local); ``/clock`` from the STA lines with ``use_sim_time``.
+
+The scan, odometry and truth are published on the connection's reader thread as each line
+arrives. UDK's P3AT sends no wheel state, so ``joint_states`` is not published (said at start).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from array import array
+from dataclasses import dataclass
+
+import numpy as np
+
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.platform import FRAME_STYLES, PlatformDescription, PlatformFrames, mount_matrix
+from usar_arm.core.spatial import invert, transform
+from usar_arm.description.platform import LivePlatform
+from usar_arm.ros.api import (
+    LATCHED,
+    Clock,
+    EventsExecutor,
+    LaserScan,
+    Node,
+    Odometry,
+    String,
+    TFMessage,
+    Time,
+    Twist,
+    declared_options,
+    rclpy,
+    ros_time,
+    run_ros,
+    spin_until,
+    transform_message,
+)
+from usar_arm.ros.drive import STOP, WheelCommand, wheel_speeds
+from usar_arm.ros.frames import Edge, quaternion
+from usar_arm.ros.platform_state import PoseSample, PoseTracker, scan_fields, sensor_pose
+from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.client import UsarClient
+from usar_arm.usarsim.inbox import Received
+
+log = logging.getLogger("usar_arm.ros")
+
+TRUTH_PREFIX = "truth/"
+CLAMP_LOG_S = 2.0
+"""At most one clamping log line per this many seconds."""
+
+
+@dataclass(frozen=True)
+class PlatformNodeOptions:
+    """The command line's settings; each is also a ROS parameter (same name).
+
+    Attributes:
+        robot_type: vehicle class. host, port: a USARSim server ('' = embedded, ``rooms``).
+        start: start pose ('' = the server's first). use_sim_time: stamps and /clock from the
+        simulator. frames: ``rep105`` or ``seed`` (the 2012 names). odom_sensor: the sensor
+        odom comes from ('' = the first INS, else the first Odometry). cmd_timeout: s without
+        cmd_vel after which the robot is stopped. wire_precision: the embedded simulator's.
+    """
+
+    robot_type: str = "P3AT"
+    host: str = ""
+    port: int = 3000
+    start: str = ""
+    use_sim_time: bool = False
+    frames: str = "rep105"
+    odom_sensor: str = ""
+    cmd_timeout: float = 0.5
+    wire_precision: str = "udk"
+    node_name: str = "usar_arm"
+
+
+def odom_source(desc: PlatformDescription, asked: str) -> str:
+    """The name of the sensor odom comes from: ``asked``, else the first INS, else the first
+    Odometry. Raises InvalidInputError naming the pose sensors when there is none."""
+    poses = [s for s in desc.sensors if s.type.lower() in ("ins", "odometry")]
+    if asked:
+        for s in poses:
+            if s.name.lower() == asked.lower():
+                return s.name
+        raise InvalidInputError(f"odom_sensor '{asked}' is not a pose sensor of {desc.name}; "
+                                f"it has: {', '.join(s.name for s in poses) or 'none'}")
+    for kind in ("ins", "odometry"):
+        for s in poses:
+            if s.type.lower() == kind:
+                return s.name
+    raise InvalidInputError(f"{desc.name} has no INS or Odometry sensor to give odom")
+
+
+class Streams:
+    """Publishes scan, odom, ground truth, tf and /clock from the SEN and STA lines."""
+
+    def __init__(self, node: Node, desc: PlatformDescription, frames: PlatformFrames,
+                 odom_sensor: str, use_sim_time: bool):
+        self.node, self.desc, self.frames = node, desc, frames
+        self.use_sim_time = use_sim_time
+        footprint = transform(pos=(0.0, 0.0, desc.footprint_height)) \
+            if frames.footprint is not None else np.eye(4)
+        # base_footprint in a sensor's frame: mount^-1 (base_link in the sensor) times
+        # base_link -> base_footprint (down by the footprint height).
+        self.odom_name = odom_sensor
+        odom = desc.sensor(odom_sensor)
+        to_root = invert(mount_matrix(odom)) @ invert(footprint) \
+            if odom.type.lower() == "ins" else np.eye(4)
+        self.odom = PoseTracker(to_root, relative=True)
+        truth = desc.sensors_of("GroundTruth")
+        self.truth_name = truth[0].name if truth else None
+        self.truth = PoseTracker(invert(mount_matrix(truth[0])) @ invert(footprint)
+                                 if truth else np.eye(4), relative=False)
+        self.scanners = {s.name.lower(): s for s in desc.sensors_of("RangeScanner")}
+        self.scan_times: dict[str, float] = {}
+        self.scan_pub = node.create_publisher(LaserScan, "scan", 10)
+        self.odom_pub = node.create_publisher(Odometry, "odom", 10)
+        self.truth_pub = node.create_publisher(Odometry, "ground_truth", 10)
+        self.tf = node.create_publisher(TFMessage, "tf", 100)
+        self.clock = node.create_publisher(Clock, "/clock", 10) if use_sim_time else None
+        self.sim_time = 0.0
+        self.counts = {"scan": 0, "odom": 0, "ground_truth": 0}
+        self.failures: set[str] = set()
+
+    def on_line(self, rec: Received) -> None:
+        """The connection's subscriber (its reader thread); never raises: a failure is logged
+        as a warning the first time of its kind (a context shutting down: at debug level)."""
+        try:
+            self._handle(rec)
+        except Exception as exc:  # a publisher of a context shutting down, a bad number
+            kind = type(exc).__name__
+            quiet = kind in self.failures or not rclpy.ok()
+            self.failures.add(kind)
+            log.log(logging.DEBUG if quiet else logging.WARNING,
+                    "%s line not published: %s: %s", rec.line[:40], kind, exc)
+
+    def _stamp(self, rec: Received, sim: float | None) -> Time:
+        if self.use_sim_time:
+            return ros_time(sim if sim is not None else self.sim_time)
+        return ros_time(time.time() - (time.monotonic() - rec.wall_time))
+
+    def _handle(self, rec: Received) -> None:
+        msg = rec.message
+        if isinstance(msg, m.Sta):
+            self.sim_time = msg.time
+            if self.clock is not None:
+                self.clock.publish(Clock(clock=ros_time(msg.time)))
+            return
+        if isinstance(msg, m.RangeScan):
+            self._scan(rec, msg)
+            return
+        name = getattr(msg, "name", "")
+        if not isinstance(name, str):
+            return
+        at = getattr(msg, "time", None)
+        if name.lower() == self.odom_name.lower():
+            pose = sensor_pose(msg)
+            if pose is not None:
+                sample = self.odom.update(at if at is not None else rec.wall_time, pose)
+                self._publish_pose(self.odom_pub, "odom", sample, self.frames.odom,
+                                   self.frames.root, self._stamp(rec, at))
+        elif self.truth_name is not None and name.lower() == self.truth_name.lower():
+            pose = sensor_pose(msg)
+            if pose is not None:
+                sample = self.truth.update(at if at is not None else rec.wall_time, pose)
+                self._publish_pose(self.truth_pub, "ground_truth", sample,
+                                   TRUTH_PREFIX + self.frames.map,
+                                   TRUTH_PREFIX + self.frames.root, self._stamp(rec, at))
+
+    def _scan(self, rec: Received, msg: m.RangeScan) -> None:
+        sensor = self.scanners.get(msg.name.lower())
+        if sensor is None or sensor.scanner is None:
+            return
+        now = msg.time if msg.time is not None else rec.wall_time
+        last = self.scan_times.get(sensor.name, now)
+        self.scan_times[sensor.name] = now
+        fields = scan_fields(msg, sensor.scanner, now - last)
+        out = LaserScan(angle_min=fields.angle_min, angle_max=fields.angle_max,
+                        angle_increment=fields.angle_increment, time_increment=0.0,
+                        scan_time=fields.scan_time, range_min=fields.range_min,
+                        range_max=fields.range_max,
+                        ranges=array("f", fields.ranges))  # no per-item checks
+        out.header.stamp = self._stamp(rec, msg.time)
+        out.header.frame_id = self.frames.sensor(sensor)
+        self.scan_pub.publish(out)
+        self.counts["scan"] += 1
+
+    def _publish_pose(self, pub: object, topic: str, sample: PoseSample, parent: str,
+                      child: str, stamp: Time) -> None:
+        msg = Odometry(child_frame_id=child)
+        msg.header.stamp, msg.header.frame_id = stamp, parent
+        p = sample.pose[:3, 3]
+        pose = msg.pose.pose
+        pose.position.x, pose.position.y, pose.position.z = (float(v) for v in p)
+        q = pose.orientation
+        q.x, q.y, q.z, q.w = quaternion(sample.pose[:3, :3])
+        t = msg.twist.twist
+        t.linear.x, t.linear.y, t.linear.z = sample.linear
+        t.angular.x, t.angular.y, t.angular.z = sample.angular
+        pub.publish(msg)  # type: ignore[attr-defined]
+        self.tf.publish(TFMessage(transforms=[transform_message(
+            Edge(parent, child, sample.pose), stamp)]))
+        self.counts[topic] += 1
+
+
+class Driver:
+    """cmd_vel -> DRIVE, with the command timeout (checked by a 20 Hz timer)."""
+
+    def __init__(self, node: Node, client: UsarClient, desc: PlatformDescription,
+                 timeout: float):
+        self.client, self.desc, self.timeout = client, desc, timeout
+        self.last_command = time.monotonic()
+        self.current: WheelCommand = STOP
+        self.last_clamp_log = -CLAMP_LOG_S
+        self.lock = threading.Lock()
+        node.create_subscription(Twist, "cmd_vel", self.on_twist, 10)
+        node.create_timer(0.05, self.check_timeout)
+
+    def send(self, command: WheelCommand) -> None:
+        """One DRIVE line (rad/s, not normalized)."""
+        with self.lock:
+            self.current = command
+            self.client.send(m.Drive(command.left, command.right, normalized=False))
+
+    def on_twist(self, msg: Twist) -> None:
+        """A cmd_vel message: drive, or stop on a command that is not finite."""
+        self.last_command = time.monotonic()
+        d = self.desc
+        try:
+            command = wheel_speeds(msg.linear.x, msg.angular.z, d.wheel_radius,
+                                   d.wheel_separation, d.max_speed)
+        except InvalidInputError as exc:
+            log.error("cmd_vel refused, the robot stops: %s", exc)
+            self._send_safely(STOP)
+            return
+        if command.clamped and time.monotonic() - self.last_clamp_log > CLAMP_LOG_S:
+            self.last_clamp_log = time.monotonic()
+            log.info("cmd_vel clamped: wheels %.3f, %.3f rad/s asked, beyond the limit %g "
+                     "rad/s; both scaled by %.3f (same direction and turn radius)",
+                     *command.asked, d.max_speed, command.scale)
+        self._send_safely(command)
+
+    def check_timeout(self) -> None:
+        """Stop the robot when no cmd_vel came within the timeout."""
+        if self.current.moving and time.monotonic() - self.last_command > self.timeout:
+            log.info("no cmd_vel for %g s: the robot stops", self.timeout)
+            self._send_safely(STOP)
+
+    def _send_safely(self, command: WheelCommand) -> None:
+        try:
+            self.send(command)
+        except Exception as exc:  # the connection is gone: nothing to drive
+            log.warning("DRIVE not sent: %s", exc)
+
+
+def static_edges(desc: PlatformDescription, frames: PlatformFrames) -> list[Edge]:
+    """base_footprint -> base_link and base_link -> every placed sensor (4x4, m)."""
+    edges = []
+    if frames.footprint is not None:
+        edges.append(Edge(frames.footprint, frames.base,
+                          transform(pos=(0.0, 0.0, desc.footprint_height))))
+    edges += [Edge(frames.base, frames.sensor(s), mount_matrix(s)) for s in desc.sensors
+              if frames.placed(s)]
+    return edges
+
+
+def serve(node: Node, live: LivePlatform, options: PlatformNodeOptions, frames: PlatformFrames,
+          stop: threading.Event) -> int:
+    """Publish and serve until ``stop`` is set or the context shuts down; the robot stops."""
+    desc = live.result.description
+    streams = Streams(node, desc, frames, odom_source(desc, options.odom_sensor),
+                      options.use_sim_time)
+    driver = Driver(node, live.client, desc, options.cmd_timeout)
+    unsubscribe = live.client.subscribe(streams.on_line)
+    stamp = node.get_clock().now().to_msg()
+    static = node.create_publisher(TFMessage, "tf_static", LATCHED)
+    static.publish(TFMessage(transforms=[transform_message(e, stamp)
+                                         for e in static_edges(desc, frames)]))
+    node.create_publisher(String, "robot_description", LATCHED).publish(
+        String(data=live.result.urdf))
+    log.info("the server sends no wheel state (UDK's %s has no wheel encoder line): "
+             "joint_states is not published", desc.name)
+    log.info("serving %s: cmd_vel, odom (from %s), scan, ground_truth, tf", desc.name,
+             streams.odom_name)
+    spin = EventsExecutor()  # cmd_vel and the timeout timer, dispatched in C++ (rclpy's)
+    spin.add_node(node)
+    try:
+        spin_until(spin, stop)
+    finally:
+        unsubscribe()
+        driver._send_safely(STOP)
+        spin.shutdown(timeout_sec=2.0)
+    return 0
+
+
+def run(options: PlatformNodeOptions, ros_args: list[str] | None = None,
+        stop: threading.Event | None = None) -> int:
+    """Start ROS, spawn and learn the vehicle, serve until Ctrl-C/SIGTERM (or ``stop``); 0 on
+    a clean stop (the vehicle stopped)."""
+    def body(node: Node) -> int:
+        chosen = declared_options(node, options)
+        if chosen.frames not in FRAME_STYLES:
+            raise InvalidInputError(f"frames '{chosen.frames}': expected one of "
+                                    f"{', '.join(FRAME_STYLES)}")
+        frames = FRAME_STYLES[chosen.frames]
+        live = LivePlatform(chosen.robot_type, chosen.host or None, chosen.port,
+                            chosen.start or None, wire_precision=chosen.wire_precision,
+                            frames=frames)
+        try:
+            return serve(node, live, chosen, frames, stop or threading.Event())
+        finally:
+            live.close()
+
+    return run_ros(options.node_name, options.use_sim_time, ros_args, body)
