@@ -1,6 +1,4 @@
-"""Build the ROS 2 message packages the package index lacks (tf2_msgs, control_msgs), and
-nav_msgs' Odometry (published as a wheel, but not among the ros extra's wheels; built here from
-its public definition so that the platform node needs no other wheel).
+"""Build the ROS 2 message packages the package index lacks (tf2_msgs, control_msgs).
 
 Their interface definitions ship in ``usar_arm/ros/interfaces/<package>/``; this module compiles
 them with cmake, ament and rosidl against the installed ros-jazzy wheels into a cache folder
@@ -49,7 +47,6 @@ PACKAGES: dict[str, tuple[str, ...]] = {
     "tf2_msgs": ("builtin_interfaces", "geometry_msgs", "std_msgs"),
     "control_msgs": ("action_msgs", "builtin_interfaces", "geometry_msgs", "std_msgs",
                      "trajectory_msgs", "unique_identifier_msgs"),
-    "nav_msgs": ("builtin_interfaces", "geometry_msgs", "std_msgs"),
 }
 """Each package built, with the message packages its definitions use (from the wheels)."""
 

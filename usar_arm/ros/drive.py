@@ -1,21 +1,17 @@
-"""cmd_vel -> wheel speeds for a skid-steered vehicle (plain Python, no ROS types).
+"""cmd_vel -> wheel speeds for a skid-steered vehicle, as the platform node sends them.
 
-A body velocity ``v`` (m/s, forward) and yaw rate ``w`` (rad/s, counter-clockwise, REP-103) need
-the left and right wheels to spin at (rad/s, positive forward)::
-
-    left  = (v - w * separation / 2) / radius
-    right = (v + w * separation / 2) / radius
-
-When either exceeds the wheels' limit both are scaled by the same factor, so the robot keeps its
-direction and its turning radius and goes as fast as it can. A NaN or infinite command is refused.
+The mapping is :func:`usar_arm.control.skid.wheel_speeds` (the one ``usar-arm drive`` uses):
+both wheels scaled by the same factor when one exceeds the limit, a NaN or infinite command
+refused. This module adds what the node logs and decides with: the speeds asked before the
+scaling, and whether the command moves the robot at all.
 """
 
 from __future__ import annotations
 
-import math
+import sys
 from dataclasses import dataclass
 
-from usar_arm.core.errors import InvalidInputError
+from usar_arm.control.skid import wheel_speeds as skid_wheel_speeds
 
 
 @dataclass(frozen=True)
@@ -52,13 +48,12 @@ def wheel_speeds(v: float, w: float, radius: float, separation: float, max_speed
     ``radius`` (m) ``separation`` (m) apart, at most ``max_speed`` (rad/s) each.
 
     Raises:
-        InvalidInputError: ``v`` or ``w`` is NaN or infinite (the caller stops the robot).
+        NonFiniteCommandError: ``v`` or ``w`` is NaN or infinite (the caller stops the robot);
+            an :class:`~usar_arm.core.errors.InvalidInputError`.
     """
-    if not (math.isfinite(v) and math.isfinite(w)):
-        raise InvalidInputError(f"cmd_vel linear.x {v} and angular.z {w} must be finite "
-                                "numbers (m/s, rad/s)")
-    left = (v - w * separation / 2.0) / radius
-    right = (v + w * separation / 2.0) / radius
-    fastest = max(abs(left), abs(right))
-    scale = 1.0 if fastest <= max_speed else max_speed / fastest
-    return WheelCommand(left * scale + 0.0, right * scale + 0.0, scale, (left, right))
+    asked = skid_wheel_speeds(v, w, radius, separation, sys.float_info.max)  # never scaled
+    spins = skid_wheel_speeds(v, w, radius, separation, max_speed)
+    fastest = max(abs(asked.left), abs(asked.right))
+    scale = max_speed / fastest if spins.clamped else 1.0
+    return WheelCommand(spins.left + 0.0, spins.right + 0.0,  # no -0.0 on the wire
+                        scale, (asked.left, asked.right))
