@@ -262,8 +262,12 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
 
 def ros_section(doc: dict[str, Any]) -> list[str]:
     """The live ROS 2 node as its own rclpy client in another process saw it."""
-    if not doc["cases"]:
-        return [f"Skipped: {doc['settings'].get('skipped', 'no figures')}.", ""]
+    out = ([f"Skipped: {doc['settings']['skipped']}.", ""] if doc["settings"].get("skipped")
+           else [])
+    if "P3AT" in doc["cases"]:
+        out = [*_platform_lines(doc["cases"]["P3AT"]), *out]
+    if "KR60" not in doc["cases"]:
+        return out
     r = doc["cases"]["KR60"]
     js, goals, refused, node = r["joint_states"], r["goals"], r["refused_goals"], r["node"]
     lat, acc = js["latency_ms"], goals["accept_ms"]
@@ -292,7 +296,28 @@ def ros_section(doc: dict[str, Any]) -> list[str]:
     return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
             "in another process with its own Pinocchio FK, on a private domain on localhost; "
             f"load average at its end {r['load_average_1min_at_end']:.1f} on "
-            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), ""]
+            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), "", *out]
+
+
+def _platform_lines(r: dict[str, Any]) -> list[str]:
+    """The ground vehicle's node (``bench/ros_platform.py``)."""
+    scan, drive, node = r["scan"], r["cmd_vel_to_drive"], r["node"]
+    lat, cmd = scan["latency_ms"], drive["latency_ms"]
+    rows = [["/scan", f"{scan['messages']} scans at {scan['rate_hz']:.2f} Hz, "
+                      f"{', '.join(map(str, scan['ranges']))} ranges each"],
+            ["SEN arrival -> subscriber", f"median {lat['median']:.2f} ms, p99 "
+                                          f"{lat['p99']:.2f} ms, max {lat['max']:.1f} ms"],
+            ["cmd_vel -> DRIVE on the wire", f"{drive['matched']} of {drive['sent']} matched: "
+                                             f"median {cmd['median']:.2f} ms, p99 "
+                                             f"{cmd['p99']:.2f} ms, max {cmd['max']:.1f} ms"],
+            ["node CPU streaming / driving",
+             f"{node['cpu_streaming_fraction_of_a_core']:.1%} / "
+             f"{node['cpu_driving_fraction_of_a_core']:.1%} of a core"]]
+    return ["`usar-arm ros --robot P3AT` against `usar-arm sim --world rooms` (its own process), "
+            "measured by `bench/ros_platform.py` (an rclpy client, and a relay on the wire "
+            f"that notes each DRIVE line); load average at its end "
+            f"{r['load_average_1min_at_end']:.1f}.", "", *table(["figure", "measured"], rows),
+            ""]
 
 
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,

@@ -1,5 +1,7 @@
-"""The ROS 2 stage: the live node (``usar-arm ros``, embedded KR60) measured by
-``bench/ros_probe.py``, an rclpy client of its own in another process.
+"""The ROS 2 stage: the live nodes measured from another process by rclpy clients of their own:
+the arm (``usar-arm ros``, embedded KR60) by ``bench/ros_probe.py``, the ground vehicle
+(``usar-arm ros --robot P3AT``, against ``usar-arm sim --world rooms``) by
+``bench/ros_platform.py``.
 
 The probe runs in a subprocess of the interpreter that runs the benchmark (the test venv, where
 the ``ros`` extra and its message build live), so that ``bench/run.py`` itself never imports
@@ -22,6 +24,9 @@ import common
 from common import Context
 
 PROBE = Path(__file__).resolve().with_name("ros_probe.py")
+PLATFORM_PROBE = PROBE.with_name("ros_platform.py")
+PLATFORM_SECONDS = {"quick": 10.0, "full": 60.0}
+"""Each of the platform probe's two windows (/scan, then cmd_vel) in seconds per mode."""
 WINDOWS = {"quick": (10.0, 20.0), "full": (60.0, 600.0)}
 """(joint_states window, goal period) in seconds per mode."""
 DOMAIN = 78
@@ -30,12 +35,23 @@ DOMAIN = 78
 
 def _probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
     seconds, goal_seconds = WINDOWS[ctx.mode]
-    out = ctx.work / "ros_probe.json"
-    budget = 240 + seconds + goal_seconds * 1.5
+    return _run(ctx, [str(PROBE), "--seconds", str(seconds), "--goal-seconds",
+                      str(goal_seconds)], "ros_probe.json", 240 + seconds + goal_seconds * 1.5)
+
+
+def _platform_probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
+    seconds = PLATFORM_SECONDS[ctx.mode]
+    return _run(ctx, [str(PLATFORM_PROBE), "--seconds", str(seconds)], "ros_platform.json",
+                240 + 3 * seconds)
+
+
+def _run(ctx: Context, command: list[str], name: str, budget: float
+         ) -> tuple[dict[str, Any] | None, str]:
+    """Run a probe in this interpreter on the stage's domain; (its results, '') or (None, why)."""
+    out = ctx.work / name
     try:
         done = subprocess.run(
-            [sys.executable, str(PROBE), "--seconds", str(seconds), "--goal-seconds",
-             str(goal_seconds), "--domain", str(DOMAIN), "--json", str(out)],
+            [sys.executable, *command, "--domain", str(DOMAIN), "--json", str(out)],
             capture_output=True, text=True, timeout=budget, env={**os.environ})
     except subprocess.TimeoutExpired:
         return None, f"the probe did not finish within {budget:.0f} s"
@@ -89,16 +105,38 @@ def _growth(samples: list[dict[str, float]], key: str) -> float | None:
     return None if len(samples) < 3 else samples[-1][key] - samples[1][key]
 
 
+def _platform_targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    t = common.target
+    return [
+        t("P3AT /scan: SEN arrival -> subscriber in another process, p99",
+          doc["scan"]["latency_ms"].get("p99"), 5.0, "<=", "ms",
+          f"{doc['scan']['messages']} scans"),
+        t("P3AT /cmd_vel -> DRIVE line on the wire, p99",
+          doc["cmd_vel_to_drive"]["latency_ms"].get("p99"), 5.0, "<=", "ms",
+          "the simulator in its own process, a relay on the wire"),
+    ]
+
+
 def run(ctx: Context) -> dict[str, Any]:
-    """Run the probe and return the stage document (cases hold its figures as measured)."""
+    """Run the probes and return the stage document (cases hold their figures as measured)."""
     started = time.perf_counter()
     seconds, goal_seconds = WINDOWS[ctx.mode]
-    settings = {"joint_states_window_s": seconds, "goal_period_s": goal_seconds,
-                "ros_domain_id": DOMAIN, "probe": "bench/ros_probe.py"}
-    doc, reason = _probe(ctx)
-    if doc is None:
-        common.log(f"ros stage skipped: {reason}")
-        return common.stage_document("ros", ctx.mode, {**settings, "skipped": reason}, {}, [],
-                                     started)
-    return common.stage_document("ros", ctx.mode, settings, {"KR60": doc}, _targets(doc),
-                                 started)
+    settings: dict[str, Any] = {
+        "joint_states_window_s": seconds, "goal_period_s": goal_seconds,
+        "platform_window_s": PLATFORM_SECONDS[ctx.mode], "ros_domain_id": DOMAIN,
+        "probes": ["bench/ros_probe.py", "bench/ros_platform.py"]}
+    cases: dict[str, Any] = {}
+    targets: list[dict[str, Any]] = []
+    skipped: dict[str, str] = {}
+    for name, probe, judge in (("KR60", _probe, _targets),
+                               ("P3AT", _platform_probe, _platform_targets)):
+        doc, reason = probe(ctx)
+        if doc is None:
+            common.log(f"ros stage, {name}: skipped: {reason}")
+            skipped[name] = reason
+            continue
+        cases[name] = doc
+        targets += judge(doc)
+    if skipped:
+        settings["skipped"] = "; ".join(f"{k}: {v}" for k, v in skipped.items())
+    return common.stage_document("ros", ctx.mode, settings, cases, targets, started)
