@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol
@@ -38,7 +39,7 @@ from usar_arm.discover.interview import discover
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
-from usar_arm.planning.robot import Robot, robot_from_files
+from usar_arm.planning.robot import Robot, RobotOptions, robot_from_files
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.usarsim.client import UsarClient
@@ -132,10 +133,27 @@ class Arm:
         return arm
 
     @classmethod
-    def from_files(cls, urdf: str | Path, srdf: str | Path | None = None) -> Arm:
-        """An offline arm from a URDF (+ SRDF, joint_limits.yaml beside it): IK and planning,
-        no execution."""
-        return cls(robot_from_files(urdf, srdf))
+    def from_files(cls, urdf: str | Path, srdf: str | Path | None = None,
+                   group: str | None = None, tip: str | None = None, *,
+                   base: str | None = None, package_paths: Mapping[str, str] | None = None,
+                   convex_hull: bool = False) -> Arm:
+        """An offline arm from any URDF (+ SRDF, joint_limits.yaml beside it): IK and
+        planning, no execution.
+
+        Args:
+            group: the SRDF planning group (default: its first, or the whole URDF when it is
+                one chain). tip: the tool frame poses refer to (``fk``/IK ``tool0``).
+            base: plan the chain from this link (instead of a group).
+            package_paths: package name -> folder for ``package://`` meshes (before
+                ROS_PACKAGE_PATH, AMENT_PREFIX_PATH and the URDF's ancestors).
+            convex_hull: collision meshes replaced by their convex hulls.
+
+        Raises:
+            RobotStructureError: no serial chain to plan (floating base, closed loop,
+                branched without a group...). FileFormatError: a bad file or missing mesh.
+        """
+        options = RobotOptions.of(group, base, tip, package_paths, convex_hull)
+        return cls(robot_from_files(urdf, srdf, options=options))
 
     def close(self) -> None:
         """Close the connection (the server destroys the robot) and stop an embedded
