@@ -1,3 +1,4 @@
+# ruff: noqa: E501  (the test robot's URDF reads best one element per line)
 """A small arm written for the tests: a ROS-style package folder with STL and OBJ collision
 meshes made by trimesh (one concave: a ring), boxes, spheres, a capsule, several collision
 elements on one link, scaled meshes, a gripper branch with a mimic joint, and an SRDF."""

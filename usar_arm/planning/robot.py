@@ -20,9 +20,9 @@ from usar_arm.planning.scene import EMPTY, Mesh, Scene
 from usar_arm.planning.scene_file import validate_allow
 from usar_arm.urdf.description_reader import ReadOptions, read_urdf
 from usar_arm.urdf.group import GroupChoice, cut_chain
+from usar_arm.urdf.joint_limits import apply_joint_limits_text
 from usar_arm.urdf.kinematic_text import kinematic_urdf
 from usar_arm.urdf.packages import PackagePaths
-from usar_arm.urdf.reader import apply_joint_limits_text
 from usar_arm.urdf.srdf_reader import Srdf, read_srdf
 
 log = logging.getLogger("usar_arm.planning.robot")
