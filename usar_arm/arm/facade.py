@@ -184,8 +184,8 @@ class Arm:
 
     @property
     def home(self) -> Array:
-        """The SRDF's home configuration."""
-        return np.array(self.robot.named_state("home"))
+        """The SRDF's home configuration (without one: each joint at 0, or mid-range)."""
+        return np.array(self.robot.home())
 
     def write_description(self, out_dir: str | Path) -> list[Path]:
         """Write the description's files (URDF, SRDF, joint limits, discovery notes) into

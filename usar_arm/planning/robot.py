@@ -12,7 +12,7 @@ from pathlib import Path
 
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.model import KinematicChain
-from usar_arm.planning.acm import adjacent_pairs
+from usar_arm.planning.acm import adjacent_pairs, default_state
 from usar_arm.planning.collision import CollisionWorld, Pair
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.kinematics import KinematicModel
@@ -100,6 +100,13 @@ class Robot:
         """A collision world of this arm in ``scene``."""
         validate_allow(scene, {lk.name for lk in self.chain.links})
         return CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding)
+
+    def home(self) -> list[float]:
+        """The ``home`` state, or without one each joint at 0 (the middle of its limits when 0
+        is outside them), rad or m."""
+        if "home" in self.states:
+            return self.named_state("home")
+        return [float(v) for v in default_state(self.chain)]
 
     def named_state(self, name: str) -> list[float]:
         """A named state (``home``) in joint order."""
