@@ -4,6 +4,7 @@ chain to plan."""
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -158,3 +159,50 @@ def test_group_options_without_a_urdf_are_usage_errors() -> None:
     with pytest.raises(SystemExit) as stop:
         main(["ik", "--tip-link", "tool0", "--pose", "0.1", "0", "0.5", "0", "0", "0"])
     assert stop.value.code == 2
+
+
+def test_ik_and_plan_on_a_mesh_arm_from_the_command_line(
+        toy: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """What a new user types: the gripper's finger joints are held, not asked for."""
+    robot = robot_from_files(*toy)
+    goal = np.array([0.4, -0.6, 0.8, 0.05])
+    assert not robot.collision_world().in_collision(goal)
+    x, y, z = robot.kinematics.frame_pose(goal, "tool0")[:3, 3]
+    rot = robot.kinematics.frame_pose(goal, "tool0")[:3, :3]
+    code = main(["ik", "--urdf", str(toy[0]), "--json", "--tolerance", "1e-6", "--pose",
+                 str(x), str(y), str(z), *map(str, _rpy(rot))])
+    assert code == 0
+    solutions = json_out(capsys)["solutions"]
+    assert any(np.allclose(robot.kinematics.frame_pose(np.array(q), "tool0"),
+                           robot.kinematics.frame_pose(goal, "tool0"), atol=1e-5)
+               for q in solutions)
+    code = main(["plan", "--urdf", str(toy[0]), "--json", "--joints", *map(str, goal),
+                 "--from-joints", "0", "0", "0", "0", "--out", str(tmp_path / "t.json")])
+    assert code == 0 and json_out(capsys)["duration"] > 0
+    planned = json.loads((tmp_path / "t.json").read_text())
+    assert planned["joint_names"] == ["joint_1", "joint_2", "joint_3", "joint_4"]
+    assert np.allclose(planned["q"][-1], goal)
+    code = main(["render", "--urdf", str(toy[0]), "--out", str(tmp_path / "toy.png")])
+    assert code == 0 and (tmp_path / "toy.png").stat().st_size > 10_000
+
+
+def _rpy(rot: np.ndarray) -> tuple[float, float, float]:
+    from usar_arm.core.spatial import matrix_to_rpy
+
+    return matrix_to_rpy(rot)
+
+
+def json_out(capsys: pytest.CaptureFixture[str]) -> dict:
+    return json.loads(capsys.readouterr().out)
+
+
+def test_the_library_takes_the_same_choices(toy: tuple[Path, Path], tmp_path: Path) -> None:
+    from usar_arm import Arm
+
+    arm = Arm.from_files(toy[0], toy[1], group="wrist", tip="link_4")
+    assert tuple(arm.joint_names) == ("joint_3", "joint_4")
+    assert arm.fk(np.zeros(2))[2, 3] == pytest.approx(0.05 + 0.2 + 0.3 + 0.24)
+    urdf = _moved(toy[0], tmp_path)
+    hull = Arm.from_files(urdf, package_paths={PACKAGE: str(toy[0].parents[1])},
+                          convex_hull=True, base="base_link", tip="tool0")
+    assert tuple(hull.joint_names) == ("joint_1", "joint_2", "joint_3", "joint_4")
