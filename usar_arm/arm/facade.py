@@ -137,23 +137,10 @@ class Arm:
                    group: str | None = None, tip: str | None = None, *,
                    base: str | None = None, package_paths: Mapping[str, str] | None = None,
                    convex_hull: bool = False) -> Arm:
-        """An offline arm from any URDF (+ SRDF, joint_limits.yaml beside it): IK and
-        planning, no execution.
-
-        Args:
-            group: the SRDF planning group (default: its first, or the whole URDF when it is
-                one chain). tip: the tool frame poses refer to (``fk``/IK ``tool0``).
-            base: plan the chain from this link (instead of a group).
-            package_paths: package name -> folder for ``package://`` meshes (before
-                ROS_PACKAGE_PATH, AMENT_PREFIX_PATH and the URDF's ancestors).
-            convex_hull: collision meshes replaced by their convex hulls.
-
-        Raises:
-            RobotStructureError: no serial chain to plan (floating base, closed loop,
-                branched without a group...). FileFormatError: a bad file or missing mesh.
-        """
-        options = RobotOptions.of(group, base, tip, package_paths, convex_hull)
-        return cls(robot_from_files(urdf, srdf, options=options))
+        """An offline arm (IK, planning) from any URDF (+ SRDF, joint_limits.yaml beside it); the
+        other arguments as :meth:`RobotOptions.of` says (RobotStructureError: no chain to plan)."""
+        return cls(robot_from_files(urdf, srdf, options=RobotOptions.of(
+            group, base, tip, package_paths, convex_hull)))
 
     def close(self) -> None:
         """Close the connection (the server destroys the robot) and stop an embedded

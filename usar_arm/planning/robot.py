@@ -44,8 +44,17 @@ class RobotOptions:
     def of(cls, group: str | None = None, base: str | None = None, tip: str | None = None,
            package_paths: Mapping[str, str] | None = None, convex_hull: bool = False
            ) -> RobotOptions:
-        """Options from plain values: an SRDF group, base and tip links, package name ->
-        folder, convex hulls for the collision meshes."""
+        """Options from plain values.
+
+        Args:
+            group: the SRDF planning group (default: its first, or the whole URDF when it is
+                one chain). base: plan the chain from this link instead of a group.
+            tip: the tool frame poses refer to (``tool0``; default: the group's tip, tool0
+                below its last joint, or the chain's last link down fixed joints).
+            package_paths: package name -> folder for ``package://`` meshes (searched before
+                ROS_PACKAGE_PATH, AMENT_PREFIX_PATH and the URDF's ancestors).
+            convex_hull: the collision meshes replaced by their convex hulls.
+        """
         return cls(GroupChoice(group, base, tip),
                    ReadOptions(PackagePaths(dict(package_paths or {})), convex_hull))
 
