@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import fcl
 import numpy as np
@@ -26,6 +27,12 @@ from ..urdf.mesh_robot import DISABLED, PACKAGE, write_robot
 CONFIGURATIONS = 3000
 
 
+def _child(el: ET.Element, tag: str) -> ET.Element:
+    found = el.find(tag)
+    assert found is not None, f"<{el.tag}> has no <{tag}>"
+    return found
+
+
 class Judge:
     """Every link's collision elements as python-fcl objects, placed by this class's own
     forward kinematics of the URDF file; contacts by testing every pair."""
@@ -35,14 +42,13 @@ class Judge:
         self.elements: list[tuple[str, fcl.CollisionObject, np.ndarray]] = []
         for link in root.findall("link"):
             for col in link.findall("collision"):
-                geometry = self._geometry(col.find("geometry"), package)  # type: ignore[arg-type]
+                geometry = self._geometry(_child(col, "geometry"), package)
                 self.elements.append((link.get("name", ""), fcl.CollisionObject(geometry),
                                       self._origin(col.find("origin"))))
-        self.joints = [(j.get("name"), j.get("type"), j.find("parent").get("link"),  # type: ignore[union-attr]
-                        j.find("child").get("link"), self._origin(j.find("origin")),  # type: ignore[union-attr]
-                        np.array([float(v) for v in (j.find("axis").get("xyz")  # type: ignore[union-attr]
-                                                     if j.find("axis") is not None
-                                                     else "1 0 0").split()]))
+        self.joints = [(j.get("name", ""), j.get("type", ""), _child(j, "parent").get("link", ""),
+                        _child(j, "child").get("link", ""), self._origin(j.find("origin")),
+                        np.array([float(v) for v in _child(j, "axis").get("xyz", "").split()]
+                                 if j.find("axis") is not None else [1.0, 0.0, 0.0]))
                        for j in root.findall("joint")]
         self.obstacles = [(name, fcl.CollisionObject(g, fcl.Transform(p[:3, :3], p[:3, 3])))
                           for name, g, p in obstacles]
@@ -64,7 +70,7 @@ class Judge:
             name = shape.get("filename", "")
             file = package / name.split(f"package://{PACKAGE}/")[-1].split(
                 f"{PACKAGE}/")[-1]
-            mesh = trimesh.load(file, force="mesh")
+            mesh: Any = trimesh.load(file, force="mesh")
             scale = [float(v) for v in shape.get("scale", "1 1 1").split()]
             model = fcl.BVHModel()
             model.beginModel(len(mesh.vertices), len(mesh.faces))
