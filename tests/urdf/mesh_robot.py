@@ -85,6 +85,8 @@ SRDF = """<?xml version="1.0"?>
   <group name="arm"><chain base_link="base_link" tip_link="tool0"/></group>
   <group name="wrist"><joint name="joint_3"/><joint name="joint_4"/></group>
   <group name="gripper"><joint name="finger_l_joint"/></group>
+  <group name="forearm"><link name="link_3"/><link name="link_4"/></group>
+  <group name="typo"><joint name="joint_3"/><joint name="joint_44"/></group>
   <disable_collisions link1="base_link" link2="link_1" reason="Adjacent"/>
   <disable_collisions link1="link_1" link2="link_2" reason="Adjacent"/>
   <disable_collisions link1="link_2" link2="link_3" reason="Adjacent"/>

@@ -103,6 +103,15 @@ def test_a_joint_list_group_and_a_tip(toy: tuple[Path, Path]) -> None:
     assert pose[2, 3] == pytest.approx(0.05 + 0.2 + 0.3 + 0.24 + 0.05)
 
 
+def test_a_link_list_group_plans_the_joints_that_move_its_links(toy: tuple[Path, Path]
+                                                               ) -> None:
+    robot = robot_from_files(*toy, options=RobotOptions.of(group="forearm"))
+    assert robot.chain.joint_names == ("joint_3", "joint_4")
+    with pytest.raises(RobotStructureError, match="group 'typo' names joints the URDF does "
+                                                  "not have: joint_44"):
+        robot_from_files(*toy, options=RobotOptions.of(group="typo"))
+
+
 def test_base_and_tip_links_choose_the_chain(toy: tuple[Path, Path]) -> None:
     robot = robot_from_files(toy[0], options=RobotOptions.of(base="link_1", tip="link_3"))
     assert robot.chain.joint_names == ("joint_2", "joint_3")

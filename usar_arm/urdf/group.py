@@ -123,12 +123,18 @@ def cut_chain(tree: UrdfTree, srdf: Srdf | None, choice: GroupChoice, where: str
         if choice.group is None and len(srdf.groups) > 1:
             notes.append(f"planning group '{spec.name}', the first of "
                          f"{', '.join(g.name for g in srdf.groups)} (choose with --group)")
-        chains, joints = srdf.group_joints(spec, where)
+        chains, joints, links = srdf.group_joints(spec, where)
+        joints += [j.name for j in chain.joints if j.child in links and j.name not in joints]
         if chains:
             base, tip = base or chains[0][0], tip or chains[0][1]
         elif joints:
-            planned = [chain.joint(n) for n in joints if chain.joint(n).actuated
-                       and n not in tree.mimic]
+            known = {j.name: j for j in chain.joints}
+            unknown = [n for n in joints if n not in known]
+            if unknown:
+                raise RobotStructureError(f"group '{spec.name}' names joints the URDF does not "
+                                          f"have: {', '.join(unknown)}", where,
+                                          f"joints among {', '.join(known)}")
+            planned = [known[n] for n in joints if known[n].actuated and n not in tree.mimic]
     if planned is None and (base is not None or tip is not None):
         own = [j for j in chain.actuated_joints if j.name not in tree.mimic]
         if tip is None:

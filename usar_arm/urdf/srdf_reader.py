@@ -44,14 +44,14 @@ class Srdf:
         raise FileFormatError(where, f"no planning group '{name}'; groups: "
                               f"{', '.join(g.name for g in self.groups) or 'none'}")
 
-    def group_joints(self, spec: GroupSpec, where: str) -> tuple[list[Pair], list[str]]:
-        """The chains and joints of ``spec`` with its subgroups' (depth first)."""
-        chains, joints = list(spec.chains), list(spec.joints)
+    def group_joints(self, spec: GroupSpec, where: str
+                     ) -> tuple[list[Pair], list[str], list[str]]:
+        """The chains, joints and links of ``spec`` with its subgroups' (depth first)."""
+        chains, joints, links = list(spec.chains), list(spec.joints), list(spec.links)
         for sub in spec.subgroups:
-            c, j = self.group_joints(self.group(sub, where), where)
-            chains += c
-            joints += j
-        return chains, joints
+            c, j, lk = self.group_joints(self.group(sub, where), where)
+            chains, joints, links = chains + c, joints + j, links + lk
+        return chains, joints, links
 
 
 def read_srdf(text: str, path: str = "<srdf>") -> Srdf:
