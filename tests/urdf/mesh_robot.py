@@ -83,7 +83,7 @@ URDF = """<?xml version="1.0"?>
 SRDF = """<?xml version="1.0"?>
 <robot name="toy">
   <group name="arm"><chain base_link="base_link" tip_link="tool0"/></group>
-  <group name="wrist"><joint name="joint_3"/><joint name="joint_4"/></group>
+  <group name="wrist"><joint name="joint_4"/><joint name="joint_3"/></group>
   <group name="gripper"><joint name="finger_l_joint"/></group>
   <group name="forearm"><link name="link_3"/><link name="link_4"/></group>
   <group name="typo"><joint name="joint_3"/><joint name="joint_44"/></group>

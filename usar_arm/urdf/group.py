@@ -137,8 +137,9 @@ def cut_chain(tree: UrdfTree, srdf: Srdf | None, choice: GroupChoice, where: str
             planned = [known[n] for n in joints if known[n].actuated and n not in tree.mimic]
     if planned is None and (base is not None or tip is not None):
         own = [j for j in chain.actuated_joints if j.name not in tree.mimic]
-        if tip is None:
+        if tip is None and own:
             tip = _default_tip(chain, own[-1], {j.name for j in own})
+        tip = tip or chain.links[-1].name
         base = base or chain.root
         path = _path(chain, base, tip, where)
         planned = [j for j in path if j.actuated and j.name not in tree.mimic]
@@ -147,6 +148,7 @@ def cut_chain(tree: UrdfTree, srdf: Srdf | None, choice: GroupChoice, where: str
     if not planned:
         raise RobotStructureError("the planning group moves no joint", where,
                                   "a group with at least one revolute or prismatic joint")
+    planned.sort(key=lambda j: len(chain.path_to(j.child)))  # an SRDF may list them in any order
     path = chain.path_to(planned[-1].child)
     if any(j not in path for j in planned):
         raise RobotStructureError(f"group '{group_name}' is branched (joints "
