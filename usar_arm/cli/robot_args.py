@@ -106,9 +106,9 @@ def robot_options(args: argparse.Namespace) -> RobotOptions:
 def check_file_options(args: argparse.Namespace) -> None:
     """``--srdf``, ``--group``... without ``--urdf`` are usage errors (exit 2): they would be
     ignored."""
-    if args.urdf:
+    if getattr(args, "urdf", None):
         return
-    if args.srdf:
+    if getattr(args, "srdf", None):
         args.robot_usage_error("--srdf goes with --urdf (the SRDF of that URDF); a discovered "
                                "robot brings its own SRDF: give --urdf FILE too, or drop --srdf")
     given = [f"--{n.replace('_', '-')}" for n in FILE_ONLY if getattr(args, n, None)]
