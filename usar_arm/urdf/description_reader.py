@@ -19,9 +19,9 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import yourdfpy
 
 from usar_arm.core.errors import FileFormatError, RobotStructureError
 from usar_arm.core.model import (
@@ -35,10 +35,19 @@ from usar_arm.core.model import (
     Origin,
 )
 from usar_arm.core.shapes import Box, Capsule, CylinderShape, Shape, Sphere
-from usar_arm.urdf.meshes import load_mesh
 from usar_arm.urdf.packages import PackagePaths
 
-logging.getLogger("yourdfpy").setLevel(logging.ERROR)  # its own warnings repeat ours
+if TYPE_CHECKING:
+    import yourdfpy
+
+
+def _yourdfpy() -> Any:
+    """yourdfpy, imported on first use: it brings trimesh, which an arm learnt over the wire
+    (or a command that reads no URDF) never needs."""
+    import yourdfpy
+
+    logging.getLogger("yourdfpy").setLevel(logging.ERROR)  # its own warnings repeat ours
+    return yourdfpy
 
 _TYPES = {"revolute": JointType.REVOLUTE, "continuous": JointType.REVOLUTE,
           "prismatic": JointType.PRISMATIC, "fixed": JointType.FIXED}
@@ -140,7 +149,7 @@ def read_urdf(text: str, path: str = "<urdf>", options: ReadOptions | None = Non
     options = options or ReadOptions()
     root = _document(text, path)
     try:
-        robot = yourdfpy.URDF.load(io.BytesIO(_without_capsules(root, text)),
+        robot = _yourdfpy().URDF.load(io.BytesIO(_without_capsules(root, text)),
                                    build_scene_graph=False,
                                    build_collision_scene_graph=False, load_meshes=False,
                                    load_collision_meshes=False).robot
@@ -218,6 +227,8 @@ def _shape(link: str, g: yourdfpy.Geometry | None, el: ET.Element, path: str,
                               "NAME=DIR)")
     scale = np.broadcast_to(np.asarray(1.0 if g.mesh.scale is None else g.mesh.scale, float),
                             (3,))
+    from usar_arm.urdf.meshes import load_mesh  # trimesh: only for a URDF with meshes
+
     try:
         return load_mesh(found, tuple(scale), options.convex_hull)  # type: ignore[arg-type]
     except ValueError as exc:
@@ -273,8 +284,8 @@ def actuated_joint_names(text: str) -> list[str]:
     """The actuated joints yourdfpy reads in URDF text (an independent check of a written
     description; ValueError when it cannot load it)."""
     try:
-        robot = yourdfpy.URDF.load(io.BytesIO(text.encode()), build_scene_graph=False,
-                                   load_meshes=False)
+        robot = _yourdfpy().URDF.load(
+            io.BytesIO(text.encode()), build_scene_graph=False, load_meshes=False)
     except Exception as exc:  # yourdfpy raises many types; all mean "cannot load"
         raise ValueError(str(exc)) from None
     return list(robot.actuated_joint_names)
@@ -284,7 +295,8 @@ def viewer_urdf(text: str) -> yourdfpy.URDF:
     """A yourdfpy URDF with its scene graph (no meshes), for the 3D viewer (ValueError when it
     cannot load it)."""
     try:
-        return yourdfpy.URDF.load(io.BytesIO(text.encode()), build_scene_graph=True,
+        return _yourdfpy().URDF.load(
+            io.BytesIO(text.encode()), build_scene_graph=True,
                                   load_meshes=False, build_collision_scene_graph=False,
                                   load_collision_meshes=False)
     except Exception as exc:  # yourdfpy raises assorted errors for malformed XML
