@@ -38,7 +38,7 @@ ALLOWED: dict[str, set[str]] = {
 ENTRY_POINTS = {"cli", "__init__", "__main__"}
 THIRD_PARTY_LIMITS = {"numpy", "yaml"}  # core: numpy, and PyYAML in yamlio
 HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1,
-         "rclpy": 1}
+         "rclpy": 1, "yourdfpy": 1, "trimesh": 1}
 ROS_MESSAGES = {"tf2_msgs", "control_msgs", "std_msgs", "sensor_msgs", "geometry_msgs",
                 "trajectory_msgs", "builtin_interfaces", "rosgraph_msgs", "action_msgs",
                 "unique_identifier_msgs", "nav_msgs", "visualization_msgs"}

@@ -19,7 +19,7 @@ from usar_arm.control.drive import DriveModel
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.description.accuracy import accuracy_report
 from usar_arm.sim.robot_spec import builtin_robots
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 from usar_arm.usarsim.codec import parse_line
 from usar_arm.usarsim.inbox import Received
 from usar_arm.usarsim.numbers import printed_steps

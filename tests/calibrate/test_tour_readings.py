@@ -13,7 +13,7 @@ from usar_arm.arm.tour_calibration import fit_tour
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.calibrate.tour_readings import TourReadings, read_tour
 from usar_arm.core.errors import CalibrationError, FileFormatError
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 
 ROOT = Path(__file__).resolve().parents[2]
 LEARNT = (ROOT / "robots/generated/as-learnt/KR60.urdf").read_text()

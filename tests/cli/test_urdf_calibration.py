@@ -18,7 +18,7 @@ from usar_arm.cli.main import main
 from usar_arm.core.errors import EXIT_OK
 from usar_arm.sim.robot_spec import builtin_robots
 from usar_arm.sim.server import SimOptions, SimServer
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 
 REPO = Path(__file__).resolve().parents[2]
 AS_LEARNT = REPO / "robots" / "generated" / "as-learnt" / "KR60.urdf"

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from usar_arm.planning.robot import robot_from_files
+from usar_arm.urdf.description_reader import parse_urdf
 from usar_arm.urdf.opw_fit import NotOpwError, fit_opw, opw_forward
-from usar_arm.urdf.reader import parse_urdf
 from usar_arm.urdf.tesseract import TesseractOptions, choose_solver
 
 ROOT = Path(__file__).resolve().parents[2]

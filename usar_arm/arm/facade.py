@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol
@@ -38,7 +39,7 @@ from usar_arm.discover.interview import discover
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
-from usar_arm.planning.robot import Robot, robot_from_files
+from usar_arm.planning.robot import Robot, RobotOptions, robot_from_files
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.usarsim.client import UsarClient
@@ -132,10 +133,14 @@ class Arm:
         return arm
 
     @classmethod
-    def from_files(cls, urdf: str | Path, srdf: str | Path | None = None) -> Arm:
-        """An offline arm from a URDF (+ SRDF, joint_limits.yaml beside it): IK and planning,
-        no execution."""
-        return cls(robot_from_files(urdf, srdf))
+    def from_files(cls, urdf: str | Path, srdf: str | Path | None = None,
+                   group: str | None = None, tip: str | None = None, *,
+                   base: str | None = None, package_paths: Mapping[str, str] | None = None,
+                   convex_hull: bool = False) -> Arm:
+        """An offline arm (IK, planning) from any URDF (+ SRDF, joint_limits.yaml beside it); the
+        other arguments as :meth:`RobotOptions.of` says (RobotStructureError: no chain to plan)."""
+        return cls(robot_from_files(urdf, srdf, options=RobotOptions.of(
+            group, base, tip, package_paths, convex_hull)))
 
     def close(self) -> None:
         """Close the connection (the server destroys the robot) and stop an embedded
@@ -166,8 +171,8 @@ class Arm:
 
     @property
     def home(self) -> Array:
-        """The SRDF's home configuration."""
-        return np.array(self.robot.named_state("home"))
+        """The SRDF's home configuration (without one: each joint at 0, or mid-range)."""
+        return np.array(self.robot.home())
 
     def write_description(self, out_dir: str | Path) -> list[Path]:
         """Write the description's files (URDF, SRDF, joint limits, discovery notes) into

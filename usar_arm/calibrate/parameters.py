@@ -24,7 +24,7 @@ import numpy as np
 from usar_arm.core.errors import CalibrationError
 from usar_arm.core.model import Joint, JointType
 from usar_arm.core.spatial import Array, exp_so3, matrix_to_rpy, transform
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 from usar_arm.urdf.writer import nums
 
 AXES = ("x", "y", "z", "roll", "pitch", "yaw")

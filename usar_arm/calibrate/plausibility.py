@@ -29,7 +29,7 @@ from usar_arm.calibrate.parameters import ErrorModel
 from usar_arm.calibrate.quantised import log_many, rpy_many
 from usar_arm.core.errors import CalibrationError
 from usar_arm.core.spatial import Array, log_so3, rpy_to_matrix
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 
 MATCH_M, MATCH_RAD = 0.01, 0.02
 """How close (m, rad) a frame of the description must sit to a constant offset found in the

@@ -13,7 +13,7 @@ import numpy as np
 from usar_arm.calibrate.parameters import replace_origin
 from usar_arm.core.errors import CalibrationError
 from usar_arm.core.spatial import FLIP_X, Array, transform
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 
 FLIP = transform(FLIP_X)
 """A turn of pi about x (4x4): REP-103 axes to USARSim's and back."""

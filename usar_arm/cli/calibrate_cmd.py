@@ -42,7 +42,7 @@ from usar_arm.core.errors import EXIT_OK, FileFormatError, InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
 from usar_arm.core.model import JointType
 from usar_arm.core.precision import with_precision
-from usar_arm.urdf.reader import parse_urdf
+from usar_arm.urdf.description_reader import parse_urdf
 
 POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: accuracy vs poses)
 

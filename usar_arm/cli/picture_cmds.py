@@ -102,7 +102,7 @@ def run_render(args: argparse.Namespace) -> int:
     elif traj is not None:
         q = traj.q[-1]
     else:
-        q = np.array(robot.named_state("home"))
+        q = np.array(robot.home())
     path, ghosts = None, []
     if traj is not None:
         _check_joints(robot, traj, args.trajectory)

@@ -15,7 +15,12 @@ from usar_arm.cli.execution_args import (
     print_report,
     save_bag,
 )
-from usar_arm.cli.robot_args import add_server_args
+from usar_arm.cli.robot_args import (
+    add_file_robot_args,
+    add_server_args,
+    check_file_options,
+    robot_options,
+)
 from usar_arm.cli.units import UNITS, pose_from_args
 from usar_arm.control.executor import ExecutionOptions
 from usar_arm.control.motion import MotionOptions
@@ -75,6 +80,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--urdf", default=None, metavar="FILE",
                    help="plan for this URDF (SRDF and joint limits beside it) without a server")
     p.add_argument("--srdf", default=None, metavar="FILE", help="SRDF for --urdf")
+    add_file_robot_args(p)
     p.add_argument("--json", action="store_true", help="print one JSON summary on stdout")
     p.add_argument("--execute", action="store_true",
                    help="execute the plan on the arm and report how it went")
@@ -103,11 +109,12 @@ def goal_pose(args: argparse.Namespace, arm: Arm) -> np.ndarray | None:
 def open_arm(args: argparse.Namespace) -> Arm:
     """The arm: offline from --urdf, or live (embedded simulator or --host); ``--srdf``
     without ``--urdf`` is a usage error (exit 2), not ignored."""
-    if getattr(args, "srdf", None) and not getattr(args, "urdf", None):
-        args.robot_usage_error("--srdf goes with --urdf (the SRDF of that URDF); a discovered "
-                               "robot brings its own SRDF: give --urdf FILE too, or drop --srdf")
+    check_file_options(args)
     if getattr(args, "urdf", None):
-        return Arm.from_files(args.urdf, args.srdf)
+        o = robot_options(args)
+        return Arm.from_files(args.urdf, args.srdf, o.choice.group, o.choice.tip,
+                              base=o.choice.base, package_paths=o.read.packages.explicit,
+                              convex_hull=o.read.convex_hull)
     where = "the embedded simulator" if args.host is None else f"{args.host}:{args.port}"
     progress(f"connecting to {where} and discovering {args.robot}...")
     return Arm.connect(args.robot, args.host, args.port, args.start_position, args.timeout,

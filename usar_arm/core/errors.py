@@ -198,6 +198,13 @@ class ValidationError(DescriptionError):
         super().__init__(f"{subject} failed {len(self.problems)} check(s):\n{lines}")
 
 
+class RobotStructureError(DescriptionError):
+    """A URDF (+ SRDF, options) has no serial chain to plan: a floating or planar joint, a
+    closed loop, a branched robot without a group, an unknown base or tip link."""
+    def __init__(self, what: str, where: str, expected: str):
+        self.what, self.where, self.expected = what, where, expected
+        super().__init__(f"{where}: {what}; expected {expected}")
+
 # --------------------------------------------------------------------------- kinematics
 
 

@@ -14,6 +14,7 @@ from enum import Enum
 
 import numpy as np
 
+from usar_arm.core.shapes import CylinderShape, Shape
 from usar_arm.core.spatial import Array, Vector, exp_so3, transform, transform_from_xyz_rpy
 
 Vec3 = tuple[float, float, float]
@@ -85,6 +86,19 @@ class Cylinder:
     origin: Origin = Origin()
 
 
+@dataclass(frozen=True, eq=False)
+class Collision:
+    """One collision element of a link: a shape at ``origin`` in the link's frame (m).
+
+    Attributes:
+        shape: box, cylinder, sphere, capsule or triangle mesh (scaled, in metres).
+        origin: the shape's pose in the owning link's frame.
+    """
+
+    shape: Shape
+    origin: Origin = Origin()
+
+
 RGBA = tuple[float, float, float, float]
 
 
@@ -97,12 +111,26 @@ class Link:
         geometry: collision and visual shape, or None for frames (base, flange, tool0).
         color: RGBA in [0, 1] for the visual material.
         material: name of that material.
+        collisions: the link's collision elements when they are not the one ``geometry``
+            cylinder (meshes, boxes, spheres, capsules, several elements); empty otherwise.
     """
 
     name: str
     geometry: Cylinder | None = None
     color: RGBA | None = None
     material: str | None = None
+    collisions: tuple[Collision, ...] = ()
+
+    @property
+    def elements(self) -> tuple[Collision, ...]:
+        """Every collision element of the link: ``collisions``, or the ``geometry`` cylinder
+        as one element, or none for a pure frame."""
+        if self.collisions:
+            return self.collisions
+        if self.geometry is None:
+            return ()
+        g = self.geometry
+        return (Collision(CylinderShape(g.radius, g.length), g.origin),)
 
 
 @dataclass(frozen=True)

@@ -106,7 +106,7 @@ def _chain_frames(chain: KinematicChain, q: Array) -> tuple[Array, Array, Array]
 
 def urdf_accuracy(urdf: str, options: DescribeOptions, samples: int = 1000) -> dict[str, Any]:
     """:func:`accuracy_report` of a URDF (e.g. a calibrated one) of a built-in robot."""
-    from usar_arm.urdf.reader import parse_urdf
+    from usar_arm.urdf.description_reader import parse_urdf
 
     chain, _ = parse_urdf(urdf)
     spec = builtin_robots()[options.robot_class]

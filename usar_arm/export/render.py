@@ -29,6 +29,7 @@ from usar_arm.control.trajectory import Trajectory
 from usar_arm.core.errors import InvalidInputError
 from usar_arm.core.fileio import write_atomic
 from usar_arm.core.model import KinematicChain
+from usar_arm.core.shapes import Capsule, CylinderShape
 from usar_arm.core.spatial import Array
 from usar_arm.export.surfaces import Faces, cylinder, outline, shape_faces
 from usar_arm.planning.scene import Scene
@@ -79,17 +80,20 @@ def tool_path(chain: KinematicChain, trajectory: Trajectory, frame: str = "tool0
 
 
 def _arm_faces(chain: KinematicChain, q: Array, alpha: float | None, faces: Faces) -> None:
-    """Add the link cylinders at ``q`` to ``faces`` (alpha: None = the material's own)."""
+    """Add the links' collision elements at ``q`` to ``faces`` (alpha: None = the material's
+    own; a capsule is drawn as the cylinder around it)."""
     poses = chain.link_poses(q.tolist())
     for link in chain.links:
-        if link.geometry is None:
-            continue
-        g = link.geometry
         rgba = np.array(link.color or DEFAULT_LINK_COLOR, dtype=float)
         if alpha is not None:
             rgba[3] = alpha
-        pose = poses[link.name] @ g.origin.matrix()
-        faces.add(cylinder(g.radius, g.length, pose), tuple(rgba))
+        for element in link.elements:
+            s, pose = element.shape, poses[link.name] @ element.origin.matrix()
+            if isinstance(s, CylinderShape | Capsule):
+                length = s.length + (2 * s.radius if isinstance(s, Capsule) else 0.0)
+                faces.add(cylinder(s.radius, length, pose), tuple(rgba))
+            else:
+                faces.add(shape_faces(s, pose), tuple(rgba))
 
 
 def _window(points: Array) -> tuple[Array, Array]:

@@ -48,13 +48,11 @@ def _viser() -> Any:
 
 
 def _load_urdf(urdf_text: str) -> Any:
-    import yourdfpy
+    from usar_arm.urdf.description_reader import viewer_urdf
 
     try:
-        return yourdfpy.URDF.load(io.StringIO(urdf_text), build_scene_graph=True,
-                                  load_meshes=False, build_collision_scene_graph=False,
-                                  load_collision_meshes=False)
-    except Exception as exc:  # yourdfpy raises assorted errors for malformed XML
+        return viewer_urdf(urdf_text)
+    except ValueError as exc:
         raise InvalidInputError(f"cannot read the URDF for the viewer: {exc}") from None
 
 
@@ -93,7 +91,7 @@ def _tool_path(urdf: Any, replay: _Replay, frame: str = "tool0", points: int = 2
 
 
 def _add_obstacles(server: Any, scene: Scene) -> None:
-    import trimesh
+    from usar_arm.urdf.meshes import cylinder_mesh
 
     for obj in scene.objects:
         name, s = f"/scene/{obj.name}", obj.shape
@@ -104,10 +102,10 @@ def _add_obstacles(server: Any, scene: Scene) -> None:
         elif isinstance(s, Sphere):
             server.scene.add_icosphere(name, radius=s.radius, **look, **pose)
         else:
-            mesh = (trimesh.creation.cylinder(radius=s.radius, height=s.length, sections=32)
-                    if isinstance(s, CylinderShape) else trimesh.Trimesh(s.vertices, s.faces))
-            server.scene.add_mesh_simple(name, np.asarray(mesh.vertices, np.float32),
-                                         np.asarray(mesh.faces, np.uint32), flat_shading=True,
+            vertices, faces = (cylinder_mesh(s.radius, s.length) if isinstance(s, CylinderShape)
+                               else (s.vertices, s.faces))
+            server.scene.add_mesh_simple(name, np.asarray(vertices, np.float32),
+                                         np.asarray(faces, np.uint32), flat_shading=True,
                                          side="double", **look, **pose)
 
 

@@ -47,7 +47,7 @@ class AcmResult:
 
 def adjacent_pairs(chain: KinematicChain) -> set[Pair]:
     """Pairs of links with geometry joined in the link graph after removing geometry-less links."""
-    with_geometry = {lk.name for lk in chain.links if lk.geometry is not None}
+    with_geometry = {lk.name for lk in chain.links if lk.elements}
     graph: dict[str, set[str]] = {lk.name: set() for lk in chain.links}
     for j in chain.joints:
         graph[j.parent].add(j.child)
@@ -112,6 +112,6 @@ def compute_acm(chain: KinematicChain, kinematics: KinematicModel, samples: int 
         if p not in seen:
             reasons[p] = "Never"
     disabled = tuple(DisabledPair(a, b, reasons[(a, b)]) for a, b in sorted(reasons))
-    no_geometry = tuple(lk.name for lk in chain.links if lk.geometry is None)
+    no_geometry = tuple(lk.name for lk in chain.links if not lk.elements)
     return AcmResult(disabled, samples, seed, tuple(p for p in candidates if p not in reasons),
                      no_geometry)

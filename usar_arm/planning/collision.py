@@ -18,9 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.core.model import Cylinder, KinematicChain
-from usar_arm.core.spatial import Array
+from usar_arm.core.model import KinematicChain
+from usar_arm.core.shapes import CylinderShape, Shape
+from usar_arm.core.spatial import Array, invert
 from usar_arm.planning import bounds
+from usar_arm.planning.element_fit import bounding_cylinder, padded
 from usar_arm.planning.exact import ExactJudge
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.scene import EMPTY, Scene
@@ -43,8 +45,43 @@ class Contact:
     depth: float
 
 
+@dataclass(frozen=True, eq=False)
+class _Body:
+    """One collision element of a link as the two judges see it: the compiled verdicts its
+    bounding cylinder (``local``: pose in the link frame; radius, half-length, m; ``exact``:
+    contact proofs allowed), FCL its shape (``to_shape``: the shape's pose in the cylinder's
+    frame, None when the same)."""
+
+    link: str
+    shape: Shape
+    local: Array
+    radius: float
+    half: float
+    exact: bool
+    to_shape: Array | None
+
+
+def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
+    """Every collision element of the chain's links, in link order."""
+    out = []
+    for lk in chain.links:
+        for c in lk.elements:
+            s = c.shape
+            if isinstance(s, CylinderShape):  # the learnt arms' cylinders, as they always were
+                out.append(_Body(lk.name, CylinderShape(s.radius + padding, s.length
+                                                        + 2 * padding), c.origin.matrix(),
+                                 s.radius + padding, s.length / 2 + padding, True, None))
+                continue
+            grown = padded(s, padding)
+            fit = bounding_cylinder(grown)
+            same = bool(np.array_equal(fit.frame, np.eye(4)))
+            out.append(_Body(lk.name, grown, c.origin.matrix() @ fit.frame, fit.radius,
+                             fit.half, fit.exact, None if same else invert(fit.frame)))
+    return out
+
+
 class CollisionWorld:
-    """The arm (cylinders from a chain) and a scene.
+    """The arm (its links' collision elements) and a scene.
 
     Broadphase: a compiled kernel (:mod:`.bounds`) computes every link's pose for a batch of
     configurations and clears the checked pairs that provably cannot touch (enclosing capsules,
@@ -65,17 +102,18 @@ class CollisionWorld:
         self.kinematics = kinematics
         self.scene = scene
         self.padding = float(padding)
-        links = [lk for lk in chain.links if lk.geometry is not None]
-        self._links = [lk.name for lk in links]
+        bodies = _bodies(chain, self.padding)
+        self._links = [b.link for b in bodies]
         self._frame_ids = [kinematics.frame_id(n) for n in self._links]
-        cyls: list[Cylinder] = [lk.geometry for lk in links if lk.geometry is not None]
-        self._local = np.array([c.origin.matrix() for c in cyls]).reshape(-1, 4, 4)
-        self._radius = np.array([c.radius + self.padding for c in cyls])
-        self._half = np.array([c.length / 2 + self.padding for c in cyls])
+        self._local = np.array([b.local for b in bodies]).reshape(-1, 4, 4)
+        self._radius = np.array([b.radius for b in bodies])
+        self._half = np.array([b.half for b in bodies])
         self._poses = np.zeros((len(self._links), 4, 4))
-        self._compiled = CompiledVerdicts(chain, links, self._radius, self._half, self._local,
-                                          scene)
-        self._exact = ExactJudge(self._radius, self._half, scene)
+        self._compiled = CompiledVerdicts(chain, self._links, self._radius, self._half,
+                                          self._local, scene,
+                                          np.array([b.exact for b in bodies], dtype=bool))
+        self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
+                                 self._radius, self._half, scene)
         self._levers: Array | None = None
         self.set_disabled(disabled)
 
@@ -106,7 +144,8 @@ class CollisionWorld:
         self._skip = self.disabled | allowed
         n = len(self._links)
         rr = [(i, j) for i in range(n) for j in range(i + 1, n)
-              if pair(self._links[i], self._links[j]) not in self._skip]
+              if self._links[i] != self._links[j]
+              and pair(self._links[i], self._links[j]) not in self._skip]
         rs = [(i, k) for i in range(n) for k, o in enumerate(self.scene.objects)
               if pair(self._links[i], o.name) not in self._skip]
         self._compiled.check_pairs(np.array(rr, dtype=np.int64), np.array(rs, dtype=np.int64))
@@ -138,11 +177,11 @@ class CollisionWorld:
     @property
     def link_names(self) -> tuple[str, ...]:
         """Links that have collision geometry."""
-        return tuple(self._links)
+        return tuple(dict.fromkeys(self._links))
 
     def checked_pairs(self) -> list[Pair]:
         """Every robot-robot and robot-scene pair that is checked (not disabled or allowed)."""
-        return sorted(self._pair_name(p) for p in range(len(self._rr) + len(self._rs)))
+        return sorted({self._pair_name(p) for p in range(len(self._rr) + len(self._rs))})
 
     def set_configuration(self, q: Array) -> None:
         """Place the robot's cylinders at configuration ``q`` (rad/m)."""
@@ -166,7 +205,7 @@ class CollisionWorld:
     def contacts(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, sorted."""
         world, verdicts = self.bounded_poses(q)
-        return sorted(self._decide(world[0], verdicts[0], stop_at_first=False))
+        return sorted(set(self._decide(world[0], verdicts[0], stop_at_first=False)))
 
     def _decide(self, poses: Array, verdicts: Array, stop_at_first: bool) -> list[Pair]:
         """The pairs in contact, given the compiled verdicts (link poses (L, 3, 4))."""
@@ -192,20 +231,24 @@ class CollisionWorld:
         checked: list[tuple[bool, int, int]] = []
         names: list[Pair] = []
         for i, a in enumerate(self._links):
-            others = [(False, j, self._links[j]) for j in range(i + 1, len(self._links))]
+            others = [(False, j, self._links[j]) for j in range(i + 1, len(self._links))
+                      if self._links[j] != a]
             others += [(True, k, o.name) for k, o in enumerate(self.scene.objects)]
             for static, j, b in others:
                 if pair(a, b) not in self._skip:
                     checked.append((static, i, j))
                     names.append(pair(a, b))
-        return sorted(names[n] for n in self._exact.every_pair(self._world, checked))
+        return sorted({names[n] for n in self._exact.every_pair(self._world, checked)})
 
     def contact_details(self, q: Array) -> list[Contact]:
         """The pairs in contact at ``q`` with their penetration depth (m)."""
         self.set_configuration(q)
-        index = {n: (False, i) for i, n in enumerate(self._links)}
-        index.update({o.name: (True, k) for k, o in enumerate(self.scene.objects)})
-        return [Contact(a, b, self._exact.depth(self._world, index[a], index[b]))
+        index: dict[str, list[tuple[bool, int]]] = {}
+        for i, n in enumerate(self._links):
+            index.setdefault(n, []).append((False, i))
+        index.update({o.name: [(True, k)] for k, o in enumerate(self.scene.objects)})
+        return [Contact(a, b, max(self._exact.depth(self._world, x, y)
+                                  for x in index[a] for y in index[b]))
                 for a, b in self.contacts(q)]
 
     def distance(self, q: Array) -> float:
@@ -252,5 +295,5 @@ class CollisionWorld:
         world, verdicts = self.bounded_poses(qs)
         found: list[list[Pair]] = [[] for _ in range(len(world))]
         for n in np.flatnonzero(verdicts.any(axis=1)):
-            found[n] = sorted(self._decide(world[n], verdicts[n], stop_at_first=False))
+            found[n] = sorted(set(self._decide(world[n], verdicts[n], stop_at_first=False)))
         return found

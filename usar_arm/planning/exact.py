@@ -12,10 +12,19 @@ import copy
 import fcl
 import numpy as np
 
+from usar_arm.core.shapes import Shape
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds
 from usar_arm.planning.bounds import IndexArray
-from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
+from usar_arm.planning.scene import (
+    Box,
+    Capsule,
+    CylinderShape,
+    Mesh,
+    Scene,
+    SceneObject,
+    Sphere,
+)
 
 
 def _fcl_transform(t: Array) -> fcl.Transform:
@@ -23,7 +32,7 @@ def _fcl_transform(t: Array) -> fcl.Transform:
 
 
 def shape_geometry(shape: object) -> fcl.CollisionGeometry:
-    """The python-fcl geometry of a scene shape (box, cylinder, sphere or triangle mesh), in
+    """The python-fcl geometry of a shape (box, cylinder, sphere, capsule or triangle mesh), in
     the shape's own frame (m)."""
     if isinstance(shape, Box):
         return fcl.Box(*shape.size)
@@ -31,6 +40,8 @@ def shape_geometry(shape: object) -> fcl.CollisionGeometry:
         return fcl.Cylinder(shape.radius, shape.length)
     if isinstance(shape, Sphere):
         return fcl.Sphere(shape.radius)
+    if isinstance(shape, Capsule):
+        return fcl.Capsule(shape.radius, shape.length)
     if isinstance(shape, Mesh):
         model = fcl.BVHModel()
         model.beginModel(len(shape.vertices), len(shape.faces))
@@ -67,10 +78,11 @@ class ExactJudge:
     """python-fcl objects of the link cylinders (radius, half-length (m) per link) and of a
     scene's obstacles."""
 
-    def __init__(self, radius: Array, half: Array, scene: Scene):
+    def __init__(self, shapes: list[Shape], to_shape: list[Array | None], radius: Array,
+                 half: Array, scene: Scene):
         self.radius, self.half = radius, half
-        self._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
-                       for r, h in zip(radius, half, strict=True)]
+        self.shapes, self.to_shape = shapes, to_shape
+        self._robot = [fcl.CollisionObject(shape_geometry(s), fcl.Transform()) for s in shapes]
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self._init_scene(scene)
@@ -78,8 +90,8 @@ class ExactJudge:
     def in_scene(self, scene: Scene) -> ExactJudge:
         """The same cylinders (objects of their own) with another scene's obstacles."""
         other = copy.copy(self)
-        other._robot = [fcl.CollisionObject(fcl.Cylinder(r, 2 * h), fcl.Transform())
-                        for r, h in zip(self.radius, self.half, strict=True)]
+        other._robot = [fcl.CollisionObject(shape_geometry(s), fcl.Transform())
+                        for s in self.shapes]
         other._init_scene(scene)
         return other
 
@@ -90,11 +102,19 @@ class ExactJudge:
 
     def _placed(self, i: int, poses: Array, placed: dict[int, fcl.CollisionObject]
                 ) -> fcl.CollisionObject:
-        """Robot cylinder ``i`` moved to ``poses[i]`` (once per configuration)."""
+        """Robot body ``i`` moved to ``poses[i]`` (its bounding cylinder's pose; once per
+        configuration)."""
         o = placed.get(i)
         if o is None:
             o = self._robot[i]
-            o.setTransform(_fcl_transform(poses[i]))
+            t = self.to_shape[i]
+            if t is None:
+                o.setTransform(_fcl_transform(poses[i]))
+            else:
+                rot = poses[i][:3, :3]
+                o.setTransform(fcl.Transform(np.ascontiguousarray(rot @ t[:3, :3]),
+                                             np.ascontiguousarray(rot @ t[:3, 3]
+                                                                  + poses[i][:3, 3])))
             placed[i] = o
         return o
 

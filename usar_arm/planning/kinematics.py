@@ -8,7 +8,7 @@ of the URDF's actuated joints from the root outwards (the order of
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -23,13 +23,16 @@ class KinematicModel:
     Args:
         urdf: the URDF text.
         joint_names: expected actuated joint order; checked against the URDF.
+        roles: frame role -> link (``tool0`` -> the planning tip): :meth:`frame_pose` answers
+            a role with its link's pose.
 
     Raises:
         ValidationError: Pinocchio cannot load the URDF, or its joints differ from
             ``joint_names``.
     """
 
-    def __init__(self, urdf: str, joint_names: Sequence[str] | None = None):
+    def __init__(self, urdf: str, joint_names: Sequence[str] | None = None,
+                 roles: Mapping[str, str] | None = None):
         try:
             self.model = pin.buildModelFromXML(urdf)
         except (RuntimeError, ValueError) as exc:
@@ -50,6 +53,7 @@ class KinematicModel:
         for fid, frame in enumerate(self.model.frames):
             if frame.type == pin.FrameType.BODY and frame.name not in self._frame_ids:
                 self._frame_ids[frame.name] = fid
+        self.roles: dict[str, str] = dict(roles or {})
 
     @property
     def nq(self) -> int:
@@ -78,9 +82,10 @@ class KinematicModel:
         return self.data.oMf[fid].homogeneous.copy()
 
     def frame_pose(self, q: Array, link: str) -> Array:
-        """4x4 pose of ``link`` in the root frame at ``q``."""
+        """4x4 pose of ``link`` (or of the link a frame role such as ``tool0`` names) in the
+        root frame at ``q``."""
         self.update(q)
-        return self.placement(link)
+        return self.placement(self.roles.get(link, link))
 
     def link_poses(self, q: Array, links: Sequence[str]) -> list[Array]:
         """4x4 poses of several links at ``q``."""

@@ -6,19 +6,57 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.model import KinematicChain
+from usar_arm.planning.acm import adjacent_pairs, default_state
 from usar_arm.planning.collision import CollisionWorld, Pair
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.kinematics import KinematicModel
-from usar_arm.planning.scene import EMPTY, Scene
+from usar_arm.planning.scene import EMPTY, Mesh, Scene
 from usar_arm.planning.scene_file import validate_allow
-from usar_arm.urdf.reader import apply_joint_limits_text, parse_srdf, parse_urdf
+from usar_arm.urdf.description_reader import ReadOptions, read_urdf
+from usar_arm.urdf.group import GroupChoice, cut_chain
+from usar_arm.urdf.joint_limits import apply_joint_limits_text
+from usar_arm.urdf.kinematic_text import kinematic_urdf
+from usar_arm.urdf.packages import PackagePaths
+from usar_arm.urdf.srdf_reader import Srdf, read_srdf
 
 log = logging.getLogger("usar_arm.planning.robot")
+
+
+@dataclass(frozen=True)
+class RobotOptions:
+    """How to read a description (picklable: worker processes rebuild the arm with it).
+
+    Attributes:
+        choice: the planning group, base and tip links (default: the SRDF's first group, or
+            the whole tree when it is one chain). read: where resources are, convex hulls.
+    """
+
+    choice: GroupChoice = field(default_factory=GroupChoice)
+    read: ReadOptions = field(default_factory=ReadOptions)
+
+    @classmethod
+    def of(cls, group: str | None = None, base: str | None = None, tip: str | None = None,
+           package_paths: Mapping[str, str] | None = None, convex_hull: bool = False
+           ) -> RobotOptions:
+        """Options from plain values.
+
+        Args:
+            group: the SRDF planning group (default: its first, or the whole URDF when it is
+                one chain). base: plan the chain from this link instead of a group.
+            tip: the tool frame poses refer to (``tool0``; default: the group's tip, tool0
+                below its last joint, or the chain's last link down fixed joints).
+            package_paths: package name -> folder for ``package://`` meshes (searched before
+                ROS_PACKAGE_PATH, AMENT_PREFIX_PATH and the URDF's ancestors).
+            convex_hull: the collision meshes replaced by their convex hulls.
+        """
+        return cls(GroupChoice(group, base, tip),
+                   ReadOptions(PackagePaths(dict(package_paths or {})), convex_hull))
 
 
 @dataclass
@@ -45,6 +83,10 @@ class Robot:
     """Name of the server's tip GroundTruth sensor (and of its URDF frame), when it has one."""
     files: dict[str, str] = field(default_factory=dict)
     """The description's files (name -> text: URDF, SRDF, joint limits, discovery notes)."""
+    kinematic_urdf: str = ""
+    """The planning chain's kinematics as URDF text for Pinocchio (empty: ``urdf``)."""
+    options: RobotOptions = field(default_factory=RobotOptions)
+    """How the description was read (group, tip, packages, hulls)."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
 
@@ -52,7 +94,8 @@ class Robot:
     def kinematics(self) -> KinematicModel:
         """The Pinocchio model (built on first use)."""
         if self._kinematics is None:
-            self._kinematics = KinematicModel(self.urdf, self.chain.joint_names)
+            self._kinematics = KinematicModel(self.kinematic_urdf or self.urdf,
+                                              self.chain.joint_names, self.chain.frames)
         return self._kinematics
 
     def ik_solver(self, options: IKOptions | None = None, frame: str = "tool0") -> IKSolver:
@@ -66,6 +109,13 @@ class Robot:
         """A collision world of this arm in ``scene``."""
         validate_allow(scene, {lk.name for lk in self.chain.links})
         return CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding)
+
+    def home(self) -> list[float]:
+        """The ``home`` state, or without one each joint at 0 (the middle of its limits when 0
+        is outside them), rad or m."""
+        if "home" in self.states:
+            return self.named_state("home")
+        return [float(v) for v in default_state(self.chain)]
 
     def named_state(self, name: str) -> list[float]:
         """A named state (``home``) in joint order."""
@@ -83,9 +133,11 @@ def wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
 
 
 def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
-                     joint_limits: str | Path | None = None) -> Robot:
+                     joint_limits: str | Path | None = None,
+                     options: RobotOptions | None = None) -> Robot:
     """A Robot from a URDF (and SRDF, joint_limits.yaml; found beside the URDF when not given,
-    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``, with ``<Robot>.discovery.json``)."""
+    as ``<Robot>.srdf`` and ``<Robot>.joint_limits.yaml``, with ``<Robot>.discovery.json``),
+    read with ``options`` (group, base and tip links, package paths, convex hulls)."""
     path = Path(urdf)
     try:
         text = path.read_text()
@@ -102,11 +154,11 @@ def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
              f"{stem}.discovery.json": info}
     files = {path.name: text, **{name: p.read_text() for name, p in roles.items()
                                  if p.exists()}}
-    return robot_from_texts(files, path.name, str(path))
+    return robot_from_texts(files, path.name, str(path), options)
 
 
 def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
-                     source: str = "") -> Robot:
+                     source: str = "", options: RobotOptions | None = None) -> Robot:
     """A Robot from a description's files given as text (name -> text): ``X.urdf`` and, when
     present, ``X.srdf``, ``X.joint_limits.yaml`` and ``X.discovery.json``. What a worker
     process builds its arm from (the files travel by value; the solvers do not pickle)."""
@@ -119,13 +171,24 @@ def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
     stem = urdf_name.removesuffix(".urdf")
     where = source or urdf_name
     text = files[urdf_name]
-    chain, notes = parse_urdf(text, where)
-    for note in notes:
+    options = options or RobotOptions()
+    tree = read_urdf(text, where, options.read)
+    for note in tree.notes:
         log.warning("%s: %s", where, note)
-    disabled: set[Pair] = set()
-    states: dict[str, dict[str, float]] = {}
-    if f"{stem}.srdf" in files:
-        disabled, states = parse_srdf(files[f"{stem}.srdf"], f"{stem}.srdf")
+    srdf = read_srdf(files[f"{stem}.srdf"], f"{stem}.srdf") if f"{stem}.srdf" in files else None
+    cut = cut_chain(tree, srdf, options.choice, where)
+    for note in cut.notes:
+        log.warning("%s: %s", where, note)
+    if any(isinstance(c.shape, Mesh) and c.shape.convex_hull
+           for lk in cut.chain.links for c in lk.collisions):
+        log.warning("%s: convex hulls stand in for the collision meshes (--convex-hull)", where)
+    chain = cut.chain
+    disabled, states = (srdf or Srdf()).disabled, (srdf or Srdf()).states
+    unlisted = adjacent_pairs(chain) - disabled
+    if unlisted:  # as MoveIt's setup assistant and Drake do: touching neighbours never count
+        log.info("%s: adjacent links not checked against each other: %s", where,
+                 ", ".join(f"{a}-{b}" for a, b in sorted(unlisted)))
+        disabled = disabled | unlisted
     if f"{stem}.joint_limits.yaml" in files:
         chain = apply_joint_limits_text(chain, files[f"{stem}.joint_limits.yaml"],
                                         f"{stem}.joint_limits.yaml")
@@ -138,4 +201,4 @@ def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
         actuator = doc.get("robot", {}).get("actuator")
         links, tip_sensor = wire_facts(doc)
     return Robot(chain, text, disabled, states, actuator, where, links, tip_sensor,
-                 dict(files))
+                 dict(files), kinematic_urdf(chain), options)

@@ -7,41 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from usar_arm.core.shapes import Box, Capsule, CylinderShape, Mesh, Sphere
+from usar_arm.core.shapes import ObstacleShape as Shape
 from usar_arm.core.spatial import Array
 
-
-@dataclass(frozen=True)
-class Box:
-    """A box with edge lengths ``size`` (m), centred on its pose."""
-
-    size: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class CylinderShape:
-    """A cylinder along its pose's z axis, centred there; radius and length in m."""
-
-    radius: float
-    length: float
-
-
-@dataclass(frozen=True)
-class Sphere:
-    """A sphere of ``radius`` m centred on its pose."""
-
-    radius: float
-
-
-@dataclass(frozen=True, eq=False)
-class Mesh:
-    """A triangle mesh: vertices (m, in the object's frame) and faces (vertex indices)."""
-
-    vertices: Array
-    faces: Array
-    source: str = ""
-
-
-Shape = Box | CylinderShape | Sphere | Mesh
+__all__ = ["EMPTY", "Box", "Capsule", "CylinderShape", "Mesh", "Scene", "SceneObject", "Shape",
+           "Sphere"]
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,8 +35,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.spatial import transform_from_xyz_rpy
 from usar_arm.core.yamlio import line_of, load_yaml
@@ -122,16 +120,13 @@ def _shape(ctx: _Ctx, obj: dict[str, Any], kind: str, field: str, base: Path) ->
     scale = ctx.positive(spec, "scale", where) if "scale" in spec else 1.0
     file = Path(spec["file"])
     full = file if file.is_absolute() else base / file
-    try:
-        import trimesh
+    from usar_arm.urdf.meshes import load_mesh  # trimesh: only when a scene has a mesh
 
-        mesh: Any = trimesh.load(str(full), force="mesh")
-    except Exception as exc:  # trimesh raises many types for bad files
+    try:
+        mesh = load_mesh(full, (scale, scale, scale))
+    except ValueError as exc:
         raise ctx.fail(f"cannot load mesh {full}: {exc}", spec, "file", f"{where}.file") from None
-    if len(mesh.faces) == 0:
-        raise ctx.fail(f"mesh {full} has no triangles", spec, "file", f"{where}.file")
-    vertices = np.asarray(mesh.vertices, dtype=np.float64) * scale
-    return Mesh(vertices, np.asarray(mesh.faces, np.int64), str(file))
+    return Mesh(mesh.vertices, mesh.faces, str(file))
 
 
 def parse_scene(data: Any, path: str, base: Path) -> Scene:

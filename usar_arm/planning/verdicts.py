@@ -12,7 +12,7 @@ import copy
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.core.model import KinematicChain, Link
+from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds
 from usar_arm.planning.bounds import IndexArray
@@ -47,22 +47,31 @@ def _scene_arrays(scene: Scene) -> tuple[IndexArray, Array, Array]:
             np.array(sizes, dtype=float).reshape(-1, 3))
 
 
-class CompiledVerdicts:
-    """The compiled broadphase of the link cylinders of ``links`` (each with geometry; radius
-    and half-length padded, m; cylinder poses in their link ``local`` (L, 4, 4)) in a scene."""
+NO_PROOF = -1.0e6
+"""The inner-ball radius (m) given to a body whose bounding cylinder is not its shape (a box,
+a mesh): no overlap of such balls is ever below zero, so the verdicts never prove its contacts
+(they clear its pairs; python-fcl decides the rest)."""
 
-    def __init__(self, chain: KinematicChain, links: list[Link], radius: Array, half: Array,
-                 local: Array, scene: Scene):
+
+class CompiledVerdicts:
+    """The compiled broadphase of collision bodies (each a cylinder: radius and half-length
+    padded, m; pose in its link ``links[k]``'s frame ``local`` (L, 4, 4); ``exact[k]`` False
+    when it only bounds the body's shape) in a scene."""
+
+    def __init__(self, chain: KinematicChain, links: list[str], radius: Array, half: Array,
+                 local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None):
         poe = PoeModel(chain)
         zero = chain.link_poses(np.zeros(chain.dof))
         self.chain = chain
-        self.names = [lk.name for lk in links]
+        self.names = list(links)
         self.radius, self.half = radius, half
+        self._local = local
+        self._exact = np.ones(len(links), bool) if exact is None else np.asarray(exact, bool)
         self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
         self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
         self._revolute = np.ascontiguousarray(poe.revolute, dtype=np.int64).reshape(-1)
-        self._moved_by = np.array([poe.joints_moving(lk.name) for lk in links], dtype=np.int64)
-        self._zero = np.array([zero[lk.name] @ m for lk, m in
+        self._moved_by = np.array([poe.joints_moving(name) for name in links], dtype=np.int64)
+        self._zero = np.array([zero[name] @ m for name, m in
                                zip(links, local, strict=True)]).reshape(-1, 4, 4)
         self._link_levers: Array | None = None
         self._kind, self._opose, self._osize = _scene_arrays(scene)
@@ -83,6 +92,9 @@ class CompiledVerdicts:
         self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
                                    self.radius, self.half, self._moved_by, self.rr, self.rs,
                                    self._kind, self._opose, self._osize)
+        if not self._exact.all():
+            self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
+            self._packed[2][~self._exact, bounds.REACH] = 0.0
 
     def check(self, qs: Array) -> tuple[Array, NDArray[np.int8]]:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
@@ -134,7 +146,5 @@ class CompiledVerdicts:
             reach += float(np.linalg.norm(step.origin.xyz))
             if step.type.value == "prismatic" and step.limits is not None:
                 reach += max(abs(step.limits.lower), abs(step.limits.upper))
-        geom = next(lk for lk in self.chain.links if lk.name == name).geometry
-        assert geom is not None
-        return reach + float(np.linalg.norm(geom.origin.xyz)) + float(
+        return reach + float(np.linalg.norm(self._local[k][:3, 3])) + float(
             np.hypot(self.radius[k], self.half[k]))

@@ -88,7 +88,7 @@ def arm_builder(robot: Robot) -> ArmBuilder:
     urdf_name = next((n for n in robot.files if n.endswith(".urdf")), None)
     files = dict(robot.files) if urdf_name else {f"{robot.chain.name}.urdf": robot.urdf}
     return functools.partial(robot_from_texts, files, urdf_name or f"{robot.chain.name}.urdf",
-                             robot.source)
+                             robot.source, robot.options)
 
 
 def description_text(robot: Robot) -> str:
