@@ -28,6 +28,7 @@ from typing import Any
 
 from simharness import (
     FLOOD_KINDS,
+    VEHICLE_FIGURES,
     Bot,
     Driver,
     Flooder,
@@ -113,7 +114,7 @@ async def run_load(port: int, server: ServerProcess | None, args: argparse.Names
         "spawn_s": round(ready - started, 2), "window_s": round(end - t0, 2),
         "load_before": args.load_before, "load_after": machine_load(),
         "asta": summarise_bots(rows),
-        "vehicles": summarise_bots(vehicle_rows),
+        "vehicles": summarise_bots(vehicle_rows, VEHICLE_FIGURES),
         "server": process_summary(samples, t0),
         "client_cpu_percent": round(100 * (time.process_time() - cpu0) / (end - started), 1),
         "server_samples": sample_rows(samples, started),

@@ -537,9 +537,20 @@ class Driver(StreamClient):
         return out
 
 
-def summarise_bots(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """min/median/max over bots of each per-bot figure (every float the rows carry)."""
-    keys = sorted({k for r in rows for k, v in r.items() if isinstance(v, float)})
+ARM_FIGURES = ("asta_per_wall_s", "asta_per_sim_s", "sim_speed", "max_gap_wall_s",
+               "max_gap_sim_s", "track_rms_mrad", "act_per_s", "rtt_ms_median", "rtt_ms_max")
+"""The figures every summary of arm clients carries (the tools read them without checking)."""
+VEHICLE_FIGURES = ("sta_per_wall_s", "sta_per_sim_s", "sim_speed", "max_gap_wall_s",
+                   "max_gap_sim_s", "drive_per_s", "rtt_ms_median", "rtt_ms_max", "travel_m")
+"""The figures every summary of vehicle clients carries."""
+
+
+def summarise_bots(rows: list[dict[str, Any]], figures: tuple[str, ...] = ARM_FIGURES
+                   ) -> dict[str, Any]:
+    """min/median/max over bots of each per-bot figure: every float the rows carry, and
+    ``figures`` always (``{"n": 0}`` when no bot has one)."""
+    keys = sorted({*figures, *(k for r in rows for k, v in r.items()
+                                   if isinstance(v, float))})
     out: dict[str, Any] = {k: quantiles([r[k] for r in rows if k in r]) for k in keys}
     out["bots"] = len(rows)
     out["lost"] = [f"bot {r['bot']}: {r['lost']}" for r in rows if r["lost"]]
