@@ -62,7 +62,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="use a simulator already listening on this port (no process figures)")
     p.add_argument("--platforms", type=int, default=0,
                    help="of the clients, this many spawn a P3AT in the rooms world and drive it "
-                        "(DRIVE at --rate, at most 20 Hz) instead of a KR60 (default 0)")
+                        "(DRIVE at --rate, at most 20 Hz) instead of a KR60 (default 0; with "
+                        "--port, that simulator must have RobotStart1-3, e.g. --world rooms)")
     p.add_argument("--flood", type=float, default=0.0,
                    help="one more client sends this many lines/s (e.g. 10000)")
     p.add_argument("--flood-kind", choices=FLOOD_KINDS, default="act",
