@@ -1,13 +1,17 @@
 #!/usr/bin/env python3
-"""Load test of ``usar-arm sim``: N clients, each spawning a KR60 and streaming ACT.
+"""Load test of ``usar-arm sim``: N clients, each spawning a KR60 and streaming ACT, or a P3AT
+and driving it.
 
 The simulator runs in its own process (started here, or one already running with ``--port``);
 the clients share one asyncio loop in this process. Per client the tool measures the ASTA rate
 per wall second and per simulated second (from ``{Time t}``), the largest gap between ASTAs, the
 GETCONF round trip, and how closely joint 1 follows its commanded sine; of the server it samples
-RSS, thread count and CPU time. Optionally one more client floods the server.
+RSS, thread count and CPU time. With ``--platforms K``, K of the N clients spawn a P3AT in the
+``rooms`` world instead and drive it (DRIVE at ``--rate``, at most 20 Hz); of those the tool
+measures the STA rate and gaps, each sensor type's SEN rate per simulated second against its
+ScanInterval, and the GETCONF round trip. Optionally one more client floods the server.
 
-    python tools/load_sim.py --clients 64 --rate 100 --seconds 60 --json load.json
+    python tools/load_sim.py --clients 64 --platforms 16 --rate 100 --seconds 60 --json load.json
 
 Exit status: 0 when every client kept its connection and the server survived, 1 otherwise.
 """
@@ -24,7 +28,9 @@ from typing import Any
 
 from simharness import (
     FLOOD_KINDS,
+    VEHICLE_FIGURES,
     Bot,
+    Driver,
     Flooder,
     ProcSample,
     ServerProcess,
@@ -54,17 +60,33 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--speed", type=float, default=1.0, help="--speed of the simulator")
     p.add_argument("--port", type=int, default=0,
                    help="use a simulator already listening on this port (no process figures)")
+    p.add_argument("--platforms", type=int, default=0,
+                   help="of the clients, this many spawn a P3AT in the rooms world and drive it "
+                        "(DRIVE at --rate, at most 20 Hz) instead of a KR60 (default 0; with "
+                        "--port, that simulator must have RobotStart1-3, e.g. --world rooms)")
     p.add_argument("--flood", type=float, default=0.0,
                    help="one more client sends this many lines/s (e.g. 10000)")
     p.add_argument("--flood-kind", choices=FLOOD_KINDS, default="act",
                    help="what the flooding client sends (default act: valid ACT lines)")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    if not 0 <= args.platforms <= args.clients:
+        p.error(f"--platforms must be within 0..--clients ({args.clients})")
+    return args
+
+
+def make_clients(args: argparse.Namespace) -> tuple[list[Bot], list[Driver]]:
+    """The arm clients (0 .. N-K-1) and the vehicle clients (N-K .. N-1)."""
+    arms = args.clients - args.platforms
+    return ([Bot(i, rate=args.rate, probe_every=args.probe_every) for i in range(arms)],
+            [Driver(i, rate=args.rate, probe_every=args.probe_every)
+             for i in range(arms, args.clients)])
 
 
 async def run_load(port: int, server: ServerProcess | None, args: argparse.Namespace
                    ) -> dict[str, Any]:
     stop = asyncio.Event()
-    bots = [Bot(i, rate=args.rate, probe_every=args.probe_every) for i in range(args.clients)]
+    arms, vehicles = make_clients(args)
+    bots = [*arms, *vehicles]
     samples: list[ProcSample] = []
 
     started = time.monotonic()
@@ -85,18 +107,22 @@ async def run_load(port: int, server: ServerProcess | None, args: argparse.Names
     await asyncio.wait(tasks, timeout=15)
     sampling.cancel()
     t0 = ready + min(args.warmup, args.seconds / 2)
-    rows = [b.summary(t0, end) for b in bots]
+    rows = [b.summary(t0, end) for b in arms]
+    vehicle_rows = [b.summary(t0, end) for b in vehicles]
     result: dict[str, Any] = {
-        "clients": args.clients, "rate_hz": args.rate, "seconds": args.seconds,
+        "clients": args.clients, "platforms": args.platforms, "rate_hz": args.rate,
+        "seconds": args.seconds,
         "spawn_s": round(ready - started, 2), "window_s": round(end - t0, 2),
         "load_before": args.load_before, "load_after": machine_load(),
         "asta": summarise_bots(rows),
+        "vehicles": summarise_bots(vehicle_rows, VEHICLE_FIGURES),
         "server": process_summary(samples, t0),
         "client_cpu_percent": round(100 * (time.process_time() - cpu0) / (end - started), 1),
         "server_samples": sample_rows(samples, started),
         "per_client": rows,
+        "per_vehicle": vehicle_rows,
     }
-    speed = result["asta"]["sim_speed"].get("median")
+    speed = result["asta" if rows else "vehicles"].get("sim_speed", {}).get("median")
     if result["server"] and speed:
         result["server"]["cpu_s_per_sim_s"] = round(
             result["server"]["cpu_percent"] / 100 / speed, 3)
@@ -107,26 +133,61 @@ async def run_load(port: int, server: ServerProcess | None, args: argparse.Names
     return result
 
 
-def print_summary(result: dict[str, Any]) -> None:
-    a, s = result["asta"], result.get("server", {})
+def spread(summary: dict[str, Any], key: str, fmt: str = ".3f") -> str:
+    """``min / median / max`` of one summarised figure ("-" when no client has it)."""
+    v = summary.get(key, {})
+    return " / ".join(format(v[k], fmt) for k in ("min", "median", "max")) if v.get("n") else "-"
 
-    def q(k: str) -> str:
-        v = a[k]
-        return f"{v['min']:.3f} / {v['median']:.3f} / {v['max']:.3f}" if v.get("n") else "-"
 
-    lines = [
-        f"{result['clients']} clients x {result['rate_hz']:g} Hz ACT, window "
-        f"{result['window_s']} s (spawn took {result['spawn_s']} s); load {result['load_after']}",
-        f"  ASTA per wall s   min/med/max {q('asta_per_wall_s')}",
-        f"  ASTA per sim s    min/med/max {q('asta_per_sim_s')}",
-        f"  sim speed         min/med/max {q('sim_speed')}",
-        f"  ASTA max gap (s)  min/med/max {q('max_gap_wall_s')}",
-        f"  ACT sent per s    min/med/max {q('act_per_s')}",
-        f"  GETCONF rtt p50ms min/med/max {q('rtt_ms_median')}",
-        f"  GETCONF rtt max   min/med/max {q('rtt_ms_max')}",
-        f"  joint-1 track rms min/med/max {q('track_rms_mrad')} mrad",
+def arm_lines(a: dict[str, Any]) -> list[str]:
+    """The stderr summary of the arm clients (``asta``)."""
+    return [
+        f"  arms ({a['bots']}): min/med/max",
+        f"  ASTA per wall s   {spread(a, 'asta_per_wall_s')}",
+        f"  ASTA per sim s    {spread(a, 'asta_per_sim_s')}",
+        f"  sim speed         {spread(a, 'sim_speed')}",
+        f"  ASTA max gap (s)  {spread(a, 'max_gap_wall_s')}",
+        f"  ACT sent per s    {spread(a, 'act_per_s')}",
+        f"  GETCONF rtt p50ms {spread(a, 'rtt_ms_median')}",
+        f"  GETCONF rtt max   {spread(a, 'rtt_ms_max')}",
+        f"  joint-1 track rms {spread(a, 'track_rms_mrad')} mrad",
         f"  lost connections  {len(a['lost'])} {a['lost'][:3]}",
     ]
+
+
+def vehicle_lines(v: dict[str, Any]) -> list[str]:
+    """The stderr summary of the vehicle clients (``vehicles``): STA, each SEN type's rate
+    against its expected rate, DRIVE and GETCONF."""
+    sens = sorted(k[4:-len("_per_sim_s")] for k in v if k.startswith("sen_")
+                  and k.endswith("_per_sim_s"))
+    return [
+        f"  vehicles ({v['bots']}): min/med/max",
+        f"  STA per wall s    {spread(v, 'sta_per_wall_s')}",
+        f"  STA per sim s     {spread(v, 'sta_per_sim_s')}",
+        f"  STA max gap wall  {spread(v, 'max_gap_wall_s')} s, sim "
+        f"{spread(v, 'max_gap_sim_s')} s",
+        *(f"  SEN {kind:<13} {spread(v, f'sen_{kind}_per_sim_s')} per sim s (expected "
+          f"{spread(v, f'sen_{kind}_expected', '.1f')})" for kind in sens),
+        f"  DRIVE sent per s  {spread(v, 'drive_per_s')}",
+        f"  path driven (m)   {spread(v, 'travel_m', '.2f')}",
+        f"  nearest scan (m)  {spread(v, 'closest_m', '.2f')}",
+        f"  GETCONF rtt p50ms {spread(v, 'rtt_ms_median')}",
+        f"  GETCONF rtt max   {spread(v, 'rtt_ms_max')}",
+        f"  lost connections  {len(v['lost'])} {v['lost'][:3]}",
+    ]
+
+
+def print_summary(result: dict[str, Any]) -> None:
+    s = result.get("server", {})
+    lines = [
+        f"{result['clients']} clients ({result['platforms']} of them P3ATs) x "
+        f"{result['rate_hz']:g} Hz, window {result['window_s']} s (spawn took "
+        f"{result['spawn_s']} s); load {result['load_before']} -> {result['load_after']}",
+    ]
+    if result["asta"]["bots"]:
+        lines += arm_lines(result["asta"])
+    if result["vehicles"]["bots"]:
+        lines += vehicle_lines(result["vehicles"])
     if s:
         lines.append(f"  server CPU {s['cpu_percent']} % ({s.get('cpu_s_per_sim_s')} CPU s per "
                      f"simulated s; waited for a CPU {s['runqueue_wait_percent']} % of the time)"
@@ -145,7 +206,8 @@ def main(argv: list[str] | None = None) -> int:
     server = None
     log_path = args.server_log or Path(tempfile.mkdtemp(prefix="load_sim_")) / "sim.log"
     if not args.port:
-        server = ServerProcess(log_path, speed=args.speed)
+        world = ("--world", "rooms") if args.platforms else ()
+        server = ServerProcess(log_path, speed=args.speed, extra_args=world)
     port = args.port or server.port  # type: ignore[union-attr]
     try:
         result = asyncio.run(run_load(port, server, args))
@@ -159,7 +221,8 @@ def main(argv: list[str] | None = None) -> int:
         result["server_log_counts"] = log_counts(text)
     write_result(result, args.json)
     print_summary(result)
-    ok = not result["asta"]["lost"] and result.get("server_alive") is not False
+    ok = (not result["asta"]["lost"] and not result["vehicles"]["lost"]
+          and result.get("server_alive") is not False)
     return 0 if ok else 1
 
 

@@ -56,6 +56,39 @@ def test_eight_clients_at_100_hz_get_10_hz_status(tmp_path: Path) -> None:
     assert result["asta"]["act_per_s"]["min"] > 90
 
 
+def check_vehicles(result: dict[str, Any], vehicles: int, wall_rate: bool = True) -> None:
+    """The P3AT clients: 10 STA per simulated second with no gap beyond a tick, every sensor
+    type at the rate its ScanInterval sets, DRIVE streamed, every probe answered, nobody lost."""
+    veh, server = result["vehicles"], result["server"]
+    assert not veh["lost"] and result["server_alive"]
+    assert veh["bots"] == vehicles
+    assert veh["sta_per_sim_s"]["n"] == vehicles
+    assert veh["sta_per_sim_s"]["min"] >= 9.95, veh["sta_per_sim_s"]
+    assert veh["max_gap_sim_s"]["max"] < 0.11, veh["max_gap_sim_s"]
+    assert veh["probe_timeouts"] == 0
+    for kind in ("GroundTruth", "INS", "Odometry", "RangeScanner"):
+        rate, expected = veh[f"sen_{kind}_per_sim_s"], veh[f"sen_{kind}_expected"]
+        assert rate["n"] == vehicles, (kind, rate)
+        assert expected["min"] > 0, (kind, expected)
+        assert rate["min"] >= 0.99 * expected["max"] - 0.05, (kind, rate, expected)
+        assert rate["max"] <= 1.01 * expected["min"] + 0.05, (kind, rate, expected)
+    drive = veh["drive_per_s"]
+    assert drive["min"] > 18 and drive["max"] < 20.5, drive  # a vehicle's controller: 20 Hz
+    assert veh["travel_m"]["min"] > 0.1  # the vehicles do move
+    wall = veh["sta_per_wall_s"]
+    if wall_rate and server["runqueue_wait_percent"] < BUSY_WAIT_PERCENT:
+        assert wall["min"] >= 9.5, (wall, server)
+
+
+@pytest.mark.xdist_group("simulator-load")
+def test_arms_and_platforms_together_keep_their_status_and_sensor_rates(tmp_path: Path) -> None:
+    result = run_load(tmp_path, "--clients", "6", "--platforms", "2", "--rate", "100",
+                      "--seconds", "10", "--warmup", "2", "--sample-every", "0.5", timeout=120)
+    check_rates(result, 4)
+    check_vehicles(result, 2)
+    assert result["asta"]["act_per_s"]["min"] > 90
+
+
 @pytest.mark.xdist_group("simulator-load")
 @pytest.mark.slow
 def test_sixty_four_clients_at_100_hz_for_a_minute(tmp_path: Path) -> None:
