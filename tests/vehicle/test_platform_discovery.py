@@ -12,8 +12,9 @@ from pathlib import Path
 import pytest
 
 from usar_arm.cli.main import main
-from usar_arm.core.errors import DescriptionError, UnsupportedSteeringError, ValidationError
+from usar_arm.core.errors import DescriptionError, ValidationError
 from usar_arm.core.platform import SEED_FRAMES
+from usar_arm.core.vehicle_errors import UnsupportedSteeringError
 from usar_arm.description.embedded import embedded_simulator
 from usar_arm.description.platform import (
     PlatformResult,

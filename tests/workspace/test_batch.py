@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from usar_arm.cli.main import main
-from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, ResumeMismatchError
+from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK
+from usar_arm.core.job_errors import ResumeMismatchError
 from usar_arm.planning.robot import Robot
 from usar_arm.workspace import batch_job as batch
 from usar_arm.workspace.batch_file import parse_problems

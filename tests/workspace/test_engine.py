@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.core.errors import ChunkFailedError, InvalidInputError
+from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.job_errors import ChunkFailedError
 from usar_arm.workspace.engine import ChunkStore, InProcess, Job, run_job
 from usar_arm.workspace.pool import ProcessBackend
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.core.job_errors import ClusterUnavailableError
 from usar_arm.workspace.local_head import LocalHead
 
 pytest.importorskip("ray", reason="the ray extra is not installed (pip install 'usar-arm[ray]')")

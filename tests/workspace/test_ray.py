@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from usar_arm.core.errors import EXIT_UNAVAILABLE, ChunkFailedError, ClusterUnavailableError
+from usar_arm.core.errors import EXIT_UNAVAILABLE
+from usar_arm.core.job_errors import ChunkFailedError, ClusterUnavailableError
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.workspace import jobs

@@ -14,8 +14,6 @@ if TYPE_CHECKING:
     from usar_arm.core.errors import (
         AllSolutionsInCollisionError,
         CalibrationError,
-        ChunkFailedError,
-        ClusterUnavailableError,
         ConnectionFailedError,
         ConnectionLostError,
         DescriptionError,
@@ -32,7 +30,6 @@ if TYPE_CHECKING:
         PlanningError,
         ProtocolError,
         ResponseTimeoutError,
-        ResumeMismatchError,
         RobotStructureError,
         StartInCollisionError,
         TimingError,
@@ -45,6 +42,11 @@ if TYPE_CHECKING:
         ValidationError,
     )
     from usar_arm.core.fileio import write_atomic, write_tree_atomic
+    from usar_arm.core.job_errors import (
+        ChunkFailedError,
+        ClusterUnavailableError,
+        ResumeMismatchError,
+    )
     from usar_arm.core.model import Joint, JointLimits, JointType, KinematicChain, Link, Origin
     from usar_arm.core.spatial import (
         invert,
@@ -58,15 +60,16 @@ if TYPE_CHECKING:
     from usar_arm.core.yamlio import load_yaml, loads_yaml
 
 _HOMES = {
-    "errors": ("AllSolutionsInCollisionError", "CalibrationError", "ChunkFailedError",
-        "ClusterUnavailableError", "ConnectionFailedError", "ConnectionLostError",
+    "errors": ("AllSolutionsInCollisionError", "CalibrationError", "ConnectionFailedError",
+        "ConnectionLostError",
         "DescriptionError", "ExecutionAbortedError", "FileFormatError", "GoalInCollisionError",
         "IKError", "InvalidInputError", "JointLimitError", "LinBlockedError", "MapTooLargeError",
         "NoPathError", "OutOfLimitsError", "PlanningError", "ProtocolError",
-        "ResponseTimeoutError", "ResumeMismatchError", "RobotStructureError",
+        "ResponseTimeoutError", "RobotStructureError",
         "StartInCollisionError", "TimingError",
         "UnknownComponentError", "UnknownRobotError", "UnknownStartError", "UnreachableError",
         "UnreachableTargetError", "UsarArmError", "ValidationError"),
+    "job_errors": ("ChunkFailedError", "ClusterUnavailableError", "ResumeMismatchError"),
     "fileio": ("write_atomic", "write_tree_atomic"),
     "model": ("Joint", "JointLimits", "JointType", "KinematicChain", "Link", "Origin"),
     "spatial": ("invert", "matrix_to_rpy", "rotation_angle", "rpy_to_matrix", "transform",

@@ -1,8 +1,10 @@
-"""The errors of driving a ground vehicle: commands, vehicle parameters, waypoints.
+"""The errors of describing and driving a ground vehicle: steering, commands, vehicle
+parameters, waypoints.
 
-Subclasses of :class:`~usar_arm.core.errors.InvalidInputError` (exit code 65), kept beside the
-error tree because ``core/errors.py`` is at the project's module size limit; like every error
-of the tree, each carries its evidence as attributes.
+Subclasses of :class:`~usar_arm.core.errors.InvalidInputError` (exit code 65) and, for a
+steering usar-arm cannot describe, of :class:`~usar_arm.core.errors.DescriptionError`; kept
+beside the error tree because ``core/errors.py`` is at the project's module size limit; like
+every error of the tree, each carries its evidence as attributes.
 """
 
 from __future__ import annotations
@@ -10,7 +12,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from usar_arm.core.errors import InvalidInputError
+from usar_arm.core.errors import DescriptionError, InvalidInputError
+
+
+class UnsupportedSteeringError(DescriptionError):
+    """A ground vehicle whose steering usar-arm cannot describe or drive (the message names its
+    steering type and the supported ones)."""
 
 
 class NonFiniteCommandError(InvalidInputError):

@@ -20,7 +20,7 @@ import math
 import time
 from dataclasses import dataclass
 
-from usar_arm.core.errors import DescriptionError, ResponseTimeoutError, UnsupportedSteeringError
+from usar_arm.core.errors import DescriptionError, ResponseTimeoutError
 from usar_arm.core.platform import (
     SUPPORTED_STEERING,
     PlatformDescription,
@@ -29,6 +29,7 @@ from usar_arm.core.platform import (
     Wheel,
 )
 from usar_arm.core.spatial import matrix_to_rpy, transform_from_xyz_rpy, zdown_to_zup_transform
+from usar_arm.core.vehicle_errors import UnsupportedSteeringError
 from usar_arm.discover.interview import Ask, DiscoveryRecord, spawn_robot
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient

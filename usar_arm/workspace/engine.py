@@ -28,8 +28,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from usar_arm.core.errors import ChunkFailedError, ResumeMismatchError
 from usar_arm.core.fileio import write_atomic
+from usar_arm.core.job_errors import ChunkFailedError, ResumeMismatchError
 
 log = logging.getLogger("usar_arm.workspace")
 

@@ -26,7 +26,7 @@ import sys
 import tempfile
 import time
 
-from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.core.job_errors import ClusterUnavailableError
 from usar_arm.workspace.ray_address import LOCAL
 
 ANNOUNCE = "usar-arm local ray at "

@@ -25,7 +25,7 @@ from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
 from typing import Any
 
-from usar_arm.core.errors import ChunkFailedError
+from usar_arm.core.job_errors import ChunkFailedError
 from usar_arm.workspace.engine import (
     ATTEMPTS,
     Job,

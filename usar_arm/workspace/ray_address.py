@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 
-from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.core.job_errors import ClusterUnavailableError
 
 LOCAL = "local"
 """Start a fresh instance here."""

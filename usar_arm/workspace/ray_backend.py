@@ -42,7 +42,7 @@ from typing import Any, ClassVar
 
 import ray
 
-from usar_arm.core.errors import ClusterUnavailableError
+from usar_arm.core.job_errors import ClusterUnavailableError
 from usar_arm.workspace.engine import Job, Result, run_chunk
 from usar_arm.workspace.local_head import (
     ANNOUNCE,

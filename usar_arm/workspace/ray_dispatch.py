@@ -20,7 +20,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from usar_arm.core.errors import ChunkFailedError, ClusterUnavailableError
+from usar_arm.core.job_errors import ChunkFailedError, ClusterUnavailableError
 from usar_arm.workspace.engine import ATTEMPTS, Job, Result
 from usar_arm.workspace.local_head import LocalHead
 from usar_arm.workspace.warm_up_helper import WarmUpHelper
