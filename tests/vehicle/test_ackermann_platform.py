@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import socket
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -14,12 +15,16 @@ from pathlib import Path
 
 import pytest
 
+from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm.cli.main import main
+from usar_arm.control.vehicle_wire import read_vehicle
 from usar_arm.core.errors import EXIT_OK, DescriptionError
 from usar_arm.core.platform import PlatformDescription
+from usar_arm.core.vehicle_errors import UnsupportedSteeringError
 from usar_arm.discover.platform import platform_from_replies
 from usar_arm.urdf.platform import platform_urdf, validate_platform
 from usar_arm.usarsim import messages as m
+from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.codec import parse_line
 
 CONF = ("CONF {Name FrontAckerman} {Type GroundVehicle} {SteeringType AckermanSteered} "
@@ -100,3 +105,21 @@ def test_the_drive_command_takes_front_ackerman_to_a_waypoint(tmp_path: Path) ->
         math.dist(START, GOAL), abs=0.2)
     commands = result["commands"]
     assert 0 < commands["largest_sent_radps"] <= commands["max_wheel_speed_radps"] == 0.56
+
+
+def test_the_drive_refuses_a_steering_type_it_cannot_drive_in_one_line() -> None:
+    """A server (scripted) whose vehicle reports {SteeringType OmniDrive}: read_vehicle, the
+    drive command's first question, names it and the types usar-arm drives."""
+    replies = {"GETCONF": CONF.replace("AckermanSteered", "OmniDrive"), "GETGEO": GEO}
+
+    def script(conn: socket.socket) -> None:
+        conn.sendall(b"NFO {Gametype BotDeathMatch} {Level test} {TimeLimit 0}\r\n")
+        for _ in range(2):
+            request = read_line(conn)
+            conn.sendall(replies[request.split()[0]].encode() + b"\r\n")
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client, \
+            pytest.raises(UnsupportedSteeringError,
+                          match=r"OmniDrive.*only SkidSteered and AckermanSteered") as info:
+        read_vehicle(client, "USARBot.Omni", timeout=2.0)
+    assert "\n" not in str(info.value)
