@@ -3,15 +3,17 @@ its own ROS_DOMAIN_ID and on localhost only."""
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import itertools
+import math
 import os
 import signal
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +24,8 @@ ensure_importable()
 import rclpy  # noqa: E402
 from control_msgs.action import FollowJointTrajectory  # noqa: E402
 from control_msgs.msg import JointTolerance  # noqa: E402
+from geometry_msgs.msg import Twist  # noqa: E402
+from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.action import ActionClient  # noqa: E402
 from rclpy.context import Context  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -195,3 +199,60 @@ def make_goal(names: list[str], points: list[tuple[float, list[float]]],
     goal.goal_tolerance = [JointTolerance(name=n, position=v)
                            for n, v in (goal_tolerance or {}).items()]
     return goal
+
+
+def latest_odometry(client: Client, topic: str = "ground_truth", seconds: float = 1.0) -> Any:
+    """The latest nav_msgs/Odometry on ``topic`` within ``seconds`` (asserted to come)."""
+    got = client.collect(Odometry, topic, seconds, until=lambda ms: bool(ms))
+    assert got, f"no {topic}"
+    return got[-1][1]
+
+
+def odometry_yaw(msg: Any) -> float:
+    """The yaw (rad, counter-clockwise about z up) of an Odometry message's pose."""
+    q = msg.pose.pose.orientation
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def publish_twist(client: Client, v: float, w: float, seconds: float) -> None:
+    """cmd_vel (``v`` m/s, ``w`` rad/s) at 10 Hz for ``seconds`` s of wall time."""
+    pub = client.node.create_publisher(Twist, "cmd_vel", 10)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        msg = Twist()
+        msg.linear.x, msg.angular.z = v, w
+        pub.publish(msg)
+        time.sleep(0.1)
+    client.node.destroy_publisher(pub)
+
+
+def moved_under_nan(client: Client, v: float) -> tuple[float, float]:
+    """Drive at ``v`` m/s for 1 s, then keep sending NaN commands (so no timeout fires): how
+    far (x, y in m) the ground truth moves over 0.5 s of them, 0.6 s after the first."""
+    publish_twist(client, v, 0.0, 1.0)
+    publish_twist(client, math.nan, 0.0, 0.6)
+    a = latest_odometry(client).pose.pose.position
+    publish_twist(client, math.nan, 0.0, 0.5)
+    b = latest_odometry(client).pose.pose.position
+    return b.x - a.x, b.y - a.y
+
+
+def pose_change(a: Any, b: Any) -> tuple[float, float, float]:
+    """From Odometry ``a`` to ``b``: the change of x, y (m) and yaw (rad, wrapped)."""
+    pa, pb = a.pose.pose.position, b.pose.pose.position
+    return pb.x - pa.x, pb.y - pa.y, math.remainder(odometry_yaw(b) - odometry_yaw(a), math.tau)
+
+
+@contextlib.contextmanager
+def node_session(folder: Path, args: list[str]) -> Iterator[tuple[Client, str, NodeProcess]]:
+    """``usar-arm ros ARGS`` and a client on a domain of their own: (client, the node's URDF,
+    the node); the node must stop with exit 0 on SIGTERM."""
+    domain = domain_id()
+    node = NodeProcess(domain, args, folder / "node.log")
+    client = Client(domain)
+    try:
+        yield client, client.description(), node
+    finally:
+        client.close()
+        code = node.stop()
+        assert code == 0, node.text()[-3000:]

@@ -15,52 +15,36 @@ import pytest
 pytest.importorskip("rclpy", reason="the ros extra is not installed: pip install "
                                     "'usar-arm[ros]'")
 
-from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
-from tests.ros.helpers import LATCHED, Client, NodeProcess, domain_id
+from tests.ros.helpers import (
+    LATCHED,
+    Client,
+    NodeProcess,
+    domain_id,
+    latest_odometry,
+    moved_under_nan,
+    node_session,
+    pose_change,
+)
+from tests.ros.helpers import odometry_yaw as _yaw
+from tests.ros.helpers import publish_twist as _drive
 
 
 @pytest.fixture(scope="module")
 def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Client, str, NodeProcess]]:
     """A P3AT node on sim time and a client on their own domain; the node must stop with exit
     0 on SIGTERM."""
-    folder = tmp_path_factory.mktemp("ros-platform")
-    domain = domain_id()
-    node = NodeProcess(domain, ["--robot", "P3AT", "--use-sim-time", "-v"], folder / "node.log")
-    client = Client(domain)
-    try:
-        urdf = client.description()
-        yield client, urdf, node
-    finally:
-        client.close()
-        code = node.stop()
-        assert code == 0, node.text()[-3000:]
+    with node_session(tmp_path_factory.mktemp("ros-platform"),
+                      ["--robot", "P3AT", "--use-sim-time", "-v"]) as started:
+        yield started
 
 
 def _truth(client: Client, seconds: float = 1.0, topic: str = "ground_truth") -> Any:
-    got = client.collect(Odometry, topic, seconds, until=lambda ms: bool(ms))
-    assert got, f"no {topic}"
-    return got[-1][1]
-
-
-def _yaw(msg: Any) -> float:
-    q = msg.pose.pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def _drive(client: Client, v: float, w: float, seconds: float) -> None:
-    pub = client.node.create_publisher(Twist, "cmd_vel", 10)
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        msg = Twist()
-        msg.linear.x, msg.angular.z = v, w
-        pub.publish(msg)
-        time.sleep(0.1)
-    client.node.destroy_publisher(pub)
+    return latest_odometry(client, topic, seconds)
 
 
 def test_description_and_static_frames(session: tuple[Client, str, NodeProcess]) -> None:
@@ -124,8 +108,8 @@ def test_cmd_vel_moves_forward_and_turns_left_then_the_timeout_stops_it(
     a = _truth(client)
     time.sleep(0.5)
     b = _truth(client)
-    assert abs(b.pose.pose.position.x - a.pose.pose.position.x) < 0.005
-    assert abs(math.remainder(_yaw(b) - _yaw(a), math.tau)) < 0.01
+    dx, _, dyaw = pose_change(a, b)
+    assert abs(dx) < 0.005 and abs(dyaw) < 0.01
     assert "no cmd_vel for 0.5 s: the robot stops" in node.text()
 
 
@@ -133,13 +117,8 @@ def test_a_nan_command_is_refused_and_the_robot_stops(
         session: tuple[Client, str, NodeProcess]) -> None:
     """NaN commands keep arriving (so the timeout never fires): only refusing them stops it."""
     client, _, node = session
-    _drive(client, 0.1, 0.0, 1.0)
-    _drive(client, float("nan"), 0.0, 0.6)
-    a = _truth(client)
-    _drive(client, float("nan"), 0.0, 0.5)
-    b = _truth(client)
-    assert abs(b.pose.pose.position.x - a.pose.pose.position.x) < 0.005
-    assert abs(b.pose.pose.position.y - a.pose.pose.position.y) < 0.005
+    dx, dy = moved_under_nan(client, 0.1)
+    assert abs(dx) < 0.005 and abs(dy) < 0.005
     assert "cmd_vel refused, the robot stops" in node.text()
 
 

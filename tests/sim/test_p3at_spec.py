@@ -56,11 +56,16 @@ def test_scan_rays_step_in_unreal_units_as_rangescanner_uc() -> None:
 
 def test_unsupported_steering_is_refused_with_a_clear_message(tmp_path: Path) -> None:
     text = (Path(__file__).resolve().parents[2] / "usar_arm/sim/robots/p3at.yaml").read_text()
-    bad = tmp_path / "ackermann.yaml"
+    bad = tmp_path / "omni.yaml"
     bad.write_text(text.replace("  steering_type: SkidSteered\n  wheel_radius",
-                                "  steering_type: AckermanSteered\n  wheel_radius"))
-    with pytest.raises(FileFormatError, match="not supported"):
+                                "  steering_type: OmniDrive\n  wheel_radius"))
+    with pytest.raises(FileFormatError, match="OmniDrive is not supported"):
         load_robot(bad)
+    unsteered = tmp_path / "ackermann.yaml"  # Ackermann steering needs steer joints
+    unsteered.write_text(text.replace("  steering_type: SkidSteered\n  wheel_radius",
+                                      "  steering_type: AckermanSteered\n  wheel_radius"))
+    with pytest.raises(FileFormatError, match="if and only if it is AckermanSteered"):
+        load_robot(unsteered)
 
 
 def test_shipped_worlds_load_by_name_and_the_arms_cell_is_unchanged() -> None:

@@ -34,6 +34,7 @@ RESERVED = {"name", "type", "link", "value", "time", "location", "orientation", 
             "mountlink", "tip", "parent", "parentlink", "jointtype", "maxtorque", "minvalue",
             "maxvalue", "maxspeed", "gripper", "sequence", "seq", "battery", "classname",
             "start", "rotation", "opcode", "params", "left", "right", "normalized", "light",
+            "speed", "frontsteer", "rearsteer",
             "gametype", "level", "timelimit", "startposes", "resolution", "fov", "range",
             "pose"}
 HEADS = {"NFO", "GETSTARTPOSES", "INIT", "GETCONF", "GETGEO", "ACT", "SET", "DRIVE", "CONF",
@@ -121,7 +122,8 @@ def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
         "Act": st.builds(m.Act, d.values, pairs, opt() | d.ints, opt() | d.ints, extras),
         "Set": st.builds(m.Set, d.values, d.values, d.values, opt() | d.values),
         "Drive": st.builds(m.Drive, opt() | d.scalar, opt() | d.scalar, opt() | st.booleans(),
-                           opt() | st.booleans(), extras),
+                           opt() | st.booleans(), extras, opt() | d.scalar, opt() | d.scalar,
+                           opt() | d.scalar),
         "Conf": st.builds(m.Conf, d.values, st.lists(conf_items, min_size=1, max_size=3)
                           .map(tuple)),
         "PlatformConf": st.builds(m.PlatformConf, d.values, d.values, extras),

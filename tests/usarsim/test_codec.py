@@ -110,6 +110,18 @@ def test_repeated_link_groups_are_kept_in_order() -> None:
     assert msg.values == ((1, 0.1), (2, -0.2), (3, 0.3))
 
 
+def test_ackermann_drive_reads_speed_and_steers_and_prints_them_back() -> None:
+    line = "DRIVE {Speed 0.5} {FrontSteer -0.25} {RearSteer 0} {Normalized false}\r\n"
+    msg = parse_line(line)
+    assert msg == m.Drive(normalized=False, speed=0.5, front_steer=-0.25, rear_steer=0.0)
+    assert msg.left is None and msg.right is None
+    assert format_message(msg, UDK) == ("DRIVE {Speed 0.5000} {FrontSteer -0.2500} "
+                                        "{RearSteer 0.0000} {Normalized false}\r\n")
+    assert parse_line(format_message(msg)) == msg
+    skid = parse_line("DRIVE {Left 1} {Right 2}")
+    assert isinstance(skid, m.Drive) and skid.speed is None and skid.front_steer is None
+
+
 def test_ut_era_keys_are_kept_not_dropped() -> None:
     msg = parse_line("CONF {Type Actuator} {Name TeleMaxArm} {Link 1} {JointType Revolute} "
                      "{MaxSpeed 0.17} {MaxTorque 300.00} {MinValue 1.00} {MaxValue 0.00} "

@@ -107,7 +107,9 @@ def udk_quantized(msg: m.Message) -> m.Message:
     if isinstance(msg, m.Act):
         return r(msg, targets=tuple((i, _q("scalar", v)) for i, v in msg.targets))
     if isinstance(msg, m.Drive):
-        return r(msg, left=_q("scalar", msg.left), right=_q("scalar", msg.right))
+        return r(msg, left=_q("scalar", msg.left), right=_q("scalar", msg.right),
+                 speed=_q("scalar", msg.speed), front_steer=_q("scalar", msg.front_steer),
+                 rear_steer=_q("scalar", msg.rear_steer))
     if isinstance(msg, m.Conf):
         return r(msg, items=tuple(r(it, links=tuple(
             r(ln, max_torque=_q("scalar", ln.max_torque), min_value=_q("scalar", ln.min_value),

@@ -1,6 +1,6 @@
 """Learning the P3AT over real TCP from the embedded simulator: the facts are UDK's numbers
 (docs/protocol.md section 9), the URDF is valid and its tree is base_footprint -> base_link ->
-wheels and sensor frames; hidden and unknown sensors are reported, Ackermann refused."""
+wheels and sensor frames; hidden and unknown sensors are reported, unknown steering refused."""
 
 from __future__ import annotations
 
@@ -99,10 +99,12 @@ def _replies(conf: str = CONF) -> tuple[m.PlatformConf, m.Geo]:
     return c, g
 
 
-def test_an_ackermann_vehicle_is_refused_naming_its_steering() -> None:
-    conf, geo = _replies(CONF.replace("SkidSteered", "AckermanSteered"))
-    with pytest.raises(UnsupportedSteeringError, match=r"AckermanSteered.*only SkidSteered"):
-        platform_from_replies("USARBot.Car", conf, geo, [])
+def test_an_unknown_steering_type_is_refused_naming_it_and_the_supported_ones() -> None:
+    conf, geo = _replies(CONF.replace("SkidSteered", "OmniDrive"))
+    with pytest.raises(UnsupportedSteeringError,
+                       match=r"OmniDrive.*only SkidSteered and AckermanSteered") as info:
+        platform_from_replies("USARBot.Omni", conf, geo, [])
+    assert "\n" not in str(info.value)  # one line
 
 
 def test_hidden_sensors_are_listed_not_placed() -> None:

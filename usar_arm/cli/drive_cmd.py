@@ -27,7 +27,8 @@ from usar_arm.core.errors import (
 from usar_arm.core.world_file import Scenery, load_scenery
 from usar_arm.usarsim.client import UsarClient
 
-SUMMARY = "drive a ground vehicle (P3AT) by waypoints or a script; bag, picture, drift"
+SUMMARY = ("drive a ground vehicle (P3AT, FrontAckerman) by waypoints or a script; bag, "
+           "picture, drift")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -134,7 +135,9 @@ def summary(record: DriveRecord, drifts: list[Drift]) -> dict[str, Any]:
                      "max_wheel_speed_radps": v.max_wheel_speed,
                      "largest_sent_radps": max((max(abs(c.left), abs(c.right)) for c in cmds),
                                                default=0.0)},
-        "vehicle": {"wheel_radius_m": v.wheel_radius, "wheel_separation_m": v.wheel_separation,
+        "vehicle": {"steering": v.steering, "wheel_radius_m": v.wheel_radius,
+                    "wheel_separation_m": v.wheel_separation, "wheel_base_m": v.wheel_base,
+                    "max_steer_rad": v.max_steer,
                     "scanner": v.scanner.name if v.scanner else None},
         "scans": len(record.scans)}
 

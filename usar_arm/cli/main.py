@@ -44,7 +44,8 @@ SUMMARIES: dict[str, str] = {
     "view": "replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
     "ros": "serve the arm on ROS 2: robot_description, joint_states, tf, "
            "FollowJointTrajectory (a ground vehicle: cmd_vel, odom, scan)",
-    "drive": "drive a ground vehicle (P3AT) by waypoints or a script; bag, picture, drift"}
+    "drive": "drive a ground vehicle (P3AT, FrontAckerman) by waypoints or a script; bag, "
+             "picture, drift"}
 """Each command's line in --help, as its module registers it (a test checks they agree): what
 ``usar-arm --help`` shows without loading the commands."""
 

@@ -19,6 +19,7 @@ def _facts(result: PlatformResult) -> dict[str, object]:
             "steering": d.steering_type, "mass_kg": d.mass, "max_wheel_speed_rad_s": d.max_speed,
             "wheel_radius_m": d.wheel_radius, "wheel_separation_m": d.wheel_separation,
             "wheel_base_m": d.wheel_base, "footprint_radius_m": round(d.footprint_radius, 4),
+            "max_front_steer_rad": d.max_front_steer,
             "sensors": [{"type": s.type, "name": s.name, "frame": result.frames.sensor(s),
                          "xyz": list(s.xyz), "rpy": list(s.rpy)} for s in d.sensors],
             "hidden_sensors": list(d.hidden), "unknown_sensors": list(d.unknown)}
@@ -41,7 +42,8 @@ def run_platform_urdf(args: argparse.Namespace, options: DescribeOptions) -> int
     d = result.description
     out(f"{d.name} ({d.robot_class}): {d.platform_type}, {d.steering_type}, {d.mass:g} kg, "
         f"wheels r {d.wheel_radius:g} m, separation {d.wheel_separation:g} m, base "
-        f"{d.wheel_base:g} m, at most {d.max_speed:g} rad/s")
+        f"{d.wheel_base:g} m, at most {d.max_speed:g} rad/s"
+        + (f", front steer +-{d.max_front_steer:g} rad" if d.ackermann else ""))
     for s in d.sensors:
         out(f"  sensor {s.type:<12} {s.name:<10} frame {result.frames.sensor(s):<16} "
             f"xyz {', '.join(f'{v:g}' for v in s.xyz)}")

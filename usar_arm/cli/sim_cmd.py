@@ -20,7 +20,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "sim", help="run the embedded USARSim-compatible simulator (MuJoCo physics)",
         description="Serve the USARSim UDK protocol on TCP (one robot per connection, up to 64) "
                     "with MuJoCo physics, until Ctrl-C or SIGTERM. Robot classes: USARBot.KR60, "
-                    "USARBot.Fanuc_M16iB20, USARBot.P3AT.")
+                    "USARBot.Fanuc_M16iB20, USARBot.P3AT, USARBot.FrontAckerman.")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=3000, help="TCP port (default 3000, as UDK)")
     p.add_argument("--speed", type=float, default=1.0,

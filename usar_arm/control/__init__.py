@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from usar_arm.core.lazy import exports
 
 if TYPE_CHECKING:
+    from usar_arm.control.ackermann import AckermannCommand, ackermann_command
     from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
     from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
     from usar_arm.control.skid import WheelSpeeds, wheel_speeds
@@ -18,6 +19,7 @@ if TYPE_CHECKING:
     from usar_arm.control.trajectory import LimitReport, MotionLimits, Trajectory, check_limits
 
 _HOMES = {
+    "ackermann": ("AckermannCommand", "ackermann_command"),
     "executor": ("ExecutionOptions", "ExecutionReport", "Executor"),
     "motion": ("MotionOptions", "MotionPlan", "plan_motion"),
     "skid": ("WheelSpeeds", "wheel_speeds"),
@@ -27,8 +29,9 @@ _HOMES = {
 }
 """The module of each public name, imported on first use (usar_arm.core.lazy)."""
 
-__all__ = ["ExecutionOptions", "ExecutionReport", "Executor", "LimitReport", "MotionLimits",
-           "MotionOptions", "MotionPlan", "TimedMotion", "TipReading", "TipSensor", "Trajectory",
-           "WheelSpeeds", "check_limits", "plan_motion", "wheel_speeds"]
+__all__ = ["AckermannCommand", "ExecutionOptions", "ExecutionReport", "Executor", "LimitReport",
+           "MotionLimits", "MotionOptions", "MotionPlan", "TimedMotion", "TipReading", "TipSensor",
+           "Trajectory", "WheelSpeeds", "ackermann_command", "check_limits", "plan_motion",
+           "wheel_speeds"]
 
 __getattr__ = exports(__name__, _HOMES)

@@ -59,6 +59,9 @@ class Command:
     left: float
     right: float
     clamped: bool
+    steer: float = 0.0
+    """The front steer sent (rad, REP-103: positive left); 0 on a skid-steered vehicle, whose
+    ``left`` and ``right`` are its sides' spins (an Ackermann vehicle's both its one spin)."""
 
 
 @dataclass(frozen=True)

@@ -3,14 +3,19 @@
 The loop is paced by the vehicle's GroundTruth stream (10 Hz on a P3AT): at each new reading it
 takes the pose from the chosen localisation (``truth``, ``odometry`` or ``ins``), asks the
 controller for (v, w), maps it to wheel spins (:func:`~usar_arm.control.skid.wheel_speeds`,
-within the vehicle's reported maximum) and sends ``DRIVE``. Every SEN line is recorded as it
-arrives (on the client's reader thread). Every wait is bounded by the client's timeout; a drive
-that overruns its time budget (simulated seconds) ends with ``reached`` False. Ctrl-C stops the
-vehicle (``DRIVE {Left 0} {Right 0}``) and keeps the record, marked ``interrupted``.
+within the vehicle's reported maximum) or, on an Ackermann vehicle, to a spin and a front steer
+(:func:`~usar_arm.control.ackermann.ackermann_command`) and sends ``DRIVE``. Every SEN line
+is recorded as it arrives (on the client's reader thread). Every wait is bounded by the
+client's timeout; a drive that overruns its time budget (simulated seconds) ends with
+``reached`` False. Ctrl-C stops the vehicle (``DRIVE {Left 0} {Right 0}``, or ``{Speed 0}``)
+and keeps the record, marked ``interrupted``.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import logging
+import math
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -18,6 +23,7 @@ from typing import Literal
 
 import numpy as np
 
+from usar_arm.control.ackermann import ackermann_command, drive_message
 from usar_arm.control.drive_record import (
     Command,
     DriveRecord,
@@ -37,6 +43,8 @@ from usar_arm.control.vehicle_wire import (
 from usar_arm.core.errors import InvalidInputError, ResponseTimeoutError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import Received, UsarClient
+
+log = logging.getLogger("usar_arm.control")
 
 Localisation = Literal["truth", "odometry", "ins"]
 Progress = Callable[[int, int], None]
@@ -128,10 +136,15 @@ class Driver:
         self.client = client
         self.vehicle = vehicle
         self.options = options
+        self.steer = 0.0
+        """An Ackermann vehicle's front steer in force (rad, REP-103)."""
 
     def follow(self, waypoints: Sequence[tuple[float, float]], pursuit_options: PursuitOptions,
                progress: Progress | None = None) -> DriveRecord:
-        """Pure pursuit from where the vehicle stands through ``waypoints`` (m, map frame)."""
+        """Pure pursuit from where the vehicle stands through ``waypoints`` (m, map frame); an
+        Ackermann vehicle never turns on the spot (its pursuit follows arcs only)."""
+        if self.vehicle.ackermann:  # (it cannot turn on the spot: arcs only)
+            pursuit_options = dataclasses.replace(pursuit_options, turn_in_place_rad=math.pi)
         recorder = _Recorder(self.vehicle)
         unsubscribe = self.client.subscribe(recorder)
         try:
@@ -196,7 +209,6 @@ class Driver:
 
     def _run(self, recorder: _Recorder, step: Controller, budget_s: float,
              goals: Sequence[tuple[float, float]]) -> DriveRecord:
-        v = self.vehicle
         commands: list[Command] = []
         reached, interrupted = False, False
         t0 = last = self._next_truth(None).time or 0.0
@@ -220,20 +232,38 @@ class Driver:
                 if asked is None:
                     reached = True
                     break
-                left, right, clamped = wheel_speeds(asked[0], asked[1], v.wheel_radius,
-                                                    v.wheel_separation, v.max_wheel_speed)
-                self.client.send(m.Drive(left, right))
-                commands.append(Command(last, asked[0], asked[1], left, right, clamped))
+                line, command = self._command(last, asked[0], asked[1])
+                self.client.send(line)
+                commands.append(command)
         except KeyboardInterrupt:
             interrupted = True
         finally:
             self._stop(commands, last)
         return recorder.record(commands, reached, interrupted, goals)
 
+    def _command(self, t: float, v: float, w: float) -> tuple[m.Drive, Command]:
+        """The DRIVE line for (v m/s, w rad/s) at time ``t`` (s) and its record: the sides'
+        wheel spins of a skid-steered vehicle, or an Ackermann vehicle's spin and steer."""
+        veh = self.vehicle
+        if not veh.ackermann:
+            left, right, clamped = wheel_speeds(v, w, veh.wheel_radius, veh.wheel_separation,
+                                                veh.max_wheel_speed)
+            return m.Drive(left, right), Command(t, v, w, left, right, clamped)
+        cmd = ackermann_command(v, w, veh.wheel_radius, veh.wheel_base, veh.max_wheel_speed,
+                                veh.max_steer, self.steer)
+        if cmd.turn_refused:
+            log.info("a turn on the spot (w %.3f rad/s, v 0) cannot be driven by an Ackermann "
+                     "vehicle: it stands still, steer kept", w)
+        self.steer = cmd.steer
+        return drive_message(cmd), Command(t, v, w, cmd.speed, cmd.speed,
+                                           cmd.speed_clamped or cmd.steer_clamped, cmd.steer)
+
     def _stop(self, commands: list[Command], t: float) -> None:
-        """DRIVE 0, 0 (also after Ctrl-C or a failed wait), recorded as a command."""
+        """DRIVE 0, 0 (or Speed 0, steer kept; also after Ctrl-C or a failed wait), recorded
+        as a command."""
+        line, command = self._command(t, 0.0, 0.0)
         try:
-            self.client.send(m.Drive(0.0, 0.0))
+            self.client.send(line)
         except OSError:
             return
-        commands.append(Command(t, 0.0, 0.0, 0.0, 0.0, False))
+        commands.append(command)

@@ -1,7 +1,8 @@
 """What a ground vehicle says about itself over the wire, and its poses in REP-103.
 
 ``GETCONF {Type Robot}`` gives the maximum wheel spin (``MaxSpeed``, rad/s), ``GETGEO {Type
-Robot}`` the wheel radius and separation (m); each sensor type's CONF and GEO give the range
+Robot}`` the wheel radius and separation (m), and for an Ackermann vehicle the steer range
+(``MaxFrontSteer``, rad) and the wheel base (m); each sensor type's CONF and GEO give the range
 scanner's limits and mount. Nothing is taken from a table: a vehicle is driven with what its
 server reports. Poses on the wire are in the USARSim frame (x forward, y right, z down); the
 conversion to REP-103 (z up) is :func:`usar_arm.core.spatial.zdown_to_zup_transform`, the one
@@ -14,13 +15,14 @@ import math
 from dataclasses import dataclass
 
 from usar_arm.core.errors import ResponseTimeoutError
+from usar_arm.core.platform import ACKERMANN_STEERED, SUPPORTED_STEERING
 from usar_arm.core.spatial import (
     Array,
     transform_from_xyz_rpy,
     zdown_to_zup_point,
     zdown_to_zup_transform,
 )
-from usar_arm.core.vehicle_errors import NotAVehicleError
+from usar_arm.core.vehicle_errors import NotAVehicleError, UnsupportedSteeringError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 
@@ -50,6 +52,8 @@ class VehicleInfo:
         wheel_radius, wheel_separation: m. max_wheel_speed: rad/s per wheel.
         truth, odometry, ins: the names of its GroundTruth, Odometry and INS sensors (None when
             it has none). scanner: its first range scanner (None when it has none).
+        wheel_base: front to rear axle (m). max_steer: the largest front steer either way
+            (rad; half the CONF's MaxFrontSteer range). Both 0 on a skid-steered vehicle.
     """
 
     name: str
@@ -61,6 +65,13 @@ class VehicleInfo:
     odometry: str | None
     ins: str | None
     scanner: ScannerInfo | None
+    wheel_base: float = 0.0
+    max_steer: float = 0.0
+
+    @property
+    def ackermann(self) -> bool:
+        """Whether it is driven by a wheel spin and a steer (docs/protocol.md section 10)."""
+        return self.steering == ACKERMANN_STEERED
 
     @property
     def max_speed(self) -> float:
@@ -132,16 +143,25 @@ def read_vehicle(client: UsarClient, robot: str, timeout: float | None = None) -
     values = {"MaxSpeed": _number(fields, "MaxSpeed"),
               "WheelRadius": _number(geo_fields, "WheelRadius"),
               "WheelSeparation": _number(geo_fields, "WheelSeparation")}
+    steering = next((v for k, v in fields if k.lower() == "steeringtype"), "")
+    if steering == ACKERMANN_STEERED:
+        front = _number(fields, "MaxFrontSteer")  # (6.28: no front steer, section 10)
+        values |= {"WheelBase": _number(geo_fields, "WheelBase"),
+                   "MaxFrontSteer": front if front is not None and front < 6.28 else None}
     missing = [k for k, v in values.items() if v is None]
     if missing:
         raise NotAVehicleError(robot, platform_type, missing)
-    steering = next((v for k, v in fields if k.lower() == "steeringtype"), "")
+    if steering not in SUPPORTED_STEERING:
+        raise UnsupportedSteeringError(
+            f"{robot} reports {{SteeringType {steering or '(none given)'}}}: usar-arm drives only "
+            f"{' and '.join(SUPPORTED_STEERING)} ground vehicles")
     names = {t: (found[0].name if (found := _first_sensor(client, t)) else None)
              for t in ("GroundTruth", "Odometry", "INS")}
     return VehicleInfo(conf.name if isinstance(conf, m.PlatformConf) else robot, steering,
                        values["WheelRadius"] or 0.0, values["WheelSeparation"] or 0.0,
                        values["MaxSpeed"] or 0.0, names["GroundTruth"], names["Odometry"],
-                       names["INS"], _scanner(client))
+                       names["INS"], _scanner(client), values.get("WheelBase") or 0.0,
+                       (values.get("MaxFrontSteer") or 0.0) / 2)
 
 
 def planar_wire(location: m.Vector3, rpy: m.Vector3) -> tuple[float, float, float]:

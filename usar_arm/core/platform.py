@@ -19,8 +19,13 @@ from usar_arm.core.spatial import Array, transform_from_xyz_rpy
 
 Vec3 = tuple[float, float, float]
 
-SUPPORTED_STEERING = ("SkidSteered",)
-"""The steering types usar-arm can describe and drive (UDK's SkidSteeredVehicle)."""
+SKID_STEERED = "SkidSteered"
+"""UDK's SkidSteeredVehicle: two sides of wheels at two speeds (DRIVE {Left} {Right})."""
+ACKERMANN_STEERED = "AckermanSteered"
+"""UDK's AckermanSteeredVehicle (spelt with one n): one wheel spin and steer angles (DRIVE
+{Speed} {FrontSteer} {RearSteer}, docs/protocol.md section 10)."""
+SUPPORTED_STEERING = (SKID_STEERED, ACKERMANN_STEERED)
+"""The steering types usar-arm can describe and drive."""
 WHEEL_WIDTH_M = 0.05
 """The wheels' width (m) drawn in the URDF: the wire does not give it (labelled as assumed)."""
 
@@ -81,7 +86,8 @@ class PlatformDescription:
 
     Attributes:
         name: the robot's name (its CONF Name). robot_class: e.g. ``USARBot.P3AT``.
-        platform_type: the CONF Type (``GroundVehicle``). steering_type: ``SkidSteered``.
+        platform_type: the CONF Type (``GroundVehicle``). steering_type: ``SkidSteered`` or
+        ``AckermanSteered``.
         mass: kg. max_speed: the wheels' highest spin speed (rad/s). max_torque: the drive's
         torque limit (N m).
         wheel_radius, wheel_separation (left to right), wheel_base (front to rear): m.
@@ -91,6 +97,9 @@ class PlatformDescription:
         hidden: ``Type Name`` of sensors whose GETGEO gave nothing (no frame written).
         unknown: ``Type Name`` of sensors of a type usar-arm does not know (not asked about).
         notes: what was assumed, for the files' comments.
+        max_front_steer, max_rear_steer: the largest steer angle either way (rad): half the
+        range CONF MaxFrontSteer/MaxRearSteer reports; 0 for a wheel set that does not steer
+        (a skid-steered vehicle, or the 6.28 UDK prints when no joint steers).
     """
 
     name: str
@@ -110,6 +119,13 @@ class PlatformDescription:
     hidden: tuple[str, ...] = ()
     unknown: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    max_front_steer: float = 0.0
+    max_rear_steer: float = 0.0
+
+    @property
+    def ackermann(self) -> bool:
+        """Whether the vehicle steers its wheels (DRIVE {Speed} {FrontSteer} {RearSteer})."""
+        return self.steering_type == ACKERMANN_STEERED
 
     def sensor(self, name: str) -> SensorFrame:
         """The sensor called ``name`` (any case); KeyError naming the sensors otherwise."""

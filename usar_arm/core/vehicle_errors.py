@@ -61,7 +61,8 @@ class NotAVehicleError(InvalidInputError):
         self.missing = tuple(missing)
         super().__init__(f"{robot} is a {platform_type}, not a ground vehicle that can be "
                          f"driven: its CONF/GEO {{Type Robot}} has no {', '.join(self.missing)} "
-                         "(a skid-steered vehicle such as USARBot.P3AT has them)")
+                         "(USARBot.P3AT and USARBot.FrontAckerman have them; a rear-steered "
+                         "vehicle has no MaxFrontSteer below 6.28)")
 
 
 class OutsideWorldError(InvalidInputError):

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 from usar_arm.core.errors import DescriptionError, ResponseTimeoutError
 from usar_arm.core.platform import (
+    ACKERMANN_STEERED,
     SUPPORTED_STEERING,
     PlatformDescription,
     Scanner,
@@ -44,6 +45,8 @@ SENSOR_GEO_TIMEOUT_S = 1.0
 KNOWN_SENSOR_TYPES = ("GroundTruth", "INS", "Odometry", "RangeScanner")
 """The sensor types usar-arm describes (and the platform node serves)."""
 GROUND_VEHICLE = "GroundVehicle"
+NO_STEER_RANGE = 6.28
+"""The steer range (rad) UDK reports for wheels no joint steers: its search's start value."""
 
 
 @dataclass(frozen=True)
@@ -110,7 +113,7 @@ def platform_from_replies(robot_class: str, conf: m.PlatformConf, geo: m.Geo,
     """The description of a ground vehicle from its replies (no I/O).
 
     Raises:
-        UnsupportedSteeringError: a steering type other than skid steering.
+        UnsupportedSteeringError: a steering type other than skid or Ackermann steering.
         DescriptionError: a missing or non-finite number, or no GEO for the robot.
     """
     fields = dict((k.lower(), v) for k, v in conf.fields)
@@ -118,7 +121,9 @@ def platform_from_replies(robot_class: str, conf: m.PlatformConf, geo: m.Geo,
     if steering not in SUPPORTED_STEERING:
         raise UnsupportedSteeringError(
             f"{robot_class} reports {{SteeringType {steering}}}: usar-arm describes and drives "
-            f"only {', '.join(SUPPORTED_STEERING)} ground vehicles")
+            f"only {' and '.join(SUPPORTED_STEERING)} ground vehicles")
+    front, rear = (_steer_limits(conf, robot_class) if steering == ACKERMANN_STEERED
+                   else (0.0, 0.0))
     item = next((i for i in geo.items if i.name.lower() == conf.name.lower()),
                 geo.items[0] if geo.items else None)
     if item is None:
@@ -151,11 +156,31 @@ def platform_from_replies(robot_class: str, conf: m.PlatformConf, geo: m.Geo,
         max_torque=_number(conf.fields, "MaxTorque", what), wheel_radius=radius,
         wheel_separation=separation, wheel_base=base, dimensions=(dx, dy, dz),
         axle_height=0.0, wheels=wheels, sensors=tuple(_sensor(r) for r in placed),
-        hidden=hidden, unknown=unknown,
+        hidden=hidden, unknown=unknown, max_front_steer=front, max_rear_steer=rear,
         notes=("the wire gives no wheel height: the axles are assumed at base_link's height, "
                "base_footprint one wheel radius below it",
                "the wire gives no wheel width nor body shape: the body box spans the wheels, "
                "the wheels are drawn 0.05 m wide"))
+
+
+def _steer_limits(conf: m.PlatformConf, robot_class: str) -> tuple[float, float]:
+    """The largest front and rear steer angles (rad) of an Ackermann vehicle: half the ranges
+    its CONF MaxFrontSteer/MaxRearSteer reports (``AckermanSteeredVehicle.uc GetConfData``:
+    LimitHigh - LimitLow of the steer joints; 6.28, its search's start, when none steers: 0
+    here).
+
+    Raises:
+        DescriptionError: MaxFrontSteer or MaxRearSteer missing or not finite, or the front
+            wheels do not steer (usar-arm drives front-steered vehicles).
+    """
+    what = f"{robot_class} CONF"
+    ranges = [_number(conf.fields, key, what) for key in ("MaxFrontSteer", "MaxRearSteer")]
+    front, rear = (r / 2 if 0 < r < NO_STEER_RANGE else 0.0 for r in ranges)
+    if front <= 0:
+        raise DescriptionError(f"{what}: {{MaxFrontSteer {ranges[0]:g}}} says the front wheels "
+                               "do not steer; usar-arm drives front-steered Ackermann vehicles "
+                               "(a rear-steered one, such as BasicAckermanRobot, is not)")
+    return front, rear
 
 
 def _sensor_names(client: UsarClient, timeout: float) -> list[str]:

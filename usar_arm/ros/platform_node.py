@@ -4,8 +4,9 @@ It spawns and learns the vehicle (:class:`~usar_arm.description.platform.LivePla
 serves, every ROS name from :mod:`usar_arm.ros.api`:
 
 * ``cmd_vel`` (geometry_msgs/Twist): linear.x, angular.z -> one DRIVE line per message
-  (:func:`~usar_arm.ros.drive.wheel_speeds`, clamped keeping the ratio); a NaN or infinite
-  command stops the robot; without a command for ``cmd_timeout`` s the robot is stopped;
+  (:func:`~usar_arm.ros.drive.velocity_command`: wheel speeds clamped keeping the ratio, or an
+  Ackermann vehicle's spin and front steer); a NaN or infinite command stops the robot;
+  without a command for ``cmd_timeout`` s the robot is stopped;
 * ``odom`` (nav_msgs/Odometry, odom -> base_footprint) and the same transform on ``tf``, from
   the sensor ``odom_sensor`` names (default: the first INS);
 * ``scan`` (sensor_msgs/LaserScan) per range scanner line, in the scanner's frame;
@@ -50,7 +51,13 @@ from usar_arm.ros.api import (
     spin_until,
     transform_message,
 )
-from usar_arm.ros.drive import STOP, WheelCommand, wheel_speeds
+from usar_arm.ros.drive import (
+    DriveCommand,
+    WheelCommand,
+    drive_line,
+    stop_command,
+    velocity_command,
+)
 from usar_arm.ros.frames import Edge, quaternion
 from usar_arm.ros.platform_state import PoseSample, PoseTracker, scan_fields, sensor_pose
 from usar_arm.usarsim import messages as m
@@ -218,49 +225,63 @@ class Streams:
 
 
 class Driver:
-    """cmd_vel -> DRIVE, with the command timeout (checked by a 20 Hz timer)."""
+    """cmd_vel -> DRIVE, with the command timeout (checked by a 20 Hz timer); the mapping by
+    the vehicle's steering type (:func:`~usar_arm.ros.drive.velocity_command`)."""
 
     def __init__(self, node: Node, client: UsarClient, desc: PlatformDescription,
                  timeout: float):
         self.client, self.desc, self.timeout = client, desc, timeout
         self.last_command = time.monotonic()
-        self.current: WheelCommand = STOP
+        self.current: DriveCommand = stop_command(desc, WheelCommand(0.0, 0.0))
         self.last_clamp_log = -CLAMP_LOG_S
         self.lock = threading.Lock()
         node.create_subscription(Twist, "cmd_vel", self.on_twist, 10)
         node.create_timer(0.05, self.check_timeout)
 
-    def send(self, command: WheelCommand) -> None:
-        """One DRIVE line (rad/s, not normalized)."""
+    def send(self, command: DriveCommand) -> None:
+        """One DRIVE line (rad/s and rad, not normalized)."""
         with self.lock:
             self.current = command
-            self.client.send(m.Drive(command.left, command.right, normalized=False))
+            self.client.send(drive_line(command))
 
     def on_twist(self, msg: Twist) -> None:
         """A cmd_vel message: drive, or stop on a command that is not finite."""
         self.last_command = time.monotonic()
         d = self.desc
         try:
-            command = wheel_speeds(msg.linear.x, msg.angular.z, d.wheel_radius,
-                                   d.wheel_separation, d.max_speed)
+            command = velocity_command(d, msg.linear.x, msg.angular.z, self.current)
         except InvalidInputError as exc:
             log.error("cmd_vel refused, the robot stops: %s", exc)
-            self._send_safely(STOP)
+            self._send_safely(stop_command(d, self.current))
             return
-        if command.clamped and time.monotonic() - self.last_clamp_log > CLAMP_LOG_S:
+        if time.monotonic() - self.last_clamp_log > CLAMP_LOG_S and self._say(command):
             self.last_clamp_log = time.monotonic()
-            log.info("cmd_vel clamped: wheels %.3f, %.3f rad/s asked, beyond the limit %g "
-                     "rad/s; both scaled by %.3f (same direction and turn radius)",
-                     *command.asked, d.max_speed, command.scale)
         self._send_safely(command)
+
+    def _say(self, command: DriveCommand) -> bool:
+        """Log what of a command had to give way (True when something did)."""
+        d = self.desc
+        if isinstance(command, WheelCommand):
+            if command.clamped:
+                log.info("cmd_vel clamped: wheels %.3f, %.3f rad/s asked, beyond the limit %g "
+                         "rad/s; both scaled by %.3f (same direction and turn radius)",
+                         *command.asked, d.max_speed, command.scale)
+            return command.clamped
+        if command.turn_refused:
+            log.info("cmd_vel turns on the spot: an Ackermann vehicle cannot; it stands still, "
+                     "steer kept at %.3f rad", command.steer)
+        elif command.speed_clamped or command.steer_clamped:
+            log.info("cmd_vel clamped: wheel spin %.3f rad/s (limit %g), steer %.3f rad (limit "
+                     "%g)", command.speed, d.max_speed, command.steer, d.max_front_steer)
+        return command.turn_refused or command.speed_clamped or command.steer_clamped
 
     def check_timeout(self) -> None:
         """Stop the robot when no cmd_vel came within the timeout."""
         if self.current.moving and time.monotonic() - self.last_command > self.timeout:
             log.info("no cmd_vel for %g s: the robot stops", self.timeout)
-            self._send_safely(STOP)
+            self._send_safely(stop_command(self.desc, self.current))
 
-    def _send_safely(self, command: WheelCommand) -> None:
+    def _send_safely(self, command: DriveCommand) -> None:
         try:
             self.send(command)
         except Exception as exc:  # the connection is gone: nothing to drive
@@ -302,7 +323,7 @@ def serve(node: Node, live: LivePlatform, options: PlatformNodeOptions, frames: 
         spin_until(spin, stop)
     finally:
         unsubscribe()
-        driver._send_safely(STOP)
+        driver._send_safely(stop_command(desc, driver.current))
         spin.shutdown(timeout_sec=2.0)
     return 0
 

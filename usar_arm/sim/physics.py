@@ -18,6 +18,13 @@ import mujoco
 import numpy as np
 
 from usar_arm.core.spatial import Array, invert, quat_from_matrix, rpy_to_matrix, transform
+from usar_arm.sim.drive_gains import (
+    STEER_KP,
+    STEER_SIZE,
+    WHEEL_DAMPING,
+    WHEEL_FRICTION,
+    WHEEL_KV,
+)
 from usar_arm.sim.heap import release_freed_memory
 from usar_arm.sim.physics_index import ActuatorIndex, RobotEntry, VehicleIndex
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
@@ -33,16 +40,6 @@ SCENERY_AFFINITY = 1
 (contype 0) and vehicles among themselves do not touch anything else."""
 VEHICLE_CONTYPE = 1
 """Contact type of a vehicle's chassis and wheels."""
-WHEEL_KV = 20.0
-"""Gain (N·m per rad/s) of a wheel's velocity drive, within the wheel's MaxForce: stiff enough
-that a wheel keeps within 5 % of the speed DRIVE gives it while the tyres slide sideways in a
-skid turn, soft enough that a start from rest does not rock the chassis. Measured at 1.3 rad/s:
-turning in place, 2 N·m per rad/s let the wheels fall to 0.6-0.85 rad/s, 20 keeps them at
-1.23-1.26 (50 at 1.27-1.28, but the chassis pitched 0.10 rad on starting, 0.018 at 20)."""
-WHEEL_DAMPING = 0.001
-"""Viscous friction of a wheel's axle (N·m·s/rad)."""
-WHEEL_FRICTION = 1.0
-"""Sliding friction coefficient between a wheel and the ground."""
 FRESH_SPEC_AFTER = 50
 """Robot removals after which the MuJoCo spec is built anew: an ``MjSpec`` keeps about 2 KiB
 for every robot ever deleted from it (mujoco 3.x), which a long-running server must not."""
@@ -67,16 +64,15 @@ def _add_scenery(world: mujoco.MjsBody, scenery: Sequence[SceneryBox], floor_z: 
 
 def _add_vehicle(spec: mujoco.MjSpec, entry: RobotEntry, veh: VehicleSpec, floor_z: float
                  ) -> VehicleIndex:
-    """A free chassis on its wheels: boxes and bumper masses on one body, one hinge per
-    wheel (positive spin drives forward) with a velocity drive limited to MaxForce.
+    """A free chassis on its wheels: boxes and bumper masses on one body, one hinge per wheel
+    (positive spin forward; a steered one on a position-driven knuckle) driven within MaxForce.
 
     The chassis is placed no lower than resting on the floor (INIT's z is the chassis
     origin, as UDK's CenterItem location)."""
     loc = list(entry.location)
     loc[2] = min(loc[2], floor_z - veh.rest_height)
     name = f"{entry.key}/platform"
-    body = spec.worldbody.add_body(name=name, pos=loc,
-                                         quat=_quat(entry.platform_pose[:3, :3]))
+    body = spec.worldbody.add_body(name=name, pos=loc, quat=_quat(entry.platform_pose[:3, :3]))
     body.add_freejoint(name=f"{name}/free")
     for box in veh.chassis:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(box.half),
@@ -85,9 +81,22 @@ def _add_vehicle(spec: mujoco.MjSpec, entry: RobotEntry, veh: VehicleSpec, floor
     for _, offset, mass in veh.extra_masses:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0, 0], pos=list(offset),
                       mass=mass, contype=0, conaffinity=0)
-    joints = {}
+    joints: dict[str, str] = {}
+    steers: dict[str, str] = {}
     for w in veh.wheels:
-        wheel = body.add_body(name=f"{name}/{w.name}", pos=list(w.offset))
+        holder, at = body, list(w.offset)
+        if w.steer is not None:  # a knuckle turning about z (down: positive turns right)
+            s = w.steer
+            holder, at = body.add_body(name=f"{name}/{s.name}", pos=at), [0.0, 0.0, 0.0]
+            steers[s.name] = f"{name}/{s.name}/steer"
+            holder.add_joint(name=steers[s.name], type=mujoco.mjtJoint.mjJNT_HINGE,
+                             axis=[0.0, 0.0, 1.0], range=[s.limit_low, s.limit_high],
+                             limited=True)
+            holder.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[STEER_SIZE, 0, 0],
+                            mass=s.mass, contype=0, conaffinity=0)
+            _drive(spec, steers[s.name], s.max_force).set_to_position(kp=STEER_KP,
+                                                                      kv=s.damping)
+        wheel = holder.add_body(name=f"{name}/{w.name}", pos=at)
         jname = f"{name}/{w.name}/spin"
         wheel.add_joint(name=jname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, -1.0, 0.0],
                         damping=WHEEL_DAMPING)
@@ -95,13 +104,18 @@ def _add_vehicle(spec: mujoco.MjSpec, entry: RobotEntry, veh: VehicleSpec, floor
                        mass=w.mass, contype=VEHICLE_CONTYPE, conaffinity=0,
                        friction=[WHEEL_FRICTION, 0.005, 0.0001])
         if w.driven:
-            drive = spec.add_actuator(name=f"{jname}/drive", target=jname,
-                                            trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            drive.set_to_velocity(kv=WHEEL_KV)
-            drive.forcelimited = True
-            drive.forcerange = [-w.max_force, w.max_force]
+            _drive(spec, jname, w.max_force).set_to_velocity(kv=WHEEL_KV)
         joints[w.name] = jname
-    return VehicleIndex(veh, name, joints)
+    return VehicleIndex(veh, name, joints, steers)
+
+
+def _drive(spec: mujoco.MjSpec, joint: str, max_force: float) -> mujoco.MjsActuator:
+    """A joint's actuator ``<joint>/drive``, its force limited to +-``max_force``."""
+    drive = spec.add_actuator(name=f"{joint}/drive", target=joint,
+                              trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    drive.forcelimited = True
+    drive.forcerange = [-max_force, max_force]
+    return drive
 
 
 def _joint_state(m: mujoco.MjModel, d: mujoco.MjData
@@ -127,16 +141,18 @@ def _index_vehicle(m: mujoco.MjModel, d: mujoco.MjData, veh: VehicleIndex,
     if f"{veh.body}/free" in free_state:
         qa, da = m.jnt_qposadr[free], m.jnt_dofadr[free]
         d.qpos[qa:qa + 7], d.qvel[da:da + 6] = free_state[f"{veh.body}/free"]
-    veh.wheel_qpos, veh.wheel_ctrl = {}, {}
-    for wheel, jname in veh.wheel_joints.items():
-        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
-        veh.wheel_qpos[wheel] = int(m.jnt_qposadr[j])
-        if jname in qpos:
-            d.qpos[m.jnt_qposadr[j]], d.qvel[m.jnt_dofadr[j]] = qpos[jname]
-        a = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{jname}/drive")
-        if a >= 0:
-            veh.wheel_ctrl[wheel] = a
-            d.ctrl[a] = ctrl.get(f"{jname}/drive", 0.0)
+    veh.wheel_qpos, veh.wheel_ctrl, veh.steer_qpos, veh.steer_ctrl = {}, {}, {}, {}
+    for joints, at, drives in ((veh.wheel_joints, veh.wheel_qpos, veh.wheel_ctrl),
+                               (veh.steer_joints, veh.steer_qpos, veh.steer_ctrl)):
+        for part, jname in joints.items():
+            j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
+            at[part] = int(m.jnt_qposadr[j])
+            if jname in qpos:
+                d.qpos[m.jnt_qposadr[j]], d.qvel[m.jnt_dofadr[j]] = qpos[jname]
+            a = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{jname}/drive")
+            if a >= 0:
+                drives[part] = a
+                d.ctrl[a] = ctrl.get(f"{jname}/drive", 0.0)
 
 
 class PhysicsWorld:
@@ -387,6 +403,19 @@ class PhysicsWorld:
         assert veh is not None, f"{key} is not a vehicle"
         for wheel, speed in speeds.items():
             self._data.ctrl[veh.wheel_ctrl[wheel]] = speed
+
+    def set_steer_targets(self, key: str, targets: dict[str, float]) -> None:
+        """Set the target angle (rad, positive turns right) of steer joints by UDK name."""
+        veh = self._robots[key].vehicle
+        assert veh is not None, f"{key} is not a vehicle"
+        for joint, angle in targets.items():
+            self._data.ctrl[veh.steer_ctrl[joint]] = angle
+
+    def steer_angles(self, key: str) -> dict[str, float]:
+        """The angle (rad, positive turning right) of every steer joint of a vehicle."""
+        veh = self._robots[key].vehicle
+        assert veh is not None, f"{key} is not a vehicle"
+        return {s: float(self._data.qpos[a]) for s, a in veh.steer_qpos.items()}
 
     def wheel_angles(self, key: str) -> dict[str, float]:
         """The accumulated spin (rad, positive forward) of every wheel of a vehicle."""

@@ -31,15 +31,20 @@ class ActuatorIndex:
 
 @dataclass
 class VehicleIndex:
-    """A vehicle's chassis body and wheels: names, and their addresses in the model."""
+    """A vehicle's chassis body, wheels and steer joints: names, and their addresses in the
+    model."""
 
     spec: VehicleSpec
     body: str
     wheel_joints: dict[str, str]
     """Wheel name -> joint name."""
+    steer_joints: dict[str, str] = field(default_factory=dict)
+    """Steer joint name (UDK's, e.g. ``FRFrontSteer``) -> MuJoCo joint name."""
     body_id: int = -1
     wheel_qpos: dict[str, int] = field(default_factory=dict)
     wheel_ctrl: dict[str, int] = field(default_factory=dict)
+    steer_qpos: dict[str, int] = field(default_factory=dict)
+    steer_ctrl: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass

@@ -152,7 +152,7 @@ class Session:
         elif isinstance(msg, (m.GetConf, m.GetGeo)):
             self._describe(msg, style)
         elif isinstance(msg, m.Drive) and self.vehicle is not None:
-            self.vehicle.drive(msg, world, reject)
+            self.vehicle.drive(msg, world, reject, style)
         elif isinstance(msg, m.Set) and self.vehicle is not None:
             self.vehicle.set(msg, reject)
         elif isinstance(msg, (m.Set, m.Drive)):

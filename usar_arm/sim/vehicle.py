@@ -30,6 +30,12 @@ UDK_MAX_SPEED = 100.0
 """``WheeledVehicle.uc GetConfData`` starts its search for the lowest MaxVelocity here."""
 UDK_MAX_TORQUE = 50000.0
 """... and for the lowest wheel MaxForce here."""
+SKID = "SkidSteered"
+ACKERMANN = "AckermanSteered"
+"""The steering types of UDK's wheeled vehicles (``GetSteeringType``; Ackerman with one n)."""
+NO_STEER_RANGE = 6.28
+"""``AckermanSteeredVehicle.uc GetConfData`` starts its search for the smallest steer range here
+(rad): what it reports when no joint steers."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +49,33 @@ class Box:
 
 
 @dataclass(frozen=True)
+class SteerSpec:
+    """The revolute joint that steers a wheel (``RevoluteJoint`` between the chassis and the
+    part the wheel's joint hangs on, ``AckermanSteeredVehicle.uc``).
+
+    Attributes:
+        name: the joint's name. end: ``front`` or ``rear``: which DRIVE angle moves it (UDK
+            looks for ``FRONTSTEER`` or ``REARSTEER`` in the name, any case; :func:`steer_end`).
+        limit_low, limit_high: its range (rad; targets are clamped into it).
+        mass: the part it turns (the hidden ``EmptyMesh``, kg). damping: ``Damping``.
+    """
+
+    name: str
+    end: str
+    limit_low: float
+    limit_high: float
+    mass: float
+    damping: float
+    max_force: float = UDK_MAX_TORQUE
+
+
+def steer_end(joint: str) -> str:
+    """``front``, ``rear`` or ``""`` (no DRIVE angle moves it) for a steer joint's name."""
+    upper = joint.upper()
+    return "front" if "FRONTSTEER" in upper else "rear" if "REARSTEER" in upper else ""
+
+
+@dataclass(frozen=True)
 class WheelSpec:
     """A wheel (``WheelJoint``): its part, side, anchor on the chassis and limits.
 
@@ -50,6 +83,7 @@ class WheelSpec:
         offset: wheel centre in the chassis frame (m).
         max_velocity: the highest spin speed a DRIVE can ask for (rad/s, ``MaxVelocity``).
         max_force: the drive's torque limit (``MaxForce``; UDK's default 50000).
+        steer: the joint that steers it (None: fixed to the chassis).
     """
 
     name: str
@@ -59,6 +93,7 @@ class WheelSpec:
     max_velocity: float
     max_force: float = UDK_MAX_TORQUE
     driven: bool = True
+    steer: SteerSpec | None = None
 
 
 @dataclass(frozen=True)
@@ -81,7 +116,7 @@ class SensorMount:
 
 @dataclass(frozen=True)
 class VehicleSpec:
-    """A skid-steered ground vehicle: chassis boxes, wheels, sensors.
+    """A wheeled ground vehicle, skid- or Ackermann-steered: chassis boxes, wheels, sensors.
 
     Attributes:
         wheel_radius: ``WheelRadius`` (m); also the radius of the wheels' contact spheres.
@@ -102,7 +137,8 @@ class VehicleSpec:
         """Sum of the part masses (kg) in float32, as ``USARVehicle.uc GetMass`` adds them."""
         total = np.float32(0.0)
         for m in [b.mass for b in self.chassis] + [w.mass for w in self.wheels] + [
-                e[2] for e in self.extra_masses]:
+                e[2] for e in self.extra_masses] + [
+                w.steer.mass for w in self.wheels if w.steer is not None]:
             total = np.float32(total + np.float32(m))
         return float(total)
 
@@ -133,6 +169,23 @@ class VehicleSpec:
         """The lowest wheel MaxForce, as CONF MaxTorque reports it."""
         return min([UDK_MAX_TORQUE] + [w.max_force for w in self.wheels])
 
+    @property
+    def ackermann(self) -> bool:
+        """Whether DRIVE steers the wheels (``AckermanSteered``) instead of driving two sides."""
+        return self.steering_type == ACKERMANN
+
+    def steers(self, end: str) -> tuple[SteerSpec, ...]:
+        """The steer joints a DRIVE angle moves: ``end`` is ``front`` or ``rear``."""
+        return tuple(w.steer for w in self.wheels if w.steer is not None and w.steer.end == end)
+
+    def steer_range(self, end: str) -> float:
+        """The smallest range (rad) of the ``end``'s steer joints, in float32, as CONF
+        MaxFrontSteer/MaxRearSteer reports it (``AckermanSteeredVehicle.uc GetConfData``:
+        6.28 when none steers)."""
+        f32 = np.float32
+        ranges = [float(abs(f32(s.limit_high) - f32(s.limit_low))) for s in self.steers(end)]
+        return min([float(f32(NO_STEER_RANGE)), *ranges])
+
     def sensors_of(self, type_: str) -> tuple[SensorMount, ...]:
         """The mounted sensors of a type (case-insensitive, as ``Item.uc IsType``)."""
         return tuple(s for s in self.sensors if s.type.upper() == type_.upper())
@@ -146,17 +199,18 @@ class WheelCommand:
     clamped: tuple[str, ...]
 
 
-def drive_wheels(spec: VehicleSpec, left: float, right: float, normalized: bool
-                 ) -> WheelCommand:
+def drive_wheels(spec: VehicleSpec, left: float, right: float, normalized: bool,
+                 sides: tuple[str, ...] = ("Left", "Right")) -> WheelCommand:
     """Wheel speeds for ``DRIVE {Left left} {Right right}`` (SkidSteeredVehicle.uc Drive).
 
-    Normalized speeds are percentages of each wheel's MaxVelocity; every driven wheel takes its
-    side's speed, clamped to +-MaxVelocity (WheelJoint.uc SetVelocity). Positive is forward.
+    Normalized speeds are percentages of each wheel's MaxVelocity; every driven wheel of
+    ``sides`` takes its side's speed (``right`` for a wheel of no side), clamped to
+    +-MaxVelocity (WheelJoint.uc SetVelocity). Positive is forward.
     """
     speeds: dict[str, float] = {}
     clamped: list[str] = []
     for w in spec.wheels:
-        if not w.driven or w.side not in ("Left", "Right"):
+        if not w.driven or w.side not in sides:
             continue
         asked = left if w.side == "Left" else right
         if normalized:
@@ -166,6 +220,39 @@ def drive_wheels(spec: VehicleSpec, left: float, right: float, normalized: bool
             clamped.append(w.name)
         speeds[w.name] = speed
     return WheelCommand(speeds, tuple(clamped))
+
+
+@dataclass(frozen=True)
+class SteerCommand:
+    """What an Ackermann DRIVE asks: the wheels' spins and each steer joint's target (rad,
+    clamped into its limits), and the names of what was clamped."""
+
+    wheels: WheelCommand
+    targets: dict[str, float]
+    clamped: tuple[str, ...]
+
+
+def drive_ackermann(spec: VehicleSpec, speed: float, front: float, rear: float,
+                    normalized: bool) -> SteerCommand:
+    """Wheel spins and steer targets for ``DRIVE {Speed speed} {FrontSteer front} {RearSteer
+    rear}`` (``AckermanSteeredVehicle.uc Drive``).
+
+    Every driven wheel takes ``speed`` (rad/s; normalized: percent of its own MaxVelocity),
+    clamped to +-MaxVelocity (``WheelJoint.uc SetVelocity``); every steer joint takes its end's
+    angle (rad, positive turning right about z down), clamped into its limits
+    (``RevoluteJoint.uc SetTarget``).
+    """
+    wheels = drive_wheels(spec, speed, speed, normalized, sides=("Left", "Right", "None"))
+    targets: dict[str, float] = {}
+    clamped: list[str] = []
+    for w in spec.wheels:
+        if w.steer is None or not w.steer.end:
+            continue
+        asked = front if w.steer.end == "front" else rear
+        targets[w.steer.name] = min(w.steer.limit_high, max(w.steer.limit_low, asked))
+        if targets[w.steer.name] != asked:
+            clamped.append(w.steer.name)
+    return SteerCommand(wheels, targets, tuple(clamped))
 
 
 def scan_yaws(resolution: float, fov: float) -> tuple[np.ndarray, float, float]:
@@ -231,7 +318,9 @@ def load_vehicle(d: dict[str, Any], path: str) -> VehicleSpec:
                                 _number(w, "mass", path, where),
                                 _number(w, "max_velocity", path, where),
                                 float(w.get("max_force", UDK_MAX_TORQUE)),
-                                bool(w.get("driven", True))))
+                                bool(w.get("driven", True)),
+                                _steer(w["steer"], path, f"{where}.steer") if "steer" in w
+                                else None))
     if not any(w.side == "Left" for w in wheels) or not any(w.side == "Right" for w in wheels):
         raise FileFormatError(path, "a skid-steered vehicle needs wheels on both sides",
                               field="vehicle.wheels")
@@ -243,10 +332,27 @@ def load_vehicle(d: dict[str, Any], path: str) -> VehicleSpec:
                                 tuple((str(k), float(v))
                                       for k, v in (s.get("settings") or {}).items()))
                     for i, s in enumerate(d.get("sensors", [])))
-    steering = str(d.get("steering_type", "SkidSteered"))
-    if steering != "SkidSteered":
-        raise FileFormatError(path, f"steering type {steering} is not supported (only "
-                              "SkidSteered: no Ackermann robot is simulated)",
-                              field="vehicle.steering_type")
+    steering = str(d.get("steering_type", SKID))
+    if steering not in (SKID, ACKERMANN):
+        raise FileFormatError(path, f"steering type {steering} is not supported (only {SKID} "
+                              f"and {ACKERMANN})", field="vehicle.steering_type")
+    if (steering == ACKERMANN) != any(w.steer is not None for w in wheels):
+        raise FileFormatError(path, f"a vehicle steers its wheels (a steer: on a wheel) if and "
+                              f"only if it is {ACKERMANN}", field="vehicle.wheels")
     return VehicleSpec(steering, _number(d, "wheel_radius", path, "vehicle"),
                        float(d.get("wheel_width", 0.05)), chassis, extra, tuple(wheels), sensors)
+
+
+def _steer(d: Any, path: str, where: str) -> SteerSpec:
+    """A wheel's ``steer:`` mapping (the revolute joint it hangs on)."""
+    if not isinstance(d, dict) or "name" not in d:
+        raise FileFormatError(path, f"expected a mapping with a name, got {d!r}", field=where)
+    steer = SteerSpec(str(d["name"]), steer_end(str(d["name"])),
+                      _number(d, "limit_low", path, where),
+                      _number(d, "limit_high", path, where), _number(d, "mass", path, where),
+                      _number(d, "damping", path, where),
+                      float(d.get("max_force", UDK_MAX_TORQUE)))
+    if not steer.end or not steer.limit_low <= 0 <= steer.limit_high or not steer.mass > 0:
+        raise FileFormatError(path, f"steer joint {steer.name}: its name must hold FrontSteer "
+                              "or RearSteer, its limits enclose 0, its mass be > 0", field=where)
+    return steer

@@ -11,6 +11,9 @@
   ``{Type GroundVehicle}`` matches no item, so UDK (and this simulator) send nothing.
 * ``STA {Time t} {Battery b} {Type GroundVehicle} {LightToggle ..} {LightIntensity 100}
   {FrontSteer 0} {RearSteer 0}`` (USARVehicle, WheeledVehicle, SkidSteeredVehicle GetStatus).
+* An Ackermann vehicle (AckermanSteeredVehicle.uc) reports ``{SteeringType AckermanSteered}``,
+  its steer joints' ranges as MaxFrontSteer/MaxRearSteer, and its last DRIVE's angles in STA
+  (docs/protocol.md section 10).
 """
 
 from __future__ import annotations
@@ -33,7 +36,17 @@ def robot_conf(spec: RobotSpec, veh: VehicleSpec, style: NumberStyle) -> m.Platf
     return m.PlatformConf(spec.short_name, spec.platform_type, (
         ("SteeringType", veh.steering_type), ("Mass", f4(veh.mass)),
         ("MaxSpeed", f4(veh.max_speed)), ("MaxTorque", f4(veh.max_torque)),
-        ("MaxFrontSteer", "0"), ("MaxRearSteer", "0")))
+        *_steer_ranges(veh, style)))
+
+
+def _steer_ranges(veh: VehicleSpec, style: NumberStyle) -> tuple[m.Block, m.Block]:
+    """``{MaxFrontSteer ..} {MaxRearSteer ..}``: 0 on a skid-steered vehicle
+    (SkidSteeredVehicle.uc); an Ackermann one's steer ranges, FloatString
+    (AckermanSteeredVehicle.uc GetConfData)."""
+    if not veh.ackermann:
+        return ("MaxFrontSteer", "0"), ("MaxRearSteer", "0")
+    return (("MaxFrontSteer", style.fixed_at(veh.steer_range("front"), 4)),
+            ("MaxRearSteer", style.fixed_at(veh.steer_range("rear"), 4)))
 
 
 def robot_geo(spec: RobotSpec, veh: VehicleSpec, style: NumberStyle) -> m.Geo:
@@ -77,11 +90,13 @@ def sensor_geo(spec: RobotSpec, veh: VehicleSpec, type_: str, name: str | None) 
     return m.Geo(type_, tuple(items)) if items else None
 
 
-def status(spec: RobotSpec, t: float, light: bool) -> m.Sta:
-    """The vehicle's STA line."""
+def status(spec: RobotSpec, t: float, light: bool, angles: tuple[str, str] = ("0", "0")
+           ) -> m.Sta:
+    """The vehicle's STA line; ``angles``: FrontSteer and RearSteer as printed (an Ackermann
+    vehicle's last DRIVE angles, FloatString: AckermanSteeredVehicle.uc GetStatus; else 0)."""
     return m.Sta(t, spec.battery, spec.platform_type, (
         ("LightToggle", "True" if light else "False"), ("LightIntensity", "100"),
-        ("FrontSteer", "0"), ("RearSteer", "0")))
+        ("FrontSteer", angles[0]), ("RearSteer", angles[1])))
 
 
 def _matches(item_name: str, wanted: str | None) -> bool:

@@ -1,9 +1,11 @@
 """The ground-vehicle half of a connection: DRIVE, the vehicle's CONF/GEO and its status stream.
 
-DRIVE follows UDK (BotConnection.uc ProcessDrive, SkidSteeredVehicle.uc Drive): ``Normalized``
-and ``Light`` are remembered by the vehicle whenever a DRIVE carries them; the wheels move only
-when both Left and Right are given; speeds beyond a wheel's MaxVelocity are clamped (and logged
-here, where UDK clamps silently).
+DRIVE follows UDK (BotConnection.uc ProcessDrive; SkidSteeredVehicle.uc and
+AckermanSteeredVehicle.uc Drive): ``Normalized`` and ``Light`` are remembered by the vehicle
+whenever a DRIVE carries them; a skid-steered vehicle's wheels move only when both Left and
+Right are given, an Ackermann vehicle's only when Speed, FrontSteer and RearSteer all are;
+speeds beyond a wheel's MaxVelocity and angles beyond a steer joint's limits are clamped (and
+logged here, where UDK clamps silently).
 """
 
 from __future__ import annotations
@@ -15,16 +17,16 @@ from collections.abc import Callable
 from usar_arm.sim import vehicle_replies
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import RobotSpec
-from usar_arm.sim.vehicle import VehicleSpec, drive_wheels
+from usar_arm.sim.vehicle import VehicleSpec, drive_ackermann, drive_wheels
 from usar_arm.sim.vehicle_sensors import VehicleSensors
 from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.numbers import NumberStyle
+from usar_arm.usarsim.numbers import UDK, NumberStyle
 
 Reject = Callable[..., None]
 
 
 class VehicleSession:
-    """State of one spawned vehicle: its drive flags and its sensors.
+    """State of one spawned vehicle: its drive flags, its last steer angles and its sensors.
 
     Args:
         key: the robot's key in the physics world (seeds its noisy sensors).
@@ -38,14 +40,21 @@ class VehicleSession:
         self.vehicle: VehicleSpec = spec.vehicle
         self.normalized = False
         self.light = False
+        zero = UDK.fixed_at(0.0, 4) if spec.vehicle.ackermann else "0"
+        self.steer_text: tuple[str, str] = (zero, zero)
+        """STA's FrontSteer and RearSteer as printed (an Ackermann vehicle's last DRIVE)."""
         self.sensors = VehicleSensors(spec.vehicle, zlib.crc32(key.encode()))
 
-    def drive(self, msg: m.Drive, world: PhysicsWorld, reject: Reject) -> None:
+    def drive(self, msg: m.Drive, world: PhysicsWorld, reject: Reject,
+              style: NumberStyle = UDK) -> None:
         """Act on a DRIVE line."""
         if msg.normalized is not None:
             self.normalized = msg.normalized
         if msg.light is not None:
             self.light = msg.light
+        if self.vehicle.ackermann:
+            self._steer(msg, world, reject, style)
+            return
         if msg.left is None or msg.right is None:
             reject("DRIVE without Left and Right", "DRIVE needs both {Left l} and {Right r} "
                    "to move the wheels (as UDK); the wheels keep their speeds",
@@ -58,6 +67,26 @@ class VehicleSession:
                    "+-%g rad/s: %s clamped", msg.left, msg.right, unit,
                    self.vehicle.max_speed, ", ".join(cmd.clamped), level=logging.INFO)
         world.set_wheel_speeds(self.key, cmd.speeds)
+
+    def _steer(self, msg: m.Drive, world: PhysicsWorld, reject: Reject,
+               style: NumberStyle) -> None:
+        """An Ackermann vehicle's DRIVE (docs/protocol.md section 10)."""
+        if msg.speed is None or msg.front_steer is None or msg.rear_steer is None:
+            reject("DRIVE without Speed and steers", "DRIVE needs {Speed s} {FrontSteer a} "
+                   "{RearSteer b} to move an Ackermann vehicle (as UDK); it keeps its speed "
+                   "and steer", level=logging.INFO)
+            return
+        cmd = drive_ackermann(self.vehicle, msg.speed, msg.front_steer, msg.rear_steer,
+                              self.normalized)
+        clamped = cmd.wheels.clamped + cmd.clamped
+        if clamped:
+            reject("DRIVE clamped", "DRIVE {Speed %g} {FrontSteer %g} {RearSteer %g} beyond "
+                   "the wheels' or steer joints' limits: %s clamped", msg.speed,
+                   msg.front_steer, msg.rear_steer, ", ".join(clamped), level=logging.INFO)
+        self.steer_text = (style.fixed_at(msg.front_steer, 4),
+                           style.fixed_at(msg.rear_steer, 4))
+        world.set_wheel_speeds(self.key, cmd.wheels.speeds)
+        world.set_steer_targets(self.key, cmd.targets)
 
     def set(self, msg: m.Set, reject: Reject) -> None:
         """Act on a SET line addressed to a sensor (no reply, as UDK)."""
@@ -78,5 +107,5 @@ class VehicleSession:
 
     def status(self, t: float, world: PhysicsWorld) -> list[m.Message]:
         """STA and the SEN lines due at this status tick (time ``t``, s)."""
-        return [vehicle_replies.status(self.spec, t, self.light),
+        return [vehicle_replies.status(self.spec, t, self.light, self.steer_text),
                 *self.sensors.read(t, world, self.key)]

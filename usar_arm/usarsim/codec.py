@@ -180,6 +180,8 @@ SPECS: tuple[MessageSpec, ...] = (
         Field("Opcode", "opcode", example="OPEN"), Field("Params", "params")), extra=False),
     MessageSpec("DRIVE", m.Drive, _fields(
         Field("Left", "left", SCALAR), Field("Right", "right", SCALAR),
+        Field("Speed", "speed", SCALAR), Field("FrontSteer", "front_steer", SCALAR),
+        Field("RearSteer", "rear_steer", SCALAR),
         Field("Normalized", "normalized", BOOL), Field("Light", "light", BOOL))),
     MessageSpec("CONF", m.PlatformConf, compound=(c.parse_platform_conf, c.format_platform_conf)),
     MessageSpec("CONF", m.Conf, compound=(c.parse_conf, c.format_conf)),

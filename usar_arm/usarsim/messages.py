@@ -117,13 +117,22 @@ class Set:
 
 @dataclass(frozen=True)
 class Drive:
-    """``DRIVE {Left l} {Right r} ...`` (ground vehicles; the arm tools never send it)."""
+    """``DRIVE ...`` (ground vehicles; the arm tools never send it; docs/protocol.md 9, 10).
+
+    A skid-steered vehicle reads ``{Left l} {Right r}`` (wheel spins, rad/s), an
+    Ackermann-steered one ``{Speed s} {FrontSteer a} {RearSteer b}`` (one wheel spin in rad/s,
+    steer angles in rad, positive turning right); with ``{Normalized true}`` spins are percent
+    of each wheel's MaxVelocity. Each vehicle ignores the other's keys.
+    """
 
     left: float | None = None
     right: float | None = None
     normalized: bool | None = None
     light: bool | None = None
     extra: tuple[Block, ...] = ()
+    speed: float | None = None
+    front_steer: float | None = None
+    rear_steer: float | None = None
 
 
 # ----------------------------------------------------------------------- CONF / GEO replies
