@@ -112,11 +112,12 @@ def _goal(names: list[str], q: np.ndarray, seconds: float) -> FollowJointTraject
     return goal
 
 
-def _goals(probe: Probe, names: list[str], seconds: float, refused: bool) -> dict[str, Any]:
-    """Goals every 2 s (small moves back and forth), or refused ones; latencies in ms."""
+def _goals(probe: Probe, names: list[str], seconds: float, refused: bool,
+           home: np.ndarray) -> dict[str, Any]:
+    """Goals every 2 s (small moves back and forth between ``home``, the arm's joints when the
+    run began, and a configuration near it), or refused ones; latencies in ms."""
     accept, refuse, codes, errors = [], [], [], []
     end = time.monotonic() + seconds
-    home = np.array(probe.states[-1][1].position)
     away = home + np.array([0.2, -0.1, 0.1, 0.2, 0.2, 0.2])
     k = 0
     while time.monotonic() < end:
@@ -219,6 +220,7 @@ def main(argv: list[str] | None = None) -> int:
         probe.spin(180, lambda: bool(probe.urdf and probe.static and probe.states))
         model = KinematicModel(probe.urdf)
         names = list(probe.states[-1][1].name)
+        home = np.array(probe.states[-1][1].position)  # the goals move about this, all run
         start = _proc(node.pid)
         probe.states.clear()
         probe.tf.clear()
@@ -231,7 +233,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         chunks, samples = [], [{"t_s": 0.0, **_proc(node.pid)}]
         while time.perf_counter() - t0 < a.goal_seconds - 1:  # in 30 s chunks
-            chunks.append(_goals(probe, names, min(30.0, a.goal_seconds), refused=False))
+            chunks.append(_goals(probe, names, min(30.0, a.goal_seconds), False, home))
             samples.append({"t_s": time.perf_counter() - t0, **_proc(node.pid)})
         busy_cpu = (_proc(node.pid)["cpu_s"] - before) / (time.perf_counter() - t0)
         moving = {"goals": sum(c["goals"] for c in chunks),
@@ -241,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
                   "errors": [e for c in chunks for e in c["errors"]][:5],
                   "node_over_time": [{k: round(v, 3) for k, v in x.items() if k != "cpu_s"}
                                      for x in samples]}
-        refused = _goals(probe, names, 5.0, refused=True)
+        refused = _goals(probe, names, 5.0, True, home)
         refused.pop("latencies")
         refused.pop("errors")
         end = _proc(node.pid)

@@ -59,3 +59,21 @@ def test_a_stale_figure_is_found_and_rewritten(results: Path, tmp_path: Path) ->
 def test_a_pointer_to_nothing_is_reported_with_the_keys_there(results: Path) -> None:
     with pytest.raises(KeyError, match=r"no 'nope'.*udk wire, no correction"):
         figures.evaluate("execution.json#/cases/nope/max_m", results)
+
+
+def test_the_performance_page_includes_the_summary_the_results_give() -> None:
+    """docs/performance.md shows bench/results/summary.md as it is (mkdocs' snippets), and that
+    file is what bench/report_summary.py writes from the committed results, so the published
+    table cannot be edited by hand or drift from the run."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    import report
+    from report_summary import summary_lines
+
+    results = ROOT / "bench" / "results"
+    docs = {s: json.loads((results / f"{s}.json").read_text()) for s in report.SECTIONS
+            if (results / f"{s}.json").is_file()}
+    run = json.loads((results / "run.json").read_text())
+    expected = "\n".join(summary_lines(docs, run)) + "\n"
+    assert (results / "summary.md").read_text() == expected, \
+        "bench/results/summary.md differs: run python bench/report.py bench/results"
+    assert '--8<-- "bench/results/summary.md"' in (ROOT / "docs" / "performance.md").read_text()
