@@ -1,5 +1,7 @@
 # The two set-up commands of the README. Each creates its own virtual environment, then compiles
 # the numba kernels once (cached on disk beside the package) so that no command pays for it.
+# -P: the installed package, not the source tree in the current folder (the demo venv's copy is
+# the one `usar-arm` runs; warming the tree's instead left the demo's first plan compiling, 7 s).
 PYTHON ?= python3
 DEMO_VENV := .venv
 TEST_VENV := .venv-test
@@ -14,14 +16,14 @@ $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
 	$(DEMO_VENV)/bin/pip install --quiet --upgrade pip
 	$(DEMO_VENV)/bin/pip install --quiet .
-	$(DEMO_VENV)/bin/python -c "$(WARM_UP)"
+	$(DEMO_VENV)/bin/python -P -c "$(WARM_UP)"
 	touch $@
 
 $(TEST_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(TEST_VENV)
 	$(TEST_VENV)/bin/pip install --quiet --upgrade pip
 	$(TEST_VENV)/bin/pip install --quiet -e ".[test,viz,ray,ros]"
-	$(TEST_VENV)/bin/python -c "$(WARM_UP)"
+	$(TEST_VENV)/bin/python -P -c "$(WARM_UP)"
 	$(TEST_VENV)/bin/usar-arm ros --setup
 	touch $@
 

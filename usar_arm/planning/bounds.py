@@ -394,4 +394,6 @@ def warm_up() -> None:
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
     summary(np.zeros(1), *packed, EPS, MARGIN)
-    walk(np.zeros(1), np.ones(1), 4, np.ones((1, 1)), *packed, EPS, MARGIN)
+    levers = np.ones((1, 1))
+    levers.setflags(write=False)  # the collision world hands its cached levers over read-only
+    walk(np.zeros(1), np.ones(1), 4, levers, *packed, EPS, MARGIN)

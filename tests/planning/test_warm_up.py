@@ -1,0 +1,38 @@
+"""The install's warm-up compiles every kernel signature a plan uses, so that no command pays for
+compiling (the demo's first plan once took 7 s: the collision world handed its lever arms over
+read-only, a type the warm-up never compiled)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+PROBE = """
+import json
+import numpy as np
+from usar_arm.planning import bounds, ik_kernel
+from usar_arm.planning.compiled import warm_up
+warm_up()
+kernels = {name: getattr(bounds, name) for name in ("check", "summary", "walk")}
+kernels.update({f"ik_kernel.{n}": getattr(ik_kernel, n) for n in dir(ik_kernel)
+                if hasattr(getattr(ik_kernel, n), "signatures")})
+before = {name: set(map(str, k.signatures)) for name, k in kernels.items()}
+from usar_arm import Arm
+arm = Arm.from_files("robots/generated/KR60.urdf")
+arm.ik(arm.fk(np.array([0.3, -0.5, 0.4, 0.0, 0.5, 0.0])), seed=arm.home)
+arm.plan(joints=np.array([0.3, -0.5, 0.4, 0.0, 0.5, 0.0]), scene="table")
+arm.plan(joints=np.array([0.2, -0.3, 0.5, 0.1, 0.4, 0.0]), scene="table", motion="lin")
+print(json.dumps({name: sorted(set(map(str, k.signatures)) - before[name])
+                  for name, k in kernels.items()}))
+"""
+
+
+def test_a_plan_after_the_warm_up_compiles_nothing_new() -> None:
+    done = subprocess.run([sys.executable, "-c", PROBE], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    new = {name: sigs for name, sigs in json.loads(done.stdout.splitlines()[-1]).items() if sigs}
+    assert new == {}, f"compiled at first use, not by the warm-up: {new}"
