@@ -3,6 +3,7 @@ module's own."""
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -22,6 +23,24 @@ def _own_description_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator
     patch.setenv("USAR_ARM_CACHE", str(path))
     yield path
     patch.undo()
+
+
+@pytest.fixture(autouse=True)
+def _root_logging_restored() -> Iterator[None]:
+    """A command run in-process (``main([...])``) points the root logger at the test's captured
+    stderr, which pytest closes after the test; a server thread of a later test logging there
+    printed "--- Logging error ---" tracebacks into the run. Each test leaves the root logger's
+    handlers and level as it found them."""
+    root = logging.getLogger()
+    handlers, level = list(root.handlers), root.level
+    yield
+    for h in root.handlers:
+        if h not in handlers:
+            root.removeHandler(h)
+    for h in handlers:
+        if h not in root.handlers:
+            root.addHandler(h)
+    root.setLevel(level)
 
 
 @pytest.fixture(scope="module")

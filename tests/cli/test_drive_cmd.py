@@ -215,7 +215,7 @@ def test_bad_input_gets_one_line_and_its_exit_code(tmp_path: Path, argv: list[st
 def test_an_arm_is_refused_as_no_ground_vehicle(tmp_path: Path) -> None:
     done = usar_arm("drive", "--robot", "KR60", "--waypoints", "1,-1.5", cwd=tmp_path)
     assert done.returncode == EXIT_INVALID_INPUT, done.stderr
-    assert "not a ground vehicle" in done.stderr and "WheelRadius" in done.stderr
+    assert "USARBot.KR60 is a StaticPlatform, not a ground vehicle" in done.stderr
 
 
 def test_a_velocity_script_is_played_and_recorded(tmp_path: Path) -> None:

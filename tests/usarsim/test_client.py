@@ -104,6 +104,33 @@ def test_a_server_closing_mid_reply_is_reported_promptly() -> None:
     assert "unterminated" in str(info.value)
 
 
+def test_a_reply_that_came_just_before_the_close_still_answers_the_request() -> None:
+    """A server that answers and hangs up at once: the answer wins over the close, however the
+    threads interleave. The client's send is made to wait until the close has been seen, the
+    interleaving that lost the reply once in CI."""
+    geo = b"GEO {Type Actuator} {Name KR60Arm} {Location 0,0,0} {Link 1} {ParentLink 0}" \
+          b" {Location 0,0,0} {Orientation 0,0,0}\r\n"
+
+    def script(conn: socket.socket) -> None:
+        conn.sendall(NFO)
+        read_line(conn)
+        conn.sendall(geo)
+
+    with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=3.0) as client:
+        plain_send = client.send
+
+        def send_then_see_the_close(msg: m.Message) -> None:
+            plain_send(msg)
+            deadline = time.monotonic() + 3.0
+            while client.closed_reason is None and time.monotonic() < deadline:
+                time.sleep(0.005)
+            assert client.closed_reason is not None, "the fake server did not hang up"
+
+        client.send = send_then_see_the_close  # type: ignore[method-assign]
+        reply = client.get_geo("Actuator", "KR60Arm", timeout=3.0)
+    assert reply.items[0].name == "KR60Arm"
+
+
 def test_connection_refused_names_the_address_and_how_to_start_a_simulator() -> None:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

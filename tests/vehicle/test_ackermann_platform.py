@@ -17,11 +17,10 @@ import pytest
 
 from tests.usarsim.fake_server import FakeServer, read_line
 from usar_arm.cli.main import main
-from usar_arm.control.vehicle_wire import read_vehicle
 from usar_arm.core.errors import EXIT_OK, DescriptionError
 from usar_arm.core.platform import PlatformDescription
 from usar_arm.core.vehicle_errors import UnsupportedSteeringError
-from usar_arm.discover.platform import platform_from_replies
+from usar_arm.discover.platform import learn_platform, platform_from_replies
 from usar_arm.urdf.platform import platform_urdf, validate_platform
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
@@ -107,19 +106,27 @@ def test_the_drive_command_takes_front_ackerman_to_a_waypoint(tmp_path: Path) ->
     assert 0 < commands["largest_sent_radps"] <= commands["max_wheel_speed_radps"] == 0.56
 
 
-def test_the_drive_refuses_a_steering_type_it_cannot_drive_in_one_line() -> None:
-    """A server (scripted) whose vehicle reports {SteeringType OmniDrive}: read_vehicle, the
-    drive command's first question, names it and the types usar-arm drives."""
-    replies = {"GETCONF": CONF.replace("AckermanSteered", "OmniDrive"), "GETGEO": GEO}
+def test_a_steering_type_it_cannot_drive_is_refused_before_any_sensor_is_asked() -> None:
+    """A server (scripted, real TCP) whose vehicle reports {SteeringType OmniDrive}: learning it
+    (the drive's and the description's first step) names that type and the ones usar-arm
+    drives, right after the robot's CONF, before anything else is asked."""
+    omni = CONF.replace("AckermanSteered", "OmniDrive").replace("FrontAckerman", "Omni")
+    asked: list[str] = []
 
     def script(conn: socket.socket) -> None:
         conn.sendall(b"NFO {Gametype BotDeathMatch} {Level test} {TimeLimit 0}\r\n")
-        for _ in range(2):
-            request = read_line(conn)
-            conn.sendall(replies[request.split()[0]].encode() + b"\r\n")
+        read_line(conn)  # GETSTARTPOSES
+        conn.sendall(b"NFO {StartPoses 1} {Start1 0.00,0.00,0.00 0.00,0.00,0.00}\r\n")
+        read_line(conn)  # INIT
+        conn.sendall(b"STA {Time 0.1} {Battery 99999} {Type GroundVehicle}\r\n")
+        while line := read_line(conn, timeout=5.0):
+            asked.append(line)
+            if line == "GETCONF {Type Robot}":
+                conn.sendall(omni.encode() + b"\r\n")
 
     with FakeServer(script) as srv, UsarClient(port=srv.port, timeout=2.0) as client, \
             pytest.raises(UnsupportedSteeringError,
                           match=r"OmniDrive.*only SkidSteered and AckermanSteered") as info:
-        read_vehicle(client, "USARBot.Omni", timeout=2.0)
+        learn_platform(client, "USARBot.Omni", timeout=2.0)
     assert "\n" not in str(info.value)
+    assert asked == ["GETCONF {Type Robot}"]

@@ -14,7 +14,7 @@ import pytest
 from usar_arm.cli.main import main
 from usar_arm.core.errors import DescriptionError, ValidationError
 from usar_arm.core.platform import SEED_FRAMES
-from usar_arm.core.vehicle_errors import UnsupportedSteeringError
+from usar_arm.core.vehicle_errors import NotAVehicleError, UnsupportedSteeringError
 from usar_arm.description.embedded import embedded_simulator
 from usar_arm.description.platform import (
     PlatformResult,
@@ -120,7 +120,8 @@ def test_hidden_sensors_are_listed_not_placed() -> None:
 def test_an_arm_is_not_learnt_as_a_platform() -> None:
     with embedded_simulator() as server, UsarClient("127.0.0.1", server.port or 0,
                                                     timeout=5.0) as client:
-        with pytest.raises(DescriptionError, match="StaticPlatform, not a GroundVehicle"):
+        with pytest.raises(NotAVehicleError, match="StaticPlatform, not a ground vehicle: "
+                                                   "describe an arm with usar-arm urdf"):
             learn_platform(client, "KR60", timeout=5.0)
 
 

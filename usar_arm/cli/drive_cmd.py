@@ -16,7 +16,7 @@ from usar_arm.control.drive_inputs import check_in_world, load_script, parse_way
 from usar_arm.control.drive_record import Drift, DriveRecord, drift, odom_in_map
 from usar_arm.control.drive_run import DriveOptions, Driver
 from usar_arm.control.pursuit import PursuitOptions
-from usar_arm.control.vehicle_wire import read_vehicle
+from usar_arm.control.vehicle_wire import vehicle_info
 from usar_arm.core.errors import (
     EXIT_EXECUTION_ABORTED,
     EXIT_INTERRUPTED,
@@ -25,6 +25,7 @@ from usar_arm.core.errors import (
     UnknownRobotError,
 )
 from usar_arm.core.world_file import Scenery, load_scenery
+from usar_arm.discover.platform import learn_platform
 from usar_arm.usarsim.client import UsarClient
 
 SUMMARY = ("drive a ground vehicle (P3AT, FrontAckerman) by waypoints or a script; bag, "
@@ -109,9 +110,9 @@ def _drive(args: argparse.Namespace, waypoints: Any, script: Any) -> DriveRecord
     bar = ProgressBar("cm" if script is None else "ds", enabled=verbosity(args) >= 0)
     with _server(args) as (host, port, known), \
             UsarClient(host, port, timeout=args.timeout) as client:
-        client.spawn(_class_name(args.robot), "R1", start=args.start_position or
-                     client.get_start_poses().names[0], known_classes=known)
-        vehicle = read_vehicle(client, _class_name(args.robot), args.timeout)
+        _, desc = learn_platform(client, _class_name(args.robot), args.start_position,
+                                 args.timeout, known)
+        vehicle = vehicle_info(desc)
         driver = Driver(client, vehicle, options)
         try:
             if script is not None:

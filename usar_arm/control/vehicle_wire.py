@@ -1,12 +1,12 @@
-"""What a ground vehicle says about itself over the wire, and its poses in REP-103.
+"""What the drive needs of a ground vehicle, and its poses in REP-103.
 
-``GETCONF {Type Robot}`` gives the maximum wheel spin (``MaxSpeed``, rad/s), ``GETGEO {Type
-Robot}`` the wheel radius and separation (m), and for an Ackermann vehicle the steer range
-(``MaxFrontSteer``, rad) and the wheel base (m); each sensor type's CONF and GEO give the range
-scanner's limits and mount. Nothing is taken from a table: a vehicle is driven with what its
-server reports. Poses on the wire are in the USARSim frame (x forward, y right, z down); the
-conversion to REP-103 (z up) is :func:`usar_arm.core.spatial.zdown_to_zup_transform`, the one
-the arm's discovery uses.
+The vehicle is learnt once, by :func:`usar_arm.discover.platform.learn_platform` (its CONF and
+GEO, each sensor's): :func:`vehicle_info` keeps what driving needs, the maximum wheel spin
+(rad/s), the wheel radius and separation (m), for an Ackermann vehicle the steer limit (rad) and
+wheel base (m), the localisation sensors' names and the range scanner. Nothing is taken from a
+table: a vehicle is driven with what its server reports. Poses on the wire are in the USARSim
+frame (x forward, y right, z down); the conversion to REP-103 (z up) is
+:func:`usar_arm.core.spatial.zdown_to_zup_transform`, the one the arm's discovery uses.
 """
 
 from __future__ import annotations
@@ -14,20 +14,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from usar_arm.core.errors import ResponseTimeoutError
-from usar_arm.core.platform import ACKERMANN_STEERED, SUPPORTED_STEERING
+from usar_arm.core.platform import ACKERMANN_STEERED, PlatformDescription
 from usar_arm.core.spatial import (
     Array,
     transform_from_xyz_rpy,
     zdown_to_zup_point,
     zdown_to_zup_transform,
 )
-from usar_arm.core.vehicle_errors import NotAVehicleError, UnsupportedSteeringError
 from usar_arm.usarsim import messages as m
-from usar_arm.usarsim.client import UsarClient
-
-SENSOR_TIMEOUT_S = 2.0
-"""Seconds to wait for a sensor type's CONF/GEO: UDK says nothing for a type the robot lacks."""
 
 
 @dataclass(frozen=True)
@@ -90,78 +84,29 @@ def planar(pose: Array) -> tuple[float, float, float]:
                                                             float(pose[0, 0]))
 
 
-def _number(fields: tuple[m.Block, ...], key: str) -> float | None:
-    for k, v in fields:
-        if k.lower() == key.lower():
-            try:
-                value = float(v)
-            except ValueError:
-                return None
-            return value if math.isfinite(value) and value > 0 else None
-    return None
+def vehicle_info(desc: PlatformDescription) -> VehicleInfo:
+    """What the drive needs of a learnt vehicle (:func:`usar_arm.discover.platform.
+    learn_platform`, the one reading of a vehicle's CONF and GEO): its wheels, its localisation
+    sensors' names (hidden ones included: their readings stream though their mount is unknown)
+    and its first range scanner."""
+    named = [(s.type, s.name) for s in desc.sensors]
+    named += [tuple(h.split(" ", 1)) for h in desc.hidden]  # type: ignore[misc]
 
+    def first(type_: str) -> str | None:
+        return next((name for t, name in named if t.lower() == type_.lower()), None)
 
-def _first_sensor(client: UsarClient, type_: str) -> tuple[m.ConfItem, m.GeoItem] | None:
-    try:
-        conf = client.get_conf(type_, timeout=SENSOR_TIMEOUT_S)
-        geo = client.get_geo(type_, timeout=SENSOR_TIMEOUT_S)
-    except ResponseTimeoutError:  # (and UnknownComponentError, its subclass)
-        return None
-    if not isinstance(conf, m.Conf) or not conf.items or not geo.items:
-        return None
-    return conf.items[0], geo.items[0]
-
-
-def _scanner(client: UsarClient) -> ScannerInfo | None:
-    found = _first_sensor(client, "RangeScanner")
-    if found is None:
-        return None
-    conf, geo = found
-    numbers = {k: _number(conf.fields, k) for k in ("MinRange", "MaxRange", "Resolution", "Fov")}
-    if any(v is None for v in numbers.values()):
-        return None
-    mount = pose_zup(geo.location or (0.0, 0.0, 0.0), geo.orientation or (0.0, 0.0, 0.0))
-    return ScannerInfo(conf.name, numbers["MinRange"] or 0.0, numbers["MaxRange"] or 0.0,
-                       numbers["Resolution"] or 0.0, numbers["Fov"] or 0.0, mount)
-
-
-def read_vehicle(client: UsarClient, robot: str, timeout: float | None = None) -> VehicleInfo:
-    """Ask a spawned vehicle for its CONF and GEO and its sensors' (each wait bounded).
-
-    Raises:
-        NotAVehicleError: the robot reports no wheel radius, separation or maximum speed.
-        ResponseTimeoutError: the robot's own CONF or GEO did not come within ``timeout``.
-    """
-    conf = client.get_conf("Robot", timeout=timeout)
-    platform_type = conf.type if isinstance(conf, m.PlatformConf) else "robot"
-    fields = conf.fields if isinstance(conf, m.PlatformConf) else ()
-    try:
-        geo = client.get_geo("Robot", timeout=SENSOR_TIMEOUT_S)
-        geo_fields = geo.items[0].extra if geo.items else ()
-    except ResponseTimeoutError:  # (and UnknownComponentError, its subclass)
-        geo_fields = ()
-    values = {"MaxSpeed": _number(fields, "MaxSpeed"),
-              "WheelRadius": _number(geo_fields, "WheelRadius"),
-              "WheelSeparation": _number(geo_fields, "WheelSeparation")}
-    steering = next((v for k, v in fields if k.lower() == "steeringtype"), "")
-    if steering == ACKERMANN_STEERED:
-        front = _number(fields, "MaxFrontSteer")  # (6.28: no front steer, section 10)
-        values |= {"WheelBase": _number(geo_fields, "WheelBase"),
-                   "MaxFrontSteer": front if front is not None and front < 6.28 else None}
-    missing = [k for k, v in values.items() if v is None]
-    if missing:
-        raise NotAVehicleError(robot, platform_type, missing)
-    if steering not in SUPPORTED_STEERING:
-        raise UnsupportedSteeringError(
-            f"{robot} reports {{SteeringType {steering or '(none given)'}}}: usar-arm drives only "
-            f"{' and '.join(SUPPORTED_STEERING)} ground vehicles")
-    names = {t: (found[0].name if (found := _first_sensor(client, t)) else None)
-             for t in ("GroundTruth", "Odometry", "INS")}
-    return VehicleInfo(conf.name if isinstance(conf, m.PlatformConf) else robot, steering,
-                       values["WheelRadius"] or 0.0, values["WheelSeparation"] or 0.0,
-                       values["MaxSpeed"] or 0.0, names["GroundTruth"], names["Odometry"],
-                       names["INS"], _scanner(client), values.get("WheelBase") or 0.0,
-                       (values.get("MaxFrontSteer") or 0.0) / 2)
+    scanners = [s for s in desc.sensors_of("RangeScanner") if s.scanner is not None]
+    scanner = None
+    if scanners:
+        s = scanners[0]
+        assert s.scanner is not None
+        scanner = ScannerInfo(s.name, s.scanner.min_range, s.scanner.max_range,
+                              s.scanner.resolution, s.scanner.fov,
+                              transform_from_xyz_rpy(s.xyz, s.rpy))
+    return VehicleInfo(desc.name, desc.steering_type, desc.wheel_radius, desc.wheel_separation,
+                       desc.max_speed, first("GroundTruth"), first("Odometry"), first("INS"),
+                       scanner, desc.wheel_base if desc.ackermann else 0.0,
+                       desc.max_front_steer)
 
 
 def planar_wire(location: m.Vector3, rpy: m.Vector3) -> tuple[float, float, float]:

@@ -10,7 +10,6 @@ every error of the tree, each carries its evidence as attributes.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 from usar_arm.core.errors import DescriptionError, InvalidInputError
 
@@ -47,22 +46,19 @@ class VehicleParameterError(InvalidInputError):
 
 
 class NotAVehicleError(InvalidInputError):
-    """The spawned robot is no ground vehicle the drive command can steer (its GETCONF/GETGEO
-    {Type Robot} lacks a wheel radius, a wheel separation or a maximum speed).
+    """The spawned robot is no ground vehicle (its CONF {Type Robot} says what it is instead):
+    it can be neither described as a platform nor driven.
 
     Attributes:
         robot: the class asked for. platform_type: what the robot's CONF says it is.
-        missing: the fields that were not there.
     """
 
-    def __init__(self, robot: str, platform_type: str, missing: Sequence[str]):
+    def __init__(self, robot: str, platform_type: str):
         self.robot = robot
         self.platform_type = platform_type
-        self.missing = tuple(missing)
-        super().__init__(f"{robot} is a {platform_type}, not a ground vehicle that can be "
-                         f"driven: its CONF/GEO {{Type Robot}} has no {', '.join(self.missing)} "
-                         "(USARBot.P3AT and USARBot.FrontAckerman have them; a rear-steered "
-                         "vehicle has no MaxFrontSteer below 6.28)")
+        super().__init__(f"{robot} is a {platform_type}, not a ground vehicle: describe an arm "
+                         "with usar-arm urdf; usar-arm drives ground vehicles such as "
+                         "USARBot.P3AT and USARBot.FrontAckerman")
 
 
 class OutsideWorldError(InvalidInputError):

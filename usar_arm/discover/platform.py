@@ -30,7 +30,7 @@ from usar_arm.core.platform import (
     Wheel,
 )
 from usar_arm.core.spatial import matrix_to_rpy, transform_from_xyz_rpy, zdown_to_zup_transform
-from usar_arm.core.vehicle_errors import UnsupportedSteeringError
+from usar_arm.core.vehicle_errors import NotAVehicleError, UnsupportedSteeringError
 from usar_arm.discover.interview import Ask, DiscoveryRecord, spawn_robot
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
@@ -116,12 +116,7 @@ def platform_from_replies(robot_class: str, conf: m.PlatformConf, geo: m.Geo,
         UnsupportedSteeringError: a steering type other than skid or Ackermann steering.
         DescriptionError: a missing or non-finite number, or no GEO for the robot.
     """
-    fields = dict((k.lower(), v) for k, v in conf.fields)
-    steering = fields.get("steeringtype", "(none given)")
-    if steering not in SUPPORTED_STEERING:
-        raise UnsupportedSteeringError(
-            f"{robot_class} reports {{SteeringType {steering}}}: usar-arm describes and drives "
-            f"only {' and '.join(SUPPORTED_STEERING)} ground vehicles")
+    steering = steering_type(conf, robot_class)
     front, rear = (_steer_limits(conf, robot_class) if steering == ACKERMANN_STEERED
                    else (0.0, 0.0))
     item = next((i for i in geo.items if i.name.lower() == conf.name.lower()),
@@ -163,6 +158,21 @@ def platform_from_replies(robot_class: str, conf: m.PlatformConf, geo: m.Geo,
                "the wheels are drawn 0.05 m wide"))
 
 
+def steering_type(conf: m.PlatformConf, robot_class: str) -> str:
+    """The CONF's SteeringType, one usar-arm describes and drives.
+
+    Raises:
+        UnsupportedSteeringError: any other (or none given), in one line naming both.
+    """
+    fields = dict((k.lower(), v) for k, v in conf.fields)
+    steering = fields.get("steeringtype", "(none given)")
+    if steering not in SUPPORTED_STEERING:
+        raise UnsupportedSteeringError(
+            f"{robot_class} reports {{SteeringType {steering}}}: usar-arm describes and drives "
+            f"only {' and '.join(SUPPORTED_STEERING)} ground vehicles")
+    return steering
+
+
 def _steer_limits(conf: m.PlatformConf, robot_class: str) -> tuple[float, float]:
     """The largest front and rear steer angles (rad) of an Ackermann vehicle: half the ranges
     its CONF MaxFrontSteer/MaxRearSteer reports (``AckermanSteeredVehicle.uc GetConfData``:
@@ -201,15 +211,16 @@ def learn_platform(client: UsarClient, robot_class: str, start: str | None = Non
     """Spawn ``robot_class`` and learn it as a ground vehicle.
 
     Raises:
-        DescriptionError: the robot is not a ground vehicle (its CONF Type says what it is).
+        NotAVehicleError: the robot is not a ground vehicle (its CONF Type says what it is).
+        DescriptionError: a number of the vehicle's CONF or GEO missing or not finite.
         UnsupportedSteeringError, UnknownRobotError, UnknownStartError, ConnectionLostError.
     """
     record, ask = spawn_robot(client, robot_class, None, start, timeout, known_classes)
     conf = ask(m.GetConf("Robot"), m.PlatformConf)
     assert isinstance(conf, m.PlatformConf)
     if conf.type != GROUND_VEHICLE:
-        raise DescriptionError(f"{record.robot_class} is a {conf.type}, not a "
-                               f"{GROUND_VEHICLE}: describe it as an arm")
+        raise NotAVehicleError(record.robot_class, conf.type)
+    steering_type(conf, record.robot_class)  # (refused before a sensor is asked about)
     geo = ask(m.GetGeo("Robot"), m.Geo)
     assert isinstance(geo, m.Geo)
     components = _sensor_names(client, timeout or client.timeout)

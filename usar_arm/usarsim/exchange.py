@@ -204,12 +204,14 @@ class Exchange:
                 bad = inbox.bad_since(count, lambda head: head not in STATUS_HEADS)
                 if bad is not None:
                     raise in_context(bad.error, f"the reply to `{what}` is not USARSim")
-                if self.closed_reason is not None:
-                    raise ConnectionLostError(f"waiting for the reply to `{what}`",
-                                              self.closed_reason)
-                try:
-                    rec = inbox.replies.get(timeout=max(0.0, remaining))
+                closed = self.closed_reason
+                try:  # (a reply that came before the close still answers: drain first)
+                    rec = (inbox.replies.get_nowait() if closed is not None
+                           else inbox.replies.get(timeout=max(0.0, remaining)))
                 except queue.Empty:
+                    if closed is not None:
+                        raise ConnectionLostError(f"waiting for the reply to `{what}`",
+                                                  closed) from None
                     raise self._no_reply(msg, what, limit, count, received) from None
                 if rec is None:
                     continue  # woken by a close or a bad line; re-checked above
