@@ -115,7 +115,8 @@ class Judge:
         self.reach = np.array([o.bounding_radius() for o in obstacles])
         n = len(cyl)
         self.rr = [(i, j) for i, j in itertools.combinations(range(n), 2)
-                   if (min(self.links[i], self.links[j]), max(self.links[i], self.links[j]))
+                   if self.links[i] != self.links[j]  # (a link's elements never collide)
+                   and (min(self.links[i], self.links[j]), max(self.links[i], self.links[j]))
                    not in robot.disabled]
         self.rs = [(i, k) for i in range(n) for k, o in enumerate(obstacles)
                    if self.links[i] not in o.allow]

@@ -68,5 +68,5 @@ def test_kr60_z_down_matches_the_nist_2012_urdf() -> None:
     assert np.allclose([j.origin.xyz for j in joints], origins, atol=1e-9)
     assert np.allclose([j.axis for j in joints], axes, atol=1e-9)
     assert all(j.origin.rpy == (0.0, 0.0, 0.0) for j in joints)
-    assert desc.chain.link("KR60Arm_link0").geometry is not None
+    assert desc.chain.link("KR60Arm_link0").elements
     assert desc.chain.frames["flange"] == "KR60Arm_tip"

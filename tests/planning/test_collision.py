@@ -129,19 +129,15 @@ def test_unknown_links_in_allow_are_rejected(kr60: Robot, tmp_path: Path) -> Non
     assert "link_9" in str(info.value) and "link_6" in str(info.value)
 
 
-@pytest.mark.xfail(strict=True, reason="known limitation (docs/limitations.md): one cylinder "
-                   "per link, trimmed short of its joints, leaves the joints bare; cylinders "
-                   "spanning their joints made self-collision near the joints too conservative "
-                   "(the Fanuc's calibration tour could not be planned); the fix is a second, "
-                   "thin core shape per link")
 @pytest.mark.parametrize("robot_name", ["kr60", "fanuc"])
 def test_a_thin_plate_through_any_joint_touches_the_arm(robot_name: str,
                                                         request: pytest.FixtureRequest) -> None:
-    """What the collision model should give and does not yet: a 5 mm plate (0.4 m square, any
-    orientation) centred on a joint's origin, or on the tip, collides with the arm, at random
-    configurations (a rail carriage's joint on the mount excepted: nothing passes between a
-    mount and the carriage standing on it). Today a 5 cm floor slab passes through the KR60's
-    elbow. The joints are placed by yourdfpy's forward kinematics of the URDF text."""
+    """No gap at the joints: a 5 mm plate (0.4 m square, any orientation) centred on a joint's
+    origin, or on the tip, collides with the arm, at random configurations (a rail carriage's
+    joint on the mount excepted: nothing passes between a mount and the carriage standing on
+    it). With one trimmed cylinder per link a 5 cm floor slab passed through the KR60's elbow;
+    each link's thin core spans its joints. The joints are placed by yourdfpy's forward
+    kinematics of the URDF text, the contacts are python-fcl's brute force."""
     import yourdfpy
 
     from usar_arm.planning.scene import Scene, SceneObject

@@ -25,6 +25,7 @@ from usar_arm.core.errors import (
     OutOfLimitsError,
     StartInCollisionError,
 )
+from usar_arm.core.shapes import CylinderShape
 from usar_arm.core.spatial import transform
 from usar_arm.planning.ompl_adapter import OmplOptions, edge_configurations
 from usar_arm.planning.robot import Robot
@@ -223,14 +224,14 @@ def test_a_goal_pose_that_is_no_rigid_transform_is_invalid_input(kr60: Robot,
 def _pin_grazing(robot: Robot, q: np.ndarray, link: str, depth: float) -> Scene:
     """A 5 mm sphere overlapping ``link``'s cylinder by ``depth`` m at ``q``, on the side of it
     that moves parallel to its surface when the first joint turns."""
-    geom = robot.chain.link(link).geometry
-    assert geom is not None
-    cyl = robot.chain.link_poses(q)[link] @ geom.origin.matrix()
+    body = max(robot.chain.link(link).elements, key=lambda e: e.shape.radius)  # not the core
+    assert isinstance(body.shape, CylinderShape)
+    cyl = robot.chain.link_poses(q)[link] @ body.origin.matrix()
     axis, centre = cyl[:3, 2], cyl[:3, 3]
     moving = np.cross([0.0, 0.0, 1.0], centre)
     normal = np.cross(axis, moving)
     normal *= np.sign(normal[2]) / np.linalg.norm(normal)
-    pin = centre + normal * (geom.radius + 0.005 - depth)
+    pin = centre + normal * (body.shape.radius + 0.005 - depth)
     return Scene("pin", (SceneObject("pin", Sphere(0.005), transform(pos=pin)),))
 
 
@@ -257,15 +258,17 @@ def _rims(robot: Robot, q: np.ndarray) -> np.ndarray:
     poses = robot.chain.link_poses(q)
     out = []
     for lk in robot.chain.links:
-        g = lk.geometry
-        if g is None:
-            continue
-        t = poses[lk.name] @ g.origin.matrix()
-        for z in (-g.length / 2, g.length / 2):
-            for ang in np.linspace(0, 2 * np.pi, 12, endpoint=False):
-                out.append(t[:3, :3] @ (g.radius * np.cos(ang), g.radius * np.sin(ang), z)
-                           + t[:3, 3])
+        for e in lk.elements:
+            assert isinstance(e.shape, CylinderShape)
+            out += _rim(poses[lk.name] @ e.origin.matrix(), e.shape)
     return np.array(out)
+
+
+def _rim(t: np.ndarray, g: CylinderShape) -> list[np.ndarray]:
+    """Points on both end circles of a cylinder at pose ``t``."""
+    return [t[:3, :3] @ (g.radius * np.cos(ang), g.radius * np.sin(ang), z) + t[:3, 3]
+            for z in (-g.length / 2, g.length / 2)
+            for ang in np.linspace(0, 2 * np.pi, 12, endpoint=False)]
 
 
 def test_lever_arms_bound_how_far_any_point_of_the_robot_moves(kr60: Robot,

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from usar_arm.cli.main import main
-from usar_arm.core.errors import DescriptionError, ValidationError
+from usar_arm.core.errors import ValidationError
 from usar_arm.core.platform import SEED_FRAMES
 from usar_arm.core.vehicle_errors import NotAVehicleError, UnsupportedSteeringError
 from usar_arm.description.embedded import embedded_simulator

@@ -86,7 +86,7 @@ class Cylinder:
     origin: Origin = Origin()
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class Collision:
     """One collision element of a link: a shape at ``origin`` in the link's frame (m).
 

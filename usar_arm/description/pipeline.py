@@ -134,7 +134,7 @@ def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Descripti
     kinematics = KinematicModel(urdf, chain.joint_names)
     body_links = [naming.base if naming.legacy else naming.base_link]
     body_links += [naming.link(k + 1) for k in range(arm.dof)]
-    for name in (n for n in body_links if chain.link(n).geometry is None):
+    for name in (n for n in body_links if not chain.link(n).elements):
         warnings.append(f"link {name} has no collision geometry (it is too short for a cylinder), "
                         "so collision checks cannot see it")
         log.warning("%s", warnings[-1])

@@ -1,4 +1,9 @@
-"""Build the KinematicChain of a learnt arm: REP-199 frames, joints, limits, one cylinder per link.
+"""Build the KinematicChain of a learnt arm: REP-199 frames, joints, limits, two cylinders per link.
+
+Each link with length gets a *body* cylinder, as thick as the link is long allows and trimmed
+short of both joints so that neighbours do not touch across a joint housing, and a thin *core*
+cylinder along the whole joint-to-joint segment, so that no obstacle passes between two links
+through a joint (the body cylinders alone left the joints bare).
 
 Link frames follow the 2012 generator's default "global axes" mode and ROS-Industrial practice:
 every link frame is parallel to the actuator base frame at the zero pose (joint origins have
@@ -12,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from usar_arm.core.model import (
+    Collision,
     Cylinder,
     Joint,
     JointLimits,
@@ -20,6 +26,7 @@ from usar_arm.core.model import (
     Link,
     Origin,
 )
+from usar_arm.core.shapes import CylinderShape
 from usar_arm.core.spatial import Array, matrix_to_rpy, transform
 from usar_arm.discover.frames import ArmFrames
 from usar_arm.discover.limits import MotionLimits
@@ -34,6 +41,9 @@ RADIUS_RANGE = (0.03, 0.10)
 """...clamped to this range (m)."""
 MIN_CYLINDER_LENGTH = 0.01
 """Links shorter than this (m, after trimming) get no geometry."""
+CORE_RADIUS = 0.01
+"""The core cylinder's radius (m): thin enough that links two apart, beside a short link
+between them, do not touch where their bodies do not."""
 
 
 def _vec(a: Array) -> tuple[float, float, float]:
@@ -55,15 +65,47 @@ def link_cylinder(start: Array, end: Array, frame: Array | None = None) -> Cylin
         trimmed = length * 0.6
     if trimmed < MIN_CYLINDER_LENGTH:
         return None
+    return Cylinder(radius, trimmed, _along(np.asarray(start, dtype=float), d, length, frame))
+
+
+def _along(start: Array, d: Array, length: float, frame: Array | None) -> Origin:
+    """The pose of a cylinder centred on the segment start -> start + d, its z along it."""
     z = d / length
     ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     x = np.cross(ref, z)
     x /= np.linalg.norm(x)
     rot = np.column_stack([x, np.cross(z, x), z])
-    pose = transform(rot, np.asarray(start, dtype=float) + d / 2)
+    pose = transform(rot, start + d / 2)
     if frame is not None:
         pose = frame @ pose
-    return Cylinder(radius, trimmed, Origin(_vec(pose[:3, 3]), matrix_to_rpy(pose[:3, :3])))
+    return Origin(_vec(pose[:3, 3]), matrix_to_rpy(pose[:3, :3]))
+
+
+def link_core(start: Array, end: Array, frame: Array | None = None,
+              on_mount: bool = False) -> Cylinder | None:
+    """The thin core along the whole segment start -> end (m, link frame): it reaches both
+    joints, so the links' shapes meet at every joint. ``on_mount``: ``start`` is the robot's
+    foot (base_link's origin, on whatever it stands on), where there is no joint to close:
+    the core starts where the body cylinder does, so that a floor under the robot is not a
+    contact. None for a segment shorter than :data:`MIN_CYLINDER_LENGTH`."""
+    d = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
+    length = float(np.linalg.norm(d))
+    if length < MIN_CYLINDER_LENGTH:
+        return None
+    begin = np.asarray(start, dtype=float)
+    if on_mount:
+        body = link_cylinder(start, end)
+        cut = (length - body.length) / 2 if body is not None else 0.0
+        begin, d, length = begin + d / length * cut, d * (1 - cut / length), length - cut
+    return Cylinder(CORE_RADIUS, length, _along(begin, d, length, frame))
+
+
+def link_collisions(start: Array, end: Array, frame: Array | None = None,
+                    on_mount: bool = False) -> tuple[Collision, ...]:
+    """A link's collision elements: its body cylinder and its core (either may be absent)."""
+    shapes = (link_cylinder(start, end, frame), link_core(start, end, frame, on_mount))
+    return tuple(Collision(CylinderShape(c.radius, c.length), c.origin)
+                 for c in shapes if c is not None)
 
 
 def flange_rotation(direction: Array) -> Array:
@@ -89,25 +131,27 @@ def build_chain(arm: WireArm, frames: ArmFrames, limits: Sequence[MotionLimits],
     mount = frames.mount
     links: list[Link] = []
     joints: list[Joint] = []
-    base_geometry = link_cylinder(np.zeros(3), p[0])
+    base_shapes = link_collisions(np.zeros(3), p[0], on_mount=True)
     if naming.legacy:
         links.append(Link(naming.base_link))
-        links.append(Link(naming.base, base_geometry, BASE_GREY, "base_grey"))
+        links.append(Link(naming.base, None, BASE_GREY, "base_grey", base_shapes))
         joints.append(Joint(naming.mount_joint(), JointType.FIXED, naming.base_link, naming.base,
                             Origin(_vec(mount[:3, 3]), matrix_to_rpy(mount[:3, :3]))))
         first_parent, first_origin = naming.base, transform(pos=p[0])
     else:
-        base_geometry = link_cylinder(np.zeros(3), p[0], frame=mount)
-        links.append(Link(naming.base_link, base_geometry, BASE_GREY, "base_grey"))
+        base_shapes = link_collisions(np.zeros(3), p[0], frame=mount, on_mount=True)
+        links.append(Link(naming.base_link, None, BASE_GREY, "base_grey", base_shapes))
         links.append(Link(naming.base))
         joints.append(Joint(naming.mount_joint(), JointType.FIXED, naming.base_link, naming.base,
                             Origin(_vec(mount[:3, 3]), matrix_to_rpy(mount[:3, :3]))))
         first_parent, first_origin = naming.base_link, mount @ transform(pos=p[0])
+    # joint 1 at base_link's origin (a rail carriage on its mount): link 1 stands on the floor
+    foot = bool(np.linalg.norm((mount @ transform(pos=p[0]))[:3, 3]) < 1e-9)
     for k in range(n):
         wj = arm.joints[k]
         end = p[k + 1] if k + 1 < n else frames.tip
-        geometry = link_cylinder(np.zeros(3), end - p[k])
-        links.append(Link(naming.link(k + 1), geometry, KUKA_ORANGE, "kuka_orange"))
+        shapes = link_collisions(np.zeros(3), end - p[k], on_mount=k == 0 and foot)
+        links.append(Link(naming.link(k + 1), None, KUKA_ORANGE, "kuka_orange", shapes))
         if k == 0:
             origin = Origin(_vec(first_origin[:3, 3]), matrix_to_rpy(first_origin[:3, :3]))
             parent = first_parent

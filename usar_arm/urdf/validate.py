@@ -22,6 +22,7 @@ import numpy as np
 
 from usar_arm.core.errors import ValidationError
 from usar_arm.core.model import KinematicChain
+from usar_arm.core.shapes import CylinderShape
 
 REQUIRED_FRAMES = ("base_link", "base", "flange", "tool0")
 
@@ -72,13 +73,14 @@ def semantic_problems(chain: KinematicChain) -> list[str]:
             problems.append(f"REP-199 frame '{role}' is missing")
         elif role == "base" and frame == first:
             continue  # the 2012 tree: the actuator base is a body carrying joint 1
-        elif role != "base_link" and chain.link(frame).geometry is not None:
+        elif role != "base_link" and chain.link(frame).elements:
             problems.append(f"REP-199 frame '{role}' ({frame}) must not carry geometry")
     for lk in chain.links:
-        if lk.geometry is not None:
-            if lk.material is None or lk.color is None:
-                problems.append(f"link {lk.name}: visible geometry needs a <material>")
-            if not (lk.geometry.radius > 0 and lk.geometry.length > 0):
+        if lk.elements and (lk.material is None or lk.color is None):
+            problems.append(f"link {lk.name}: visible geometry needs a <material>")
+        for e in lk.elements:
+            if isinstance(e.shape, CylinderShape) and not (e.shape.radius > 0
+                                                           and e.shape.length > 0):
                 problems.append(f"link {lk.name}: cylinder radius and length must be > 0")
     return problems
 

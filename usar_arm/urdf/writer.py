@@ -10,6 +10,7 @@ from collections.abc import Iterable, Sequence
 from xml.sax.saxutils import escape, quoteattr
 
 from usar_arm.core.model import Cylinder, Joint, JointType, KinematicChain, Link, Origin
+from usar_arm.core.shapes import CylinderShape
 
 
 def num(value: float) -> str:
@@ -29,21 +30,26 @@ def _origin(o: Origin) -> str:
     return f'<origin xyz="{nums(o.xyz)}" rpy="{nums(o.rpy)}"/>'
 
 
-def _geometry(c: Cylinder) -> str:
+def _geometry(c: Cylinder | CylinderShape) -> str:
     return f'<geometry><cylinder radius="{num(c.radius)}" length="{num(c.length)}"/></geometry>'
 
 
 def _link(link: Link) -> list[str]:
-    if link.geometry is None:
+    """A link: each collision element also drawn as a visual (what is seen is what collides)."""
+    elements = link.elements
+    if not elements:
         return [f"  <link name={quoteattr(link.name)}/>"]
-    g = link.geometry
     material = f"<material name={quoteattr(link.material)}/>" if link.material else ""
-    return [
-        f"  <link name={quoteattr(link.name)}>",
-        f"    <visual>{_origin(g.origin)}{_geometry(g)}{material}</visual>",
-        f"    <collision>{_origin(g.origin)}{_geometry(g)}</collision>",
-        "  </link>",
-    ]
+    lines = [f"  <link name={quoteattr(link.name)}>"]
+    for e in elements:
+        if not isinstance(e.shape, CylinderShape):
+            raise TypeError(f"link {link.name}: the writer writes cylinders (a learnt arm's "
+                            f"shapes), not {type(e.shape).__name__}")
+        lines.append(f"    <visual>{_origin(e.origin)}{_geometry(e.shape)}{material}</visual>")
+    lines += [f"    <collision>{_origin(e.origin)}{_geometry(e.shape)}</collision>"
+              for e in elements if isinstance(e.shape, CylinderShape)]
+    lines.append("  </link>")
+    return lines
 
 
 def _joint(j: Joint) -> list[str]:
