@@ -10,7 +10,8 @@ kinematics by Pinocchio from the URDF text. Every collision element of a link is
 object; a pair of links is checked unless the SRDF disables it or they are parts of one rigid
 body (links joined by fixed joints only, e.g. the UR5's ``ee_link`` box on ``wrist_3_link``,
 which always touch and which example-robot-data's ``ur5.srdf`` does not list); every link
-against every obstacle, through python-fcl's dynamic AABB tree broad phase (exact narrow phase behind it).
+against every obstacle, through python-fcl's dynamic AABB tree broad phase (exact narrow phase
+behind it).
 """
 
 from __future__ import annotations
