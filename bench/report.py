@@ -350,8 +350,8 @@ def robots_section(doc: dict[str, Any]) -> list[str]:
                 rows.append([task, name, f"{s.get('verified')}/{s.get('problems')} "
                              f"({fmt_pct(s.get('success_rate'))})", fmt_s(s.get("median_s")),
                              "-" if ratio is None else f"{ratio:.3g}", "; ".join(extra)])
-        out += table(["task", "solver", "verified", "median", "usar-arm / peer", "notes"],
-                     rows) + [""]
+        out += [*table(["task", "solver", "verified", "median", "usar-arm / peer", "notes"],
+                       rows), ""]
     out += ["Targets:", "", *table(["target", "measured", "threshold", "pass"], [
         [t["target"], fmt_measured(t), fmt_threshold(t), "yes" if t["pass"] else "**no**"]
         for t in doc.get("targets", [])]), ""]

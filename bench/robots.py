@@ -10,7 +10,9 @@ that reads the URDF, the meshes, the SRDF and the scene YAML itself (``mesh_judg
 * collision: uniformly random in-limit configurations in the scenes of the first valid problem
   of each set; usar-arm's ``CollisionWorld.in_collision`` beside roboplan and mplib; an answer
   is verified when it equals the judge's; missed (false negative) and invented (false
-  positive) contacts counted.
+  positive) contacts counted. Plus, for exactness, pairs of configurations straddling the
+  first contact on the straight line of the blocked problems (:data:`BOUNDARY_STEP` apart,
+  the judge's bisection): ``boundary_missed`` / ``boundary_invented``.
 * IK: a reachable pose of the tip (the judge's FK of a random self-collision-free
   configuration), a seed near that configuration; usar-arm's ``IKSolver.solve`` (the method it
   chose, closed form or numeric, is recorded) beside TRAC-IK (pytracik), roboplan and mplib;
@@ -52,18 +54,24 @@ PLAN_TIME_LIMIT_S = 2.0
 SEED_SPREAD = 0.3
 """rad: an IK seed is the pose's configuration plus U(-SPREAD, SPREAD) per joint (clipped)."""
 SIZES = {"quick": {"collision_scenes": 3, "collision_per_scene": 30, "ik": 100,
-                   "plan_per_set": 1, "per_set_scanned": 6},
+                   "plan_per_set": 1, "per_set_scanned": 6, "boundary_problems": 4},
          "full": {"collision_scenes": 7, "collision_per_scene": 150, "ik": 1000,
-                  "plan_per_set": 4, "per_set_scanned": 30}}
+                  "plan_per_set": 4, "per_set_scanned": 30, "boundary_problems": 28}}
+BOUNDARY_STEP = 1e-4
+"""rad: the largest joint change between the two configurations straddling a contact (the
+collision task's "boundary" configurations: a robot point moves ~0.1 mm or less between them,
+so a checker with a margin, a convex hull or a coarse mesh answers one of them wrong)."""
 COLLISION_CHECKED = ("usar-arm", "mplib", "roboplan")
 """IK solvers whose answers claim to be free of self-collision (ours: solved with the
 self-collision world, as mplib and roboplan check theirs)."""
 
-TESSERACT_SKIP = (
-    "not run: the tesseract runner loads the config folder usar-arm's tesseract_config writes, "
-    "and tesseract_config refuses these SRDFs (ValidationError: 'the SRDF has no <robot> "
-    "element with a 'manipulator' group'; the UR5's SRDF has no group, the Panda's is 'arm'); "
-    "ts_scene also hangs obstacles from base_link, which the Panda (root panda_link0) lacks")
+TESSERACT_GROUP = "manipulator"
+"""The group the Tesseract config folder is written for: usar-arm's tesseract_config requires an
+SRDF group of that name (the UR5's SRDF has no group, the Panda's is "arm"), so the SRDF text
+handed to it gains ``<group name="manipulator"><chain base_link tip_link/></group>``, and
+loses the groups made of other groups (and their states: the Panda's ``arm_and_hand``), which
+Tesseract's SRDF parser refuses ("Group: 'arm_and_hand' is empty or multiple types were
+provided"); its disabled pairs are the same."""
 
 VAMP_PUBLISHED = {
     "status": "published, not measured here (VAMP does not build on this machine)",
@@ -244,7 +252,16 @@ def _problem_files(ctx: Context, rf: data.RobotFiles, robot: mj.MeshRobot
         for q in rng.uniform(robot.lower, robot.upper,
                              (size["collision_per_scene"], len(rf.joints))):
             problems.append({"id": len(problems), "scene": n, "q": q.tolist()})
-    collision = {**head, "scenes": {n: data.scene_json(scene_texts[n]) for n in scenes},
+    # contact boundaries: on the straight line of each chosen blocked problem, the first
+    # contact bisected to BOUNDARY_TOL; one configuration just before it (free) and one just
+    # after (in contact), BOUNDARY_STEP apart along the line
+    for n in chosen[:size["boundary_problems"]]:
+        judge = mj.MeshJudge(robot, mj.obstacles_from_scene_yaml(scene_texts[n]))
+        for q in _boundary(judge, np.array(verdicts[n]["start"]), np.array(verdicts[n]["goal"])):
+            problems.append({"id": len(problems), "scene": n, "q": q.tolist(),
+                             "kind": "boundary"})
+    collision = {**head, "scenes": {n: data.scene_json(scene_texts[n])
+                                    for n in sorted({p["scene"] for p in problems})},
                  "problems": problems}
     # IK: reachable poses from self-collision-free configurations
     empty = mj.MeshJudge(robot, [])
@@ -269,6 +286,25 @@ def _problem_files(ctx: Context, rf: data.RobotFiles, robot: mj.MeshRobot
     return {"collision": collision, "ik": ik, "plan": plan}, scene_texts, counts
 
 
+def _boundary(judge: mj.MeshJudge, a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
+    """Two configurations on the segment a-b straddling its first contact: the last free one
+    and the first in contact, at most :data:`BOUNDARY_STEP` (rad, largest joint change) apart
+    (found by the judge: densified walk, then bisection)."""
+    dense = mj.densify(np.array([a, b]), mj.PATH_STEP)
+    hits = judge.colliding(dense, stop_at_first=True)
+    k = int(np.argmax(hits))
+    if not hits[k] or k == 0:
+        return []
+    lo, hi = dense[k - 1], dense[k]
+    while float(np.max(np.abs(hi - lo))) > BOUNDARY_STEP:
+        mid = (lo + hi) / 2
+        if judge.collides(mid):
+            hi = mid
+        else:
+            lo = mid
+    return [lo, hi]
+
+
 def _quat_wxyz(r: np.ndarray) -> list[float]:
     import pinocchio as pin
 
@@ -287,7 +323,9 @@ def _solvers(ctx: Context, task: str) -> list[common.Solver]:
     if task == "collision":
         return [ours, ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)"),
                 ctx.peer("mplib", "collision", "set_qpos + is_state_colliding (FCL)"),
-                common.Solver("tesseract", "peer", (), TESSERACT_SKIP)]
+                ctx.peer("tesseract", "collision", "setState + contactTest (Bullet, the "
+                         "config's default manager, margin 0); config folder written by "
+                         "usar-arm's tesseract_config")]
     if task == "ik":
         return [ours, ctx.peer("pytracik", "ik", "no collision check; TRAC-IK Speed, 5 ms"),
                 ctx.peer("roboplan", "ik", "collision-checked; SimpleIk"),
@@ -323,6 +361,7 @@ def run(ctx: Context) -> dict[str, Any]:
                                  mj.MeshJudge(robot, mj.obstacles_from_scene_yaml(texts[scene])))
             return judges[scene]
 
+        specs["collision"] = _with_tesseract(specs["collision"], rf, ctx.work)
         for task in ("collision", "ik", "plan"):
             spec = specs[task]
             label = f"robots_{key}_{task}"
@@ -348,6 +387,32 @@ def run(ctx: Context) -> dict[str, Any]:
     return doc
 
 
+def _with_tesseract(spec: dict[str, Any], rf: data.RobotFiles, work: Path) -> dict[str, Any]:
+    """``spec`` plus the Tesseract config folder usar-arm's tesseract_config writes for the
+    robot (see :data:`TESSERACT_GROUP`), as bench/tesseract_config.py does for the KR60."""
+    import xml.etree.ElementTree as ET
+
+    from usar_arm.core.fileio import write_tree_atomic
+    from usar_arm.urdf.tesseract import tesseract_config
+
+    robot = _robot(spec)
+    root = ET.fromstring(Path(spec["srdf"]).read_text(encoding="utf-8"))
+    nested = {g.get("name") for g in root.findall("group")
+              if len(g) and all(c.tag == "group" for c in g)}
+    for el in list(root):
+        if (el.tag == "group" and el.get("name") in nested) or (
+                el.tag == "group_state" and el.get("group") in nested):
+            root.remove(el)
+    ET.SubElement(ET.SubElement(root, "group", name=TESSERACT_GROUP), "chain",
+                  base_link=rf.base, tip_link=rf.tip)
+    srdf = ET.tostring(root, encoding="unicode")
+    folder = work / "tesseract" / f"{robot.chain.name.lower()}_tesseract"
+    config = tesseract_config(robot.chain, robot.urdf, srdf, folder.name,
+                              robot.states.get("home"))
+    write_tree_atomic(folder, config.files)
+    return {**spec, "tesseract": str(folder), "tesseract_group": TESSERACT_GROUP}
+
+
 def _case(task: str, path: Path, spec: dict[str, Any], outcomes: dict[str, common.Outcome],
           judge_of: Any, robot: mj.MeshRobot, rf: data.RobotFiles) -> dict[str, Any]:
     if task == "collision":
@@ -357,13 +422,19 @@ def _case(task: str, path: Path, spec: dict[str, Any], outcomes: dict[str, commo
         def check(p: dict[str, Any], r: dict[str, Any]) -> dict[str, Any]:
             answer = r.get("collision") if r.get("success") else None
             return {"verified": answer is not None and answer == truth[p["id"]],
-                    "collision": answer, "truth": truth[p["id"]]}
+                    "collision": answer, "truth": truth[p["id"]],
+                    "kind": p.get("kind", "uniform")}
 
         def extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
             pairs = list(zip(raw["collision"], raw["truth"], strict=True))
+            edge = [(a, t) for (a, t), k in zip(pairs, raw["kind"], strict=True)
+                    if k == "boundary"]
             return {"missed_contacts": sum(1 for a, t in pairs if a is False and t),
                     "invented_contacts": sum(1 for a, t in pairs if a is True and not t),
-                    "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None}
+                    "colliding_fraction": float(np.mean(raw["truth"])) if pairs else None,
+                    "boundary_configurations": len(edge),
+                    "boundary_missed": sum(1 for a, t in edge if a is False and t),
+                    "boundary_invented": sum(1 for a, t in edge if a is True and not t)}
 
         return common.build_case(path, spec, outcomes, check, extra)
     if task == "ik":
@@ -428,9 +499,9 @@ def _robot_summary(key: str, cases: dict[str, Any]) -> dict[str, Any]:
                    "median_s": (sm.get("time_all_s") or {}).get("median"),
                    "median_verified_s": (sm.get("time_verified_s") or {}).get("median")}
             if task == "collision":
-                row.update(missed_contacts=sm.get("missed_contacts"),
-                           invented_contacts=sm.get("invented_contacts"),
-                           colliding_fraction=sm.get("colliding_fraction"))
+                row.update({k: sm.get(k) for k in (
+                    "missed_contacts", "invented_contacts", "colliding_fraction",
+                    "boundary_configurations", "boundary_missed", "boundary_invented")})
             if task == "ik" and name == "usar-arm":
                 row["method"] = (s.get("settings") or {}).get("method")
             per[name] = row

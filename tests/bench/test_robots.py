@@ -172,6 +172,7 @@ def test_the_stage_json_has_the_keys_and_booleans() -> None:
         col = r["collision"]["solvers"]["usar-arm"]
         assert isinstance(col["missed_contacts"], int)
         assert isinstance(col["invented_contacts"], int)
+        assert col["boundary_configurations"] > 0 and isinstance(col["boundary_missed"], int)
         assert "roboplan" in r["plan"]["median_ratio_usar_to_peer"]
     assert doc["targets"] and all(isinstance(t["pass"], bool) for t in doc["targets"])
     names = " ".join(t["target"] for t in doc["targets"])
