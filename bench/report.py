@@ -320,6 +320,53 @@ def _platform_lines(r: dict[str, Any]) -> list[str]:
             ""]
 
 
+def robots_section(doc: dict[str, Any]) -> list[str]:
+    """``robots.json``: the UR5 and the Panda of example-robot-data on MotionBenchMaker's
+    problems, usar-arm beside its peers, and VAMP's published figures (not measured here)."""
+    out = [f"{doc.get('mode')} mode, generated {doc.get('generated')}, "
+           f"{doc.get('wall_seconds', 0) / 60:.1f} min; "
+           + doc.get("settings", {}).get("machine_note", ""), ""]
+    for key, r in doc.get("robots", {}).items():
+        scan = doc.get("problem_scan", {}).get(key, {}).get("mbm_scan", {})
+        blocked = sum(v["blocked"] for v in scan.values())
+        scanned = sum(v["scanned"] for v in scan.values())
+        out += [f"### {key}", "", f"MBM problems scanned by the judge: {scanned}, of which "
+                f"{blocked} have free ends and a blocked straight line (planning uses the "
+                "first of those per set).", ""]
+        rows = []
+        for task in ("collision", "ik", "plan"):
+            ratios = r[task].get("median_ratio_usar_to_peer", {})
+            for name, s in r[task]["solvers"].items():
+                if "skipped" in s:
+                    rows.append([task, name, "skipped", "-", "-", s["skipped"]])
+                    continue
+                extra = []
+                if task == "collision":
+                    extra.append(f"missed {s.get('missed_contacts')}, invented "
+                                 f"{s.get('invented_contacts')}")
+                if s.get("method"):
+                    extra.append(f"method {s['method']}")
+                ratio = ratios.get(name)
+                rows.append([task, name, f"{s.get('verified')}/{s.get('problems')} "
+                             f"({fmt_pct(s.get('success_rate'))})", fmt_s(s.get("median_s")),
+                             "-" if ratio is None else f"{ratio:.3g}", "; ".join(extra)])
+        out += [*table(["task", "solver", "verified", "median", "usar-arm / peer", "notes"],
+                       rows), ""]
+    out += ["Targets:", "", *table(["target", "measured", "threshold", "pass"], [
+        [t["target"], fmt_measured(t), fmt_threshold(t), "yes" if t["pass"] else "**no**"]
+        for t in doc.get("targets", [])]), ""]
+    v = doc.get("vamp_published", {})
+    if v:
+        out += [f"VAMP ({v.get('status')}; {v.get('machine')}; {v.get('source')}; "
+                f"{v.get('collision_model')}):", "",
+                *table(["robot", "planning median (us)", "total median (us)",
+                        "solved / valid / total"],
+                       [[k, str(v[k]["planning_us"]["median"]), str(v[k]["total_us"]["median"]),
+                         " / ".join(str(n) for n in v[k]["solved_valid_total"])]
+                        for k in ("ur5", "panda") if k in v]), ""]
+    return out
+
+
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
@@ -390,6 +437,9 @@ def generate(folder: Path, total_seconds: float | None = None) -> Path:
                   *([f"From a later run of this stage alone ({doc.get('generated')}, "
                      f"{doc.get('mode')} mode), not from the run above.", ""] if alone else []),
                   *SECTIONS[stage](doc)]
+    if (folder / "robots.json").is_file():  # kept out of SECTIONS: summary.md leaves it out
+        lines += ["## Mesh robots: UR5 and Panda (example-robot-data) on MotionBenchMaker", "",
+                  *robots_section(common.read_json(folder / "robots.json"))]
     path = folder / "README.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     (folder / "summary.md").write_text("\n".join(summary_lines(docs, run)) + "\n",

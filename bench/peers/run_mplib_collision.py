@@ -4,6 +4,10 @@ Planner(urdf, move_group=tip_link, srdf=srdf) (SRDF pairs disabled); scene obsta
 plan runner (mp_scene.py). Timed per configuration: planner.robot.set_qpos(q, True) (forward
 kinematics, collision-object poses) + planner.planning_world.is_state_colliding() (self and
 environment; FCL). Result per problem: "collision" (bool).
+
+A problem file's "urdf_mplib" (the robots stage), when present, is read instead of "urdf": the
+same URDF text with mesh paths relative to its folder (mplib joins every mesh path to the
+URDF's folder, an absolute one included).
 """
 
 import mp_scene
@@ -14,7 +18,9 @@ from mplib import Planner
 spec, out = peerio.args()
 names = spec["joint_names"]
 planner = Planner(
-    urdf=spec["urdf"], move_group=spec.get("tip_link", "tool0"), srdf=spec.get("srdf")
+    urdf=spec.get("urdf_mplib") or spec["urdf"],
+    move_group=spec.get("tip_link", "tool0"),
+    srdf=spec.get("srdf"),
 )
 idx = planner.move_group_joint_indices
 mp_names = [planner.user_joint_names[i] for i in idx]

@@ -8,6 +8,10 @@ for joint limits and collisions; mplib's threshold is ||dp|| + ||dq_quat|| and a
 difference norm is ~angle/2. mplib has no timeout. "all_q": the distinct solutions found;
 "q": the one nearest the seed (picked after the timed call). RNG: mplib.set_global_seed(1)
 (0 is refused).
+
+A problem file's "urdf_mplib" (the robots stage), when present, is read instead of "urdf": the
+same URDF text with mesh paths relative to its folder (mplib joins every mesh path to the
+URDF's folder, an absolute one included).
 """
 
 import mplib
@@ -19,7 +23,7 @@ spec, out = peerio.args()
 tol = spec["tolerance"]
 threshold = tol["position_m"] + tol["orientation_rad"] / 2
 kw = {"srdf": spec["srdf"]} if spec.get("srdf") else {}
-planner = Planner(urdf=spec["urdf"], move_group=spec["tip_link"], **kw)
+planner = Planner(urdf=spec.get("urdf_mplib") or spec["urdf"], move_group=spec["tip_link"], **kw)
 mplib.set_global_seed(1)
 idx = planner.move_group_joint_indices
 mp_names = [planner.user_joint_names[i] for i in idx]

@@ -11,6 +11,10 @@ TOPP-RA (planner.TOPP); this runner makes those two calls itself, as plan_qpos d
 clipped to the limits, range=0.1, simplify=True; time = time_limit_s), so that "seconds" is
 planning + simplification alone; "topp_seconds" and "duration_s" come from the following
 planner.TOPP(path, step=0.01). RNG: mplib.set_global_seed(problem seed) before each problem.
+
+A problem file's "urdf_mplib" (the robots stage), when present, is read instead of "urdf": the
+same URDF text with mesh paths relative to its folder (mplib joins every mesh path to the
+URDF's folder, an absolute one included).
 """
 
 import mp_scene
@@ -27,7 +31,10 @@ limits = {
     if v is not None
 }
 planner = Planner(
-    urdf=spec["urdf"], move_group=spec.get("tip_link", "tool0"), srdf=spec.get("srdf"), **limits
+    urdf=spec.get("urdf_mplib") or spec["urdf"],
+    move_group=spec.get("tip_link", "tool0"),
+    srdf=spec.get("srdf"),
+    **limits,
 )
 idx = planner.move_group_joint_indices
 mp_names = [planner.user_joint_names[i] for i in idx]

@@ -7,6 +7,8 @@ rotation matrix back to a quaternion with an eigen-decomposition; the problem al
 the quaternion).
 """
 
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import peerio
 import pytracik
@@ -26,6 +28,20 @@ chain = [
 if solver.dof != len(chain):
     raise SystemExit(f"TRAC-IK chain has {solver.dof} joints, URDF chain {chain}")
 names = spec["joint_names"]
+# pytracik 0.0.3 reads a joint with a <safety_controller> (example-robot-data's Panda) as
+# limited to [0, 0] (or [0, upper]), so every pose failed: such limits are set back to the
+# URDF's <limit> values; solvers that read the limits right are left as they are.
+_limit = {
+    j.get("name"): j.find("limit")
+    for j in ET.parse(spec["urdf"]).getroot().findall("joint")
+    if j.find("limit") is not None
+}
+urdf_limits = np.array(
+    [[float(_limit[n].get("lower")) for n in chain], [float(_limit[n].get("upper")) for n in chain]]
+)
+limits_reset = bool(np.abs(np.array(solver.joint_limits) - urdf_limits).max() > 1e-4)
+if limits_reset:
+    solver.joint_limits = (list(urdf_limits[0]), list(urdf_limits[1]))
 
 
 def solve(p):
@@ -43,5 +59,6 @@ peerio.write(
     dist="pytracik",
     stage="ik",
     results=peerio.solve_all(spec["problems"], solve),
-    settings={"solver_type": "Speed", "timeout_s": spec["timeout_s"], "epsilon": eps},
+    settings={"solver_type": "Speed", "timeout_s": spec["timeout_s"], "epsilon": eps,
+              "joint_limits_reset_from_urdf": limits_reset},
 )

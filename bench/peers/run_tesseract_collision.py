@@ -7,7 +7,8 @@ Environment from the problem's "tesseract" folder (ts_scene.load), obstacles per
 Timed per configuration: state_solver.setState(names, q) + getState() +
 manager.setCollisionObjectsTransform(link_transforms) + contactTest(ContactTestType_FIRST).
 Result per problem: "collision" (bool), and (untimed) "tool0": the 4x4 pose of tool0 by the
-kinematic group's calcFwdKin, for the FK agreement with the judge.
+kinematic group's calcFwdKin, for the FK agreement with the judge. A problem's
+"tesseract_group" (the robots stage) names the group when its "group" is not the config's.
 """
 
 import numpy as np
@@ -19,7 +20,7 @@ from tesseract_robotics import tesseract_common as common
 spec, out = peerio.args()
 names = spec["joint_names"]
 env, group_names = ts_scene.load(spec)
-group = env.getKinematicGroup(spec.get("group", "manipulator"))
+group = env.getKinematicGroup(spec.get("tesseract_group") or spec.get("group", "manipulator"))
 tip = spec.get("tip_link", "tool0")
 checker = {}
 
@@ -33,7 +34,9 @@ def refresh(_name):
                    name=str(manager.getName()))
 
 
-obstacles = ts_scene.Obstacles(env, spec["scenes"], on_change=refresh)
+obstacles = ts_scene.Obstacles(
+    env, spec["scenes"], on_change=refresh, parent=spec.get("base_link", "base_link")
+)
 
 
 def collides(q):

@@ -2,7 +2,7 @@
 
 The robot comes from the Tesseract config folder ``usar-arm tesseract-config`` wrote (the
 problem's "tesseract" key: URDF, SRDF with its kinematics and contact manager plugin configs);
-obstacles from the problem's scenes are added as links fixed to base_link
+obstacles from the problem's scenes are added as links fixed to base_link (or ``parent``)
 (``AddLinkCommand``), meshes read by Tesseract itself (``createMeshFromPath``), ``allow`` pairs
 put into the allowed collision matrix; the obstacles of the previous scene are removed
 (``RemoveLinkCommand``) first.
@@ -29,7 +29,7 @@ def load(spec: dict):
                     common.FilesystemPath(str(folder / f"{robot}.srdf")),
                     common.GeneralResourceLocator()):
         raise SystemExit(f"Tesseract could not load {folder}")
-    group = spec.get("group", "manipulator")
+    group = spec.get("tesseract_group") or spec.get("group", "manipulator")
     return env, list(env.getKinematicGroup(group).getJointNames())
 
 
@@ -53,8 +53,9 @@ def _geometry(item: dict):
 class Obstacles:
     """Swaps the environment's obstacles scene by scene (``enter(name)``, untimed)."""
 
-    def __init__(self, env, scenes: dict, on_change=None):
+    def __init__(self, env, scenes: dict, on_change=None, parent: str = "base_link"):
         self.env, self.scenes, self.on_change, self.current = env, scenes, on_change, []
+        self.parent = parent  # the link the scene's poses are given in
 
     def enter(self, name: str) -> None:
         from tesseract_robotics import tesseract_common as common
@@ -71,7 +72,7 @@ class Obstacles:
             collision.geometry = _geometry(item)
             link.collision.push_back(collision)
             joint = sg.Joint(f"{item['name']}_joint")
-            joint.parent_link_name, joint.child_link_name = "base_link", item["name"]
+            joint.parent_link_name, joint.child_link_name = self.parent, item["name"]
             joint.type = sg.JointType_FIXED
             pose = peerio.pose_matrix(item["xyz"], item.get("quat_wxyz", [1, 0, 0, 0]))
             joint.parent_to_joint_origin_transform = common.Isometry3d(pose)

@@ -1,0 +1,183 @@
+"""The robots stage (bench/robots.py): its mesh judge (bench/mesh_judge.py) sees a contact
+built to touch and a gap built to miss on small generated STL meshes, keeps the SRDF's
+disabled pairs and the parts of one rigid body out, finds a blocked straight line blocked; the
+MBM problem reader gives what the YAML holds; example-robot-data's robots load when the cache
+holds them (skipped otherwise, with the reason); and the committed results/robots.json has the
+keys and booleans the issue asks for."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "bench"))
+
+import mesh_judge as mj  # noqa: E402
+import robots_data as data  # noqa: E402
+
+# link_1 turns about z; its collision is an STL bar 1.0 x 0.1 x 0.1 from x = 0.1 to 1.1 at
+# z = 0.5; a tool link fixed to link_1 carries a small STL cube inside the bar's end (the
+# parts of one rigid body always touch: the judge must not count them); base_link's STL post
+# (0.2 x 0.2 x 0.4) stands at the origin, disabled against link_1 by the SRDF only in one test.
+URDF = """<robot name="probe">
+  <link name="base_link"><collision><origin xyz="0 0 0.2"/>
+    <geometry><mesh filename="{d}/post.stl"/></geometry></collision></link>
+  <link name="link_1"><collision><origin xyz="0.6 0 0.5"/>
+    <geometry><mesh filename="{d}/bar.stl"/></geometry></collision></link>
+  <link name="tool"><collision><origin xyz="0 0 0"/>
+    <geometry><mesh filename="{d}/cube.stl"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="link_1"/>
+    <axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" effort="1" velocity="1"/></joint>
+  <joint name="fix" type="fixed"><parent link="link_1"/><child link="tool"/>
+    <origin xyz="1.05 0 0.5"/></joint>
+</robot>"""
+
+
+@pytest.fixture
+def probe(tmp_path: Path) -> Path:
+    trimesh.creation.box(extents=(0.2, 0.2, 0.4)).export(tmp_path / "post.stl")
+    trimesh.creation.box(extents=(1.0, 0.1, 0.1)).export(tmp_path / "bar.stl")
+    trimesh.creation.box(extents=(0.06, 0.06, 0.06)).export(tmp_path / "cube.stl")
+    urdf = tmp_path / "probe.urdf"
+    urdf.write_text(URDF.format(d=tmp_path))
+    return urdf
+
+
+def _judge(urdf: Path, obstacles: list[dict], srdf: Path | None = None) -> mj.MeshJudge:
+    return mj.MeshJudge(mj.MeshRobot(urdf, srdf, ["j1"]), mj.obstacles_from_dicts(obstacles))
+
+
+def test_a_mesh_contact_built_to_touch_is_found_and_a_gap_is_not(probe: Path) -> None:
+    # a box whose near face is 0.02 m inside the bar's far end at j1 = 0 (bar: x 0.1..1.1)
+    box = {"type": "box", "xyz": [1.13, 0.0, 0.5], "size": [0.1, 0.3, 0.3]}
+    judge = _judge(probe, [box])
+    assert judge.collides(np.array([0.0]))
+    assert not judge.collides(np.array([math.pi / 2]))  # the bar turned away along y
+    # 0.01 m short of the bar's end: no contact
+    gap = _judge(probe, [{**box, "xyz": [1.16, 0.0, 0.5]}])
+    assert not gap.collides(np.array([0.0]))
+
+
+def test_the_straight_line_through_an_obstacle_is_blocked(probe: Path) -> None:
+    # a pillar at 45 degrees, 0.8 m out: the bar sweeps through it between 0 and 90 degrees
+    pillar = {"type": "cylinder", "xyz": [0.8 * math.cos(math.pi / 4),
+                                          0.8 * math.sin(math.pi / 4), 0.5],
+              "radius": 0.05, "length": 1.0}
+    judge = _judge(probe, [pillar])
+    ends = np.array([[0.0], [math.pi / 2]])
+    assert not judge.colliding(ends).any()
+    assert not judge.path_free(ends)
+    assert judge.path_free(np.array([[0.0], [-math.pi / 2]]))
+
+
+def test_srdf_pairs_and_one_rigid_body_are_left_out(probe: Path, tmp_path: Path) -> None:
+    robot = mj.MeshRobot(probe, None, ["j1"])
+    links = {tuple(sorted((robot.elements[i][0], robot.elements[j][0])))
+             for i, j in robot.self_pairs}
+    assert ("link_1", "tool") not in links  # fixed together: always touching
+    assert ("base_link", "link_1") in links
+    srdf = tmp_path / "probe.srdf"
+    srdf.write_text('<robot name="probe"><disable_collisions link1="link_1" '
+                    'link2="base_link"/></robot>')
+    disabled = mj.MeshRobot(probe, srdf, ["j1"])
+    assert [(disabled.elements[i][0], disabled.elements[j][0])
+            for i, j in disabled.self_pairs] == [("base_link", "tool")]
+    assert not _judge(probe, []).collides(np.array([0.0]))
+
+
+SCENE = """world:
+  collision_objects:
+    - id: shelf
+      primitive_poses:
+        - position: [0.5, 0.0, 0.2]
+          orientation: [0, 0, 0.7071067811865476, 0.7071067811865476]
+        - position: [0.5, 0.0, 0.6]
+          orientation: [0, 0, 0, 1]
+      primitives:
+        - type: box
+          dimensions: [0.4, 0.2, 0.02]
+        - type: cylinder
+          dimensions: [0.3, 0.05]
+"""
+REQUEST = """start_state:
+  joint_state:
+    name: [a, b, finger]
+    position: [0.1, 0.2, 0.0]
+goal_constraints:
+  - joint_constraints:
+      - joint_name: b
+        position: -0.5
+      - joint_name: a
+        position: 1.5
+"""
+
+
+def test_mbm_files_are_read_as_they_are() -> None:
+    items = data.scene_json(SCENE)
+    assert [i["type"] for i in items] == ["box", "cylinder"]
+    assert items[0]["quat_wxyz"] == pytest.approx([0.7071068, 0, 0, 0.7071068])
+    assert items[1]["length"] == 0.3 and items[1]["radius"] == 0.05
+    assert data.request_start_goal(REQUEST, ("a", "b")) == ([0.1, 0.2], [1.5, -0.5])
+    geoms = mj.obstacles_from_scene_yaml(SCENE)  # the judge's own reading
+    assert geoms[1][0].radius == 0.05 and geoms[1][0].lz == 0.3
+    assert geoms[0][1][:3, 0] == pytest.approx([0, 1, 0])
+
+
+def test_vamp_archives_are_the_published_bytes() -> None:
+    for robot in ("panda", "ur5"):
+        assert data.vamp_archive(robot).is_file()
+    assert len(data.mbm_texts("panda", ("cage",), per_set=2)) == 2
+
+
+@pytest.mark.skipif(not all((data.CACHE / "share" / "example-robot-data" / k).is_dir()
+                            for k in data.KEEP),
+                    reason="example-robot-data is not in bench/.cache (the robots stage "
+                           "downloads it once, ~540 MB)")
+def test_example_robot_data_robots_load_in_the_judge() -> None:
+    for key in ("ur5", "panda"):
+        rf = data.robot_files(key)
+        robot = mj.MeshRobot(rf.urdf, rf.srdf, list(rf.joints))
+        assert len(robot.elements) >= 7
+        assert "../meshes/" in rf.urdf_relative.read_text()
+    scene, request = data.mbm_texts("panda", ("table_pick",), per_set=1)["table_pick/0001"]
+    rf = data.robot_files("panda")
+    judge = mj.MeshJudge(mj.MeshRobot(rf.urdf, rf.srdf, list(rf.joints)),
+                         mj.obstacles_from_scene_yaml(scene))
+    start, goal = data.request_start_goal(request, rf.joints)
+    assert not judge.colliding(np.array([start, goal])).any()
+    assert not judge.path_free(np.array([start, goal]))  # blocked, as the stage uses it
+
+
+RESULTS = ROOT / "bench" / "results" / "robots.json"
+
+
+@pytest.mark.skipif(not RESULTS.is_file(), reason="no bench/results/robots.json yet")
+def test_the_stage_json_has_the_keys_and_booleans() -> None:
+    doc = json.loads(RESULTS.read_text())
+    assert doc["stage"] == "robots"
+    for key in ("ur5", "panda"):
+        r = doc["robots"][key]
+        assert set(r) == {"collision", "ik", "plan"}
+        assert {"usar-arm", "roboplan", "mplib"} <= set(r["collision"]["solvers"])
+        assert "tesseract" in r["collision"]["solvers"]
+        assert {"usar-arm", "pytracik", "roboplan", "mplib"} <= set(r["ik"]["solvers"])
+        assert r["ik"]["solvers"]["usar-arm"]["method"] in ("numeric", "analytic")
+        col = r["collision"]["solvers"]["usar-arm"]
+        assert isinstance(col["missed_contacts"], int)
+        assert isinstance(col["invented_contacts"], int)
+        assert col["boundary_configurations"] > 0 and isinstance(col["boundary_missed"], int)
+        assert "roboplan" in r["plan"]["median_ratio_usar_to_peer"]
+    assert doc["targets"] and all(isinstance(t["pass"], bool) for t in doc["targets"])
+    names = " ".join(t["target"] for t in doc["targets"])
+    for phrase in ("collision query median", "planning median", "IK success",
+                   "IK median per call"):
+        assert phrase in names
+    assert "not measured here" in doc["vamp_published"]["status"]
+    assert doc["vamp_published"]["machine"]
