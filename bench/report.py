@@ -36,7 +36,8 @@ STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "calibrate": "Calibration on the wire",
                 "workspace": "Workspace: reachability maps and base placement",
                 "planners": "OMPL planners for the MoveIt package",
-                "ros": "ROS 2 node (usar-arm ros)"}
+                "ros": "ROS 2 node (usar-arm ros)",
+                "robots": "Mesh robots: UR5 and Panda (example-robot-data) on MotionBenchMaker"}
 
 
 # ------------------------------------------------------------------------------ sections
@@ -371,7 +372,7 @@ SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_secti
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
             "workspace": workspace_section, "planners": planners_section,
-            "ros": ros_section}
+            "ros": ros_section, "robots": robots_section}
 
 
 def _load(doc: dict[str, Any]) -> str:
@@ -437,9 +438,6 @@ def generate(folder: Path, total_seconds: float | None = None) -> Path:
                   *([f"From a later run of this stage alone ({doc.get('generated')}, "
                      f"{doc.get('mode')} mode), not from the run above.", ""] if alone else []),
                   *SECTIONS[stage](doc)]
-    if (folder / "robots.json").is_file():  # kept out of SECTIONS: summary.md leaves it out
-        lines += ["## Mesh robots: UR5 and Panda (example-robot-data) on MotionBenchMaker", "",
-                  *robots_section(common.read_json(folder / "robots.json"))]
     path = folder / "README.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     (folder / "summary.md").write_text("\n".join(summary_lines(docs, run)) + "\n",

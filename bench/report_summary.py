@@ -11,9 +11,9 @@ from typing import Any
 from report_format import fmt_measured, fmt_pct, fmt_s, fmt_threshold, table
 
 OURS = "usar-arm"
-PEER_STAGES = ("ik", "collision", "plan", "timing")
+PEER_STAGES = ("ik", "collision", "plan", "timing", "robots")
 TITLES = {"ik": "IK", "collision": "Collision", "plan": "Planning",
-          "timing": "Time-parameterisation"}
+          "timing": "Time-parameterisation", "robots": "Mesh robots"}
 
 
 def _median(summary: dict[str, Any]) -> float | None:
