@@ -32,7 +32,6 @@ import numpy as np
 
 from usar_arm.core.spatial import Array
 from usar_arm.planning import scene_tree
-from usar_arm.planning.body_gaps import body_contact, cylinder_obstacle_gap, group_span
 from usar_arm.planning.bounds_arrays import (
     BOUND,
     BOX,
@@ -43,6 +42,12 @@ from usar_arm.planning.bounds_arrays import (
     HULL,
     O_BOUND,
     O_CENTRE,
+    O_DIR,
+    O_IN_DIR,
+    O_IN_START,
+    O_RHO,
+    O_SIZE,
+    O_START,
     OWNER,
     RADIUS,
     REACH,
@@ -55,7 +60,12 @@ from usar_arm.planning.bounds_arrays import (
     prepare_links,
     prepare_obstacles,
 )
-from usar_arm.planning.gaps import segment_distance
+from usar_arm.planning.gaps import (
+    cylinder_box_gap,
+    inner_box_contact,
+    point_box_distance,
+    segment_distance,
+)
 from usar_arm.planning.jit import inline_kernel, kernel
 
 __all__ = ["BOX", "CAPSULE", "CLEAR", "CONTACT", "EPS", "GROUP", "GROUP_RADIUS", "HULL", "MARGIN",
@@ -173,29 +183,23 @@ def _judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, a
                  cand: Array, scratch: Array, stack: IndexArray) -> float:
     """:func:`_judge` on the link-obstacle pairs, down the obstacles' sphere tree (``tree``,
     ``nodes``, ``order`` of :func:`.scene_tree.build`, ``pair_of`` of
-    :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries). Bodies go down
-    by group: a grouped link's bodies (contiguous, ``GROUP`` = g) once, with the cylinder
-    around them all, and where that cylinder clears an obstacle none of them is tested
-    against it; any other body is a group of one. A group visits only the subtrees its
-    bounding sphere comes within the current bound (or ``eps``) of, the pairs below the others
-    stay CLEAR. A test whose quick bound is below ``refine`` units of the motion (at least
-    ``eps`` m) is refined."""
+    :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each link visits
+    only the subtrees its bounding sphere comes within the current bound (or ``eps``) of, the
+    pairs below the others stay CLEAR. A pair whose quick bound is below ``refine`` units of
+    its link's motion (at least ``eps`` m) gets the tighter test too."""
     scene_gap = math.inf
-    for g in range(pair_of.shape[0]):
-        if int(links[g, GROUP]) >= 0 and int(links[g, GROUP]) != g:
-            continue  # judged with its group, at the group's body
-        lo, hi, move_g, radius_g, bound_g = group_span(links, g, move)
-        refine_g = max(eps, refine * move_g)
+    for i in range(pair_of.shape[0]):
         stack[0] = 0
         top = 1
+        refine_i = max(eps, refine * move[i])
         while top > 0:
             top -= 1
             nd = stack[top]
-            bound = (math.sqrt((seg[5, g, 0] - tree[nd, 0]) ** 2
-                               + (seg[5, g, 1] - tree[nd, 1]) ** 2
-                               + (seg[5, g, 2] - tree[nd, 2]) ** 2)
-                     - tree[nd, 3] - bound_g)
-            if bound > max(scene_gap * move_g, eps):
+            bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
+                               + (seg[5, i, 1] - tree[nd, 1]) ** 2
+                               + (seg[5, i, 2] - tree[nd, 2]) ** 2)
+                     - tree[nd, 3] - links[i, BOUND])
+            if bound > max(scene_gap * move[i], eps):
                 continue  # every pair below is farther apart than the bound already found
             if nodes[nd, 0] >= 0:
                 stack[top] = nodes[nd, 0]
@@ -204,36 +208,49 @@ def _judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, a
                 continue
             for k in range(nodes[nd, 2], nodes[nd, 3]):
                 s = order[k]
-                if hi > lo:  # a group: its cylinder first, if any of its pairs is checked
-                    checked = False
-                    for i in range(lo, hi + 1):
-                        checked = checked or pair_of[i, s] >= 0
-                    if not checked:
-                        continue
-                    gap = cylinder_obstacle_gap(seg[5, g], seg[4, g], seg[0, g], seg[1, g],
-                                                radius_g, links[g, HALF], bound_g,
-                                                obstacles[s], kind[s], axes[s], refine_g,
-                                                cand)
-                    if gap > eps:
-                        if move_g > 0.0:
-                            scene_gap = min(scene_gap, gap / move_g)
-                        continue
-                for i in range(lo, hi + 1):
-                    p = pair_of[i, s]
-                    if p < 0:
-                        continue
-                    gap = cylinder_obstacle_gap(seg[5, i], seg[4, i], seg[0, i], seg[1, i],
-                                                links[i, RADIUS], links[i, HALF],
-                                                links[i, BOUND], obstacles[s], kind[s],
-                                                axes[s], max(eps, refine * move[i]), cand)
-                    if gap > eps:
-                        if move[i] > 0.0:
-                            scene_gap = min(scene_gap, gap / move[i])
-                        continue
-                    scene_gap = 0.0
-                    touching = body_contact(seg, links, i, obstacles[s], kind[s], axes[s],
-                                            margin, scratch)
-                    out[p] = CONTACT if touching else UNDECIDED
+                p = pair_of[i, s]
+                if p < 0:
+                    continue
+                # Written out here, not called: a kernel call per pair with these array
+                # arguments costs more than the test itself.
+                o = obstacles[s]
+                if kind[s] == BOX or kind[s] == HULL:
+                    # The link's centre against the solid box, less the link's bounding
+                    # radius: tighter than two bounding spheres for a cell's large flat boxes.
+                    gap = (point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
+                                               o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
+                    if gap <= refine_i:
+                        gap = max(gap, cylinder_box_gap(
+                            seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
+                            o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
+                else:
+                    gap = (math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
+                                     + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
+                                     + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
+                           - links[i, BOUND] - o[O_BOUND])
+                    if gap <= refine_i:
+                        gap = max(gap, segment_distance(seg[0, i], seg[1, i],
+                                                        o[O_START:O_START + 3],
+                                                        o[O_DIR:O_DIR + 3])
+                                  - links[i, RADIUS] - o[O_SIZE])
+                if gap > eps:
+                    if move[i] > 0.0:
+                        scene_gap = min(scene_gap, gap / move[i])
+                    continue
+                scene_gap = 0.0
+                if kind[s] == BOX:
+                    touching = inner_box_contact(seg[5, i], seg[4, i], links[i, RHO],
+                                                  links[i, REACH], o[O_START:O_START + 3],
+                                                  axes[s], o[O_SIZE:O_SIZE + 3], margin,
+                                                  scratch)
+                elif kind[s] == HULL:
+                    touching = False
+                else:
+                    inner = segment_distance(seg[2, i], seg[3, i],
+                                             o[O_IN_START:O_IN_START + 3],
+                                             o[O_IN_DIR:O_IN_DIR + 3])
+                    touching = inner < links[i, RHO] + o[O_RHO] - margin
+                out[p] = CONTACT if touching else UNDECIDED
     return scene_gap
 
 
