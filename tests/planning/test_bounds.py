@@ -238,3 +238,52 @@ def test_a_million_configurations_agree_with_brute_force(kr60: Robot, fanuc: Rob
             total, colliding = total + n, colliding + c
     print(f"{total} configurations, {colliding} in contact, 0 disagreements")
     assert total >= 1_000_000
+
+
+@pytest.mark.parametrize("scene", ["table", "cage"])
+def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot,
+                                                                     scene: str) -> None:
+    """A learnt link is a body cylinder and its core along one axis: the kernel tests the
+    capsule around both first, for every link pair and obstacle. That may only save work: the
+    verdicts, and where a walk first meets a contact, are those of testing every body alone."""
+    world = kr60.collision_world(load_scene(scene))
+    packed = world._compiled._packed  # (the kernel's own arrays, as the world hands them over)
+    links = packed[2]
+    assert (links[:, bounds.GROUP] >= 0).all(), "every learnt body is in its link's group"
+    assert len(set(links[:, bounds.GROUP])) == len(set(links[:, bounds.OWNER]))
+    alone = list(packed)
+    alone[2] = links.copy()
+    alone[2][:, bounds.GROUP] = -1
+    qs = np.random.default_rng(5).uniform(kr60.chain.lower(), kr60.chain.upper(), (3000, 6))
+    grouped_verdicts = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)[1]
+    alone_verdicts = bounds.check(qs, *alone, bounds.EPS, bounds.MARGIN)[1]
+    assert (grouped_verdicts == alone_verdicts).all()
+    assert (grouped_verdicts != CLEAR).any()
+    levers = np.ascontiguousarray(world._compiled.link_levers())
+    hits = 0
+    for a, b in zip(qs[:150], qs[150:300], strict=True):
+        grouped = bounds.walk(a, b, 200, levers, *packed, bounds.EPS, bounds.MARGIN)
+        single = bounds.walk(a, b, 200, levers, *alone, bounds.EPS, bounds.MARGIN)
+        assert grouped[0] == single[0], (a.tolist(), b.tolist())
+        hits += grouped[0] >= 0
+    assert hits > 0
+
+
+def test_only_bodies_along_one_axis_and_within_its_length_are_grouped() -> None:
+    from usar_arm.planning.verdicts import link_groups
+
+    def at(z: float, tilt: float = 0.0) -> np.ndarray:
+        pose = np.eye(4)
+        pose[:3, :3] = Rotation.from_euler("x", tilt).as_matrix()
+        pose[2, 3] = z
+        return pose
+
+    radius, half = np.array([0.1, 0.01, 0.05, 0.05]), np.array([0.3, 0.5, 0.2, 0.2])
+    owner, group, group_radius = link_groups(["a", "a", "b", "b"], radius, half,
+                                             np.array([at(0.0), at(0.0), at(0.0), at(0.1)]))
+    assert owner.tolist() == [0, 0, 1, 1]
+    assert group.tolist() == [1, 1, -1, -1]  # b's second body reaches past the first's end
+    assert group_radius[0] == group_radius[1] == pytest.approx(0.1)
+    _, tilted, _ = link_groups(["a", "a"], radius[:2], half[:2],
+                               np.array([at(0.0), at(0.0, 0.2)]))
+    assert tilted.tolist() == [-1, -1]

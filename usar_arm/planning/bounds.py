@@ -36,6 +36,8 @@ from usar_arm.planning.bounds_arrays import (
     BOUND,
     BOX,
     CAPSULE,
+    GROUP,
+    GROUP_RADIUS,
     HALF,
     HULL,
     O_BOUND,
@@ -46,6 +48,7 @@ from usar_arm.planning.bounds_arrays import (
     O_RHO,
     O_SIZE,
     O_START,
+    OWNER,
     RADIUS,
     REACH,
     RHO,
@@ -65,7 +68,8 @@ from usar_arm.planning.gaps import (
 )
 from usar_arm.planning.jit import inline_kernel, kernel
 
-__all__ = ["BOX", "CAPSULE", "CLEAR", "CONTACT", "EPS", "HULL", "MARGIN", "SPHERE", "UNDECIDED",
+__all__ = ["BOX", "CAPSULE", "CLEAR", "CONTACT", "EPS", "GROUP", "GROUP_RADIUS", "HULL", "MARGIN",
+           "OWNER", "SPHERE", "UNDECIDED",
            "check", "classify", "link_poses", "pack", "segment_distance", "summary", "walk",
            "warm_up"]
 
@@ -133,19 +137,42 @@ def _judge_links(seg: Array, links: Array, pairs: IndexArray, n_rr: int, eps: fl
     """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
     smallest cleared gap per unit of closing motion (0 when a pair is not cleared)."""
     self_gap = math.inf
-    for p in range(n_rr):
+    p = 0
+    while p < n_rr:
+        # The block of rows of one link pair (rows sorted by the links' indices): when both
+        # links are grouped, the capsules around their groups clear the whole block at once.
         i, j = pairs[p, 0], pairs[p, 1]
-        gap = (segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j])
-               - links[i, RADIUS] - links[j, RADIUS])
-        if gap > eps:
-            out[p] = CLEAR
-            closing = move[i] + move[j]
-            if closing > 0.0:
-                self_gap = min(self_gap, gap / closing)
-            continue
-        inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
-        out[p] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
-        self_gap = 0.0
+        end = p + 1
+        while (end < n_rr and links[pairs[end, 0], OWNER] == links[i, OWNER]
+               and links[pairs[end, 1], OWNER] == links[j, OWNER]):
+            end += 1
+        gi, gj = int(links[i, GROUP]), int(links[j, GROUP])
+        if end - p > 1 and gi >= 0 and gj >= 0:
+            gap = (segment_distance(seg[0, gi], seg[1, gi], seg[0, gj], seg[1, gj])
+                   - links[gi, GROUP_RADIUS] - links[gj, GROUP_RADIUS])
+            if gap > eps:
+                closing = 0.0
+                for r in range(p, end):
+                    out[r] = CLEAR
+                    closing = max(closing, move[pairs[r, 0]] + move[pairs[r, 1]])
+                if closing > 0.0:
+                    self_gap = min(self_gap, gap / closing)
+                p = end
+                continue
+        for r in range(p, end):
+            i, j = pairs[r, 0], pairs[r, 1]
+            gap = (segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j])
+                   - links[i, RADIUS] - links[j, RADIUS])
+            if gap > eps:
+                out[r] = CLEAR
+                closing = move[i] + move[j]
+                if closing > 0.0:
+                    self_gap = min(self_gap, gap / closing)
+                continue
+            inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
+            out[r] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
+            self_gap = 0.0
+        p = end
     return self_gap
 
 

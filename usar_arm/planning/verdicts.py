@@ -47,6 +47,37 @@ def _scene_arrays(scene: Scene) -> tuple[IndexArray, Array, Array]:
             np.array(sizes, dtype=float).reshape(-1, 3))
 
 
+def link_groups(links: list[str], radius: Array, half: Array, local: Array
+                ) -> tuple[IndexArray, IndexArray, Array]:
+    """Per body: the index of its link (first appearance order), the body whose axis segment
+    every body of that link lies along (-1 when the link has one body, or bodies that are not
+    coaxial with its longest one and within its length), and the radius of the capsule around
+    that segment holding them all (m). A learnt arm's link is its body cylinder and its core
+    along one axis: one capsule, the core's segment with the body's radius."""
+    names = list(dict.fromkeys(links))
+    owner = np.array([names.index(name) for name in links], dtype=np.int64)
+    group = np.full(len(links), -1, dtype=np.int64)
+    group_radius = np.zeros(len(links))
+    for k in range(len(names)):
+        members = np.flatnonzero(owner == k)
+        if len(members) < 2:
+            continue
+        rep = int(members[np.argmax(half[members])])
+        axis, centre = local[rep][:3, 2], local[rep][:3, 3]
+        coaxial = True
+        for e in members:
+            d = local[e][:3, 3] - centre
+            along = float(d @ axis)
+            off_axis = float(np.linalg.norm(d - along * axis))
+            parallel = float(np.linalg.norm(np.cross(local[e][:3, 2], axis)))
+            coaxial &= (parallel < 1e-9 and off_axis < 1e-9
+                        and abs(along) + half[e] <= half[rep] + 1e-9)
+        if coaxial:
+            group[members] = rep
+            group_radius[members] = float(radius[members].max()) + 1e-9
+    return owner, group, group_radius
+
+
 NO_PROOF = -1.0e6
 """The inner-ball radius (m) given to a body whose bounding cylinder is not its shape (a box,
 a mesh): no overlap of such balls is ever below zero, so the verdicts never prove its contacts
@@ -74,6 +105,8 @@ class CompiledVerdicts:
         self._zero = np.array([zero[name] @ m for name, m in
                                zip(links, local, strict=True)]).reshape(-1, 4, 4)
         self._link_levers: Array | None = None
+        self._owner, self._group, self._group_radius = link_groups(self.names, radius, half,
+                                                                   np.asarray(local, float))
         self._kind, self._opose, self._osize = _scene_arrays(scene)
         self.rr: IndexArray = np.zeros((0, 2), dtype=np.int64)
         self.rs: IndexArray = np.zeros((0, 2), dtype=np.int64)
@@ -87,11 +120,17 @@ class CompiledVerdicts:
     def check_pairs(self, rr: IndexArray, rs: IndexArray) -> None:
         """Check the robot-robot pairs ``rr`` (P, 2: link, link) and robot-scene pairs ``rs``
         (Q, 2: link, obstacle), in that order."""
-        self.rr = np.array(rr, dtype=np.int64).reshape(-1, 2)
+        rr = np.array(rr, dtype=np.int64).reshape(-1, 2)
+        # the rows of one link pair next to each other, for the kernel's block test
+        self.rr = rr[np.lexsort((self._owner[rr[:, 1]], self._owner[rr[:, 0]]))] if len(rr) \
+            else rr
         self.rs = np.array(rs, dtype=np.int64).reshape(-1, 2)
         self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
                                    self.radius, self.half, self._moved_by, self.rr, self.rs,
                                    self._kind, self._opose, self._osize)
+        self._packed[2][:, bounds.OWNER] = self._owner
+        self._packed[2][:, bounds.GROUP] = self._group
+        self._packed[2][:, bounds.GROUP_RADIUS] = self._group_radius
         if not self._exact.all():
             self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
             self._packed[2][~self._exact, bounds.REACH] = 0.0
