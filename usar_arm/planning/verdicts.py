@@ -78,6 +78,16 @@ def link_groups(links: list[str], radius: Array, half: Array, local: Array
     return owner, group, group_radius
 
 
+def _plain(a: Array) -> Array:
+    """``a`` as the kernels were compiled for: float64, C-contiguous, writeable. A read-only
+    array (a frozen home configuration, a cached reading) is another type to numba: passing
+    it compiled the kernel again at first use, seconds in a fresh install."""
+    a = np.asarray(a)
+    if a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable:
+        return a
+    return np.array(a, dtype=np.float64, order="C")
+
+
 NO_PROOF = -1.0e6
 """The inner-ball radius (m) given to a body whose bounding cylinder is not its shape (a box,
 a mesh): no overlap of such balls is ever below zero, so the verdicts never prove its contacts
@@ -139,14 +149,14 @@ class CompiledVerdicts:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
         (N, P + Q) verdicts on the checked pairs (:data:`~.bounds.CLEAR`,
         :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED`)."""
-        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        qs = _plain(np.atleast_2d(qs))
         return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
 
     def summary(self, q: Array) -> int:
         """One verdict for configuration ``q``: CLEAR when every pair is, CONTACT when one is,
         else UNDECIDED."""
         q = np.asarray(q, dtype=float)
-        return int(bounds.summary(q if q.flags.c_contiguous else np.ascontiguousarray(q),
+        return int(bounds.summary(_plain(q),
                                   *self._packed, bounds.EPS, bounds.MARGIN))
 
     def walk(self, a: Array, b: Array, steps: int
@@ -154,7 +164,7 @@ class CompiledVerdicts:
         """:func:`.bounds.walk` from ``a`` to ``b``: the first configuration in proven contact
         (-1 if none) and the poses and verdicts of those left undecided, in order."""
         hit, _, _, poses, verdicts = bounds.walk(
-            np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float),
+            _plain(a), _plain(b),
             int(steps), self.link_levers(), *self._packed, bounds.EPS, bounds.MARGIN)
         return int(hit), poses, verdicts
 
