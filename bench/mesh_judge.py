@@ -17,7 +17,6 @@ behind it).
 from __future__ import annotations
 
 import itertools
-import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -28,10 +27,9 @@ import pinocchio as pin
 import trimesh
 import yaml
 from judge_reading import pose, quat_matrix, rpy_matrix
+from verify import PathJudge
 
 Array = np.ndarray
-PATH_STEP = 0.005
-"""rad: largest joint change between two configurations checked along a path (as verify.py)."""
 
 
 def _tf(t: Array) -> fcl.Transform:
@@ -163,7 +161,7 @@ class MeshRobot:
                 for link, origin, _ in self.elements]
 
 
-class MeshJudge:
+class MeshJudge(PathJudge):
     """Brute-force collision check of a :class:`MeshRobot` among obstacles."""
 
     def __init__(self, robot: MeshRobot, obstacles: list[tuple[fcl.CollisionGeometry, Array]]):
@@ -192,32 +190,9 @@ class MeshJudge:
         self.robot_manager.collide(self.env_manager, data, fcl.defaultCollisionCallback)
         return bool(data.result.is_collision)
 
-    def colliding(self, qs: Array, stop_at_first: bool = False) -> Array:
-        qs = np.atleast_2d(np.asarray(qs, float))
-        out = np.zeros(len(qs), dtype=bool)
-        for n, q in enumerate(qs):
-            out[n] = self.collides(q)
-            if out[n] and stop_at_first:
-                break
-        return out
-
-    def path_free(self, path: Array, step: float = PATH_STEP) -> bool:
-        return not self.colliding(densify(np.asarray(path, float), step), True).any()
-
     def inside(self, q: Array, slack: float = 1e-6) -> bool:
         return bool(np.all(q >= self.robot.lower - slack) and np.all(q <= self.robot.upper
                                                                      + slack))
-
-
-def densify(path: Array, step: float) -> Array:
-    if len(path) < 2:
-        return path
-    parts = []
-    for a, b in itertools.pairwise(path):
-        k = max(1, math.ceil(float(np.max(np.abs(b - a))) / step))
-        parts.append(a + (b - a) * np.linspace(0.0, 1.0, k + 1)[:-1, None])
-    parts.append(path[-1:])
-    return np.vstack(parts)
 
 
 def rotation_angle(a: Array, b: Array) -> float:

@@ -43,19 +43,20 @@ from usar_arm.control.trajectory import MotionLimits
 from usar_arm.core.errors import UsarArmError
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import PtpPlan, plan_to_joints
-from usar_arm.planning.robot import robot_from_files
+from usar_arm.planning.robot import Robot, robot_from_files
 
 CASES = (("KR60", "plan_KR60"), ("Fanuc_M16iB20", "plan_Fanuc_M16iB20"),
          ("boxes", "plan_KR60_boxes"))
 
 
 def scene_solver(spec: dict[str, Any], options: OmplOptions,
-                 extra: Callable[[PtpPlan], dict[str, Any]]
+                 extra: Callable[[PtpPlan], dict[str, Any]], robot: Robot | None = None
                  ) -> tuple[Callable[[str], None], Callable[[dict[str, Any]], dict[str, Any]]]:
     """``enter(scene)`` (untimed: builds the scene's collision world once) and
     ``solve(problem)`` (``plan_to_joints`` with ``options``, timed; ``extra(plan)`` adds fields
-    to an answer, untimed) for the robot and scenes of a problem file."""
-    robot = robot_from_files(spec["urdf"], spec["srdf"])
+    to an answer, untimed) for the robot (default: the problem file's URDF and SRDF) and scenes
+    of a problem file."""
+    robot = robot if robot is not None else robot_from_files(spec["urdf"], spec["srdf"])
     chain = robot.chain
     lo, hi = chain.lower(), chain.upper()
     worlds: dict[str, Any] = {}

@@ -47,6 +47,7 @@ import numpy as np
 import robots_data as data
 from common import Context, peerio
 from scenes import from_json as scene_from_json
+from verify import PATH_STEP, densify
 
 ROBOT_KEYS = ("ur5", "panda")
 TOLERANCE = {"position_m": 1e-5, "orientation_rad": 1e-5}
@@ -162,32 +163,15 @@ def _solve_ik(spec: dict[str, Any], checked: bool = True
 
 
 def _solve_plan(spec: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, Any]]:
-    from usar_arm.core.errors import UsarArmError
+    from plan import scene_solver  # (the plan stage's solver; imports usar-arm)
+
     from usar_arm.planning.ompl_adapter import OmplOptions
-    from usar_arm.planning.ptp import plan_to_joints
 
     robot = _robot(spec)
     _check_order(robot, spec)
-    chain = robot.chain
-    lo, hi = chain.lower(), chain.upper()
     options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
-    worlds: dict[str, Any] = {}
-
-    def enter(name: str) -> None:
-        worlds["now"] = robot.collision_world(scene_from_json(name, spec["scenes"][name]))
-
-    def solve(p: dict[str, Any]) -> dict[str, Any]:
-        begin = time.perf_counter()
-        try:
-            plan = plan_to_joints(worlds["now"], chain.joint_names, lo, hi,
-                                  np.array(p["start"]), np.array(p["goal"]), options)
-        except UsarArmError as exc:
-            return {"success": False, "seconds": time.perf_counter() - begin, "path": None,
-                    "status": f"{type(exc).__name__}: {exc}"}
-        sec = time.perf_counter() - begin
-        return {"success": True, "seconds": sec, "path": np.asarray(plan.waypoints).tolist(),
-                "planner": "direct" if plan.ompl is None else plan.ompl.planner}
-
+    enter, solve = scene_solver(spec, options, lambda plan: {
+        "planner": "direct" if plan.ompl is None else plan.ompl.planner}, robot)
     return (peerio.solve_by_scene(spec["problems"], enter, solve),
             {"call": "planning.ptp.plan_to_joints", "ompl": vars(options)})
 
@@ -300,7 +284,7 @@ def _boundary(judge: mj.MeshJudge, a: np.ndarray, b: np.ndarray) -> list[np.ndar
     """Two configurations on the segment a-b straddling its first contact: the last free one
     and the first in contact, at most :data:`BOUNDARY_STEP` (rad, largest joint change) apart
     (found by the judge: densified walk, then bisection)."""
-    dense = mj.densify(np.array([a, b]), mj.PATH_STEP)
+    dense = densify(np.array([a, b]), PATH_STEP)
     hits = judge.colliding(dense, stop_at_first=True)
     k = int(np.argmax(hits))
     if not hits[k] or k == 0:

@@ -90,7 +90,31 @@ class Kinematics:
                                                                      + LIMIT_SLACK))
 
 
-class Judge:
+class PathJudge:
+    """A brute-force judge's answers over many configurations and along a path, from its
+    ``collides(q)`` (the cylinder judge here, the mesh judge in ``mesh_judge.py``)."""
+
+    def collides(self, q: Array) -> bool:
+        raise NotImplementedError
+
+    def colliding(self, qs: Array, stop_at_first: bool = False) -> Array:
+        """True where a configuration (N, n) has a contact in any enabled pair."""
+        qs = np.atleast_2d(np.asarray(qs, float))
+        out = np.zeros(len(qs), dtype=bool)
+        for n, q in enumerate(qs):
+            out[n] = self.collides(q)
+            if out[n] and stop_at_first:
+                break
+        return out
+
+    def path_free(self, path: Array, step: float = PATH_STEP) -> bool:
+        """Every configuration along the polyline ``path`` (k, n), at most ``step`` apart per
+        joint, is free."""
+        return not self.colliding(densify(np.asarray(path, float), step),
+                                  stop_at_first=True).any()
+
+
+class Judge(PathJudge):
     """Brute-force collision check of one robot in one scene (python-fcl).
 
     Args:
@@ -179,21 +203,6 @@ class Judge:
                 return True
         return False
 
-    def colliding(self, qs: Array, stop_at_first: bool = False) -> Array:
-        """True where a configuration (N, n) has a contact in any enabled pair."""
-        qs = np.atleast_2d(np.asarray(qs, float))
-        out = np.zeros(len(qs), dtype=bool)
-        for n, q in enumerate(qs):
-            out[n] = self.collides(q)
-            if out[n] and stop_at_first:
-                break
-        return out
-
-    def path_free(self, path: Array, step: float = PATH_STEP) -> bool:
-        """Every configuration along the polyline ``path`` (k, n), at most ``step`` apart per
-        joint, is free."""
-        return not self.colliding(densify(np.asarray(path, float), step),
-                                  stop_at_first=True).any()
 
 
 def densify(path: Array, step: float) -> Array:
