@@ -82,30 +82,30 @@ def _along(start: Array, d: Array, length: float, frame: Array | None) -> Origin
 
 
 def link_core(start: Array, end: Array, frame: Array | None = None,
-              on_mount: bool = False) -> Cylinder | None:
-    """The thin core along the whole segment start -> end (m, link frame): it reaches both
-    joints, so the links' shapes meet at every joint. ``on_mount``: ``start`` is the robot's
-    foot (base_link's origin, on whatever it stands on), where there is no joint to close:
-    the core starts where the body cylinder does, so that a floor under the robot is not a
-    contact. None for a segment shorter than :data:`MIN_CYLINDER_LENGTH`."""
+              skip: float = 0.0) -> Cylinder | None:
+    """The thin core along the segment start -> end (m, link frame), less ``skip`` m at its
+    start: it reaches both joints, so the links' shapes meet at every joint. None for a segment
+    shorter than :data:`MIN_CYLINDER_LENGTH`."""
     d = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
     length = float(np.linalg.norm(d))
     if length < MIN_CYLINDER_LENGTH:
         return None
-    begin = np.asarray(start, dtype=float)
-    if on_mount:
-        body = link_cylinder(start, end)
-        cut = (length - body.length) / 2 if body is not None else 0.0
-        begin, d, length = begin + d / length * cut, d * (1 - cut / length), length - cut
-    return Cylinder(CORE_RADIUS, length, _along(begin, d, length, frame))
+    begin = np.asarray(start, dtype=float) + d / length * skip
+    d = d * (1 - skip / length)
+    return Cylinder(CORE_RADIUS, length - skip, _along(begin, d, length - skip, frame))
 
 
 def link_collisions(start: Array, end: Array, frame: Array | None = None,
                     on_mount: bool = False) -> tuple[Collision, ...]:
-    """A link's collision elements: its body cylinder and its core (either may be absent)."""
-    shapes = (link_cylinder(start, end, frame), link_core(start, end, frame, on_mount))
+    """A link's collision elements: its body cylinder and its core (either may be absent).
+    ``on_mount``: ``start`` is the robot's foot (base_link's origin, on whatever it stands on),
+    where there is no joint to close: the core starts where the body does, so that a floor
+    under the robot is not a contact."""
+    body = link_cylinder(start, end, frame)
+    length = float(np.linalg.norm(np.asarray(end, dtype=float) - np.asarray(start, dtype=float)))
+    skip = (length - body.length) / 2 if on_mount and body is not None else 0.0
     return tuple(Collision(CylinderShape(c.radius, c.length), c.origin)
-                 for c in shapes if c is not None)
+                 for c in (body, link_core(start, end, frame, skip)) if c is not None)
 
 
 def flange_rotation(direction: Array) -> Array:

@@ -155,9 +155,7 @@ class CompiledVerdicts:
     def summary(self, q: Array) -> int:
         """One verdict for configuration ``q``: CLEAR when every pair is, CONTACT when one is,
         else UNDECIDED."""
-        q = np.asarray(q, dtype=float)
-        return int(bounds.summary(_plain(q),
-                                  *self._packed, bounds.EPS, bounds.MARGIN))
+        return int(bounds.summary(_plain(q), *self._packed, bounds.EPS, bounds.MARGIN))
 
     def walk(self, a: Array, b: Array, steps: int
              ) -> tuple[int, Array, NDArray[np.int8]]:

@@ -40,16 +40,15 @@ def _link(link: Link) -> list[str]:
     if not elements:
         return [f"  <link name={quoteattr(link.name)}/>"]
     material = f"<material name={quoteattr(link.material)}/>" if link.material else ""
-    lines = [f"  <link name={quoteattr(link.name)}>"]
+    visuals, collisions = [], []
     for e in elements:
         if not isinstance(e.shape, CylinderShape):
             raise TypeError(f"link {link.name}: the writer writes cylinders (a learnt arm's "
                             f"shapes), not {type(e.shape).__name__}")
-        lines.append(f"    <visual>{_origin(e.origin)}{_geometry(e.shape)}{material}</visual>")
-    lines += [f"    <collision>{_origin(e.origin)}{_geometry(e.shape)}</collision>"
-              for e in elements if isinstance(e.shape, CylinderShape)]
-    lines.append("  </link>")
-    return lines
+        shape = f"{_origin(e.origin)}{_geometry(e.shape)}"
+        visuals.append(f"    <visual>{shape}{material}</visual>")
+        collisions.append(f"    <collision>{shape}</collision>")
+    return [f"  <link name={quoteattr(link.name)}>", *visuals, *collisions, "  </link>"]
 
 
 def _joint(j: Joint) -> list[str]:
