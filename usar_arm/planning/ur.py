@@ -46,8 +46,11 @@ from usar_arm.planning.opw import (
 
 Matrix = Array | list[list[float]]
 """A 3x3 matrix as an array or nested lists."""
-SINGULAR_WRIST = 1e-9
-"""Norm below which R5^T u counts as parallel to w6: q6 is free (the wrist singularity)."""
+SINGULAR_WRIST = 1e-8
+"""|R5^T u x w6| (~ |sin q5| on a UR) below which q6 counts as free (the wrist singularity) and
+takes the caller's value: the rotation then fixes it only to eps / |sin q5|, and that error
+moves the position (theta turns p56 about axis 4); 1e-8 balances the two, a few 1e-8 at worst
+(Newton finishes)."""
 
 
 class NotThreeParallel(NotOrthoParallel):
@@ -119,12 +122,17 @@ class ThreeParallelArm:
         self.s4 = 1.0 if _dot(w[3], u) > 0 else -1.0
         self.w1xu: V = _cross(w[0], u)
         self.lateral = _dot(u, _sub(self.p56, p[0]))
-        # q5: (A - D) cos q5 + B sin q5 = k - D, from u . Rot(w5, q5) w6 = k.
+        # q5: (A - D) cos q5 + B sin q5 = k - D, from u . Rot(w5, q5) w6 = k; M = |(A - D, B)|.
         a5 = _dot(u, w[5])
         b5 = _dot(u, _cross(w[4], w[5]))
-        self.d5 = _dot(u, w[4]) * _dot(w[4], w[5])
-        self.mag5 = math.hypot(a5 - self.d5, b5)
-        self.phase5 = math.atan2(b5, a5 - self.d5)
+        d5 = _dot(u, w[4]) * _dot(w[4], w[5])
+        self.mag5 = math.hypot(a5 - d5, b5)
+        self.phase5 = math.atan2(b5, a5 - d5)
+        m2m1 = self.mag5 ** 2 - 1.0
+        self.d5 = 0.0 if abs(d5) < 1e-12 else d5
+        self.m2m1 = 0.0 if abs(m2m1) < 1e-12 else m2m1
+        """D and M^2 - 1, zero on an arm in the class to 1e-12: then sin(q5 - phase) comes
+        from |u x w6'| without cancellation, exact near the wrist singularity."""
         self.x: V = _unit(_sub(w[4], tuple(_dot(w[4], u) * c for c in u)))  # type: ignore[arg-type]
         """A unit vector normal to u (w5's part normal to u): turned to find theta."""
         self.r4: V = _sub(self.p56, p[3])
@@ -154,7 +162,7 @@ class ThreeParallelArm:
         h = _dot(w1, d)
         dh = (d[0] - h * w1[0], d[1] - h * w1[1], d[2] - h * w1[2])
         a, b = _dot(u, dh), _dot(self.w1xu, dh)
-        rad = math.hypot(a, b)
+        rad = math.sqrt(a * a + b * b)
         if rad < 1e-12 or abs(self.lateral) > rad + self.slack:
             return d, []
         base = math.atan2(b, a)
@@ -165,11 +173,14 @@ class ThreeParallelArm:
         """(q5, q6, theta) (rad) of each wrist branch (up to 2) for shoulder angle q1; q6 is
         ``q6_free`` at the wrist singularity."""
         w1, w5, w6, u = self.w[0], self.w[4], self.w[5], self.u
-        k = _dot(u, _rot(w1, -q1, _mat(r, self.m6)))
-        rhs = k - self.d5
-        if self.mag5 < 1e-12 or abs(rhs) > self.mag5 + 1e-9:
+        n = _rot(w1, -q1, _mat(r, self.m6))
+        k = _dot(u, n)
+        s2 = (n[0] - k * u[0]) ** 2 + (n[1] - k * u[1]) ** 2 + (n[2] - k * u[2]) ** 2
+        # M^2 sin^2(q5 - phase) = M^2 - (k - D)^2, with 1 - k^2 = |u x w6'|^2 = s2:
+        sin2 = s2 + self.m2m1 + 2.0 * k * self.d5 - self.d5 * self.d5
+        if self.mag5 < 1e-12 or sin2 < -2e-9:
             return []
-        spread = math.acos(max(-1.0, min(1.0, rhs / self.mag5)))
+        spread = math.atan2(math.sqrt(max(0.0, sin2)), k - self.d5)
         v = _mat(self.rm, _mat_t(r, _rot(w1, q1, u)))  # R_w^T R1 u
         out = []
         for q5 in (self.phase5 + spread, self.phase5 - spread):

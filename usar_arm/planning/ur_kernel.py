@@ -39,10 +39,10 @@ from usar_arm.planning.ur import SINGULAR_WRIST, ThreeParallelArm
 """w (6x3) and p (6x3) of the joints, u, w1 x u, p56 and w6 in the tool frame, the tool's
 rotation at zero (3x3, row-major), x, p56 - p4, the plane basis ea/eb, and the 2-D p2, e and
 p3 - p2 (2 each)."""
-(C_LATERAL, C_SLACK, C_D5, C_MAG5, C_PHASE5, C_L2SQ, C_L3SQ, C_MAG, C_PHASE, C_REACH, C_S3,
- C_S4) = range(75, 87)
+(C_LATERAL, C_SLACK, C_D5, C_MAG5, C_PHASE5, C_M2M1, C_L2SQ, C_L3SQ, C_MAG, C_PHASE, C_REACH,
+ C_S3, C_S4) = range(75, 88)
 """Scalars of the closed form (see :class:`.ur.ThreeParallelArm`)."""
-C_SIZE = 87
+C_SIZE = 88
 C_W5, C_W6 = C_W + 12, C_W + 15
 
 
@@ -56,8 +56,8 @@ def pack(arm: ThreeParallelArm) -> Array:
                           (C_X, arm.x), (C_R4, arm.r4), (C_EA, arm.ea), (C_EB, arm.eb),
                           (C_P2, arm.p2), (C_E, arm.e), (C_P3P2, arm.p3p2)):
         c[offset:offset + len(value)] = value
-    c[C_LATERAL:C_SIZE] = (arm.lateral, arm.slack, arm.d5, arm.mag5, arm.phase5, arm.l2sq,
-                           arm.l3sq, arm.mag, arm.phase, arm.reach, arm.s3, arm.s4)
+    c[C_LATERAL:C_SIZE] = (arm.lateral, arm.slack, arm.d5, arm.mag5, arm.phase5, arm.m2m1,
+                           arm.l2sq, arm.l3sq, arm.mag, arm.phase, arm.reach, arm.s3, arm.s4)
     return c
 
 
@@ -87,12 +87,12 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
     v, back, g, y, turned = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     _mul(rot, c[C_T56:C_T56 + 3], False, d)
     for i in range(3):
-        d[i] += pos[i] - c[C_P + i]
+        d[i] = d[i] + pos[i] - c[C_P + i]
     h = _dot(c, C_W, d)
     for i in range(3):
         tmp[i] = d[i] - h * c[C_W + i]
     a, b = _dot(c, C_U, tmp), _dot(c, C_W1XU, tmp)
-    rad = math.hypot(a, b)
+    rad = math.sqrt(a * a + b * b)
     lateral = c[C_LATERAL]
     if rad < 1e-12 or abs(lateral) > rad + c[C_SLACK]:
         return 0
@@ -104,10 +104,14 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
     for sign1 in (1.0, -1.0):
         q1 = base + sign1 * spread
         _rot(c, C_W, -q1, w6t, tmp)
-        rhs5 = _dot(c, C_U, tmp) - c[C_D5]
-        if mag5 < 1e-12 or abs(rhs5) > mag5 + 1e-9:
+        k = _dot(c, C_U, tmp)
+        s2 = 0.0
+        for i in range(3):
+            s2 += (tmp[i] - k * c[C_U + i]) ** 2
+        sin2 = s2 + c[C_M2M1] + 2.0 * k * c[C_D5] - c[C_D5] * c[C_D5]
+        if mag5 < 1e-12 or sin2 < -2e-9:
             continue
-        spread5 = math.acos(max(-1.0, min(1.0, rhs5 / mag5)))
+        spread5 = math.atan2(math.sqrt(max(0.0, sin2)), k - c[C_D5])
         _rot(c, C_W, q1, c[C_U:C_U + 3], tmp)
         _mul(rot, tmp, True, tmp2)
         _mul(rm, tmp2, False, v)  # R_w^T R1 u
