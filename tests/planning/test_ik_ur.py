@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.planning.ur_arms import ODD, UR10, synthetic, ur5
+from tests.planning.ur_arms import NEAR, ODD, UR10, synthetic, ur5
 from usar_arm.planning import ur_kernel
 from usar_arm.planning.ik import IKOptions
 from usar_arm.planning.opw import NotOrthoParallel, OrthoParallelArm
@@ -183,3 +183,20 @@ def test_without_the_closed_form_the_ur5_is_solved_numerically(arms: dict[str, R
     assert ik.method == "numeric"
     target = _pose(arms["ur5"], GENERIC)
     assert _gap(_pose(arms["ur5"], ik.solve(target, GENERIC + 0.05).best.q), target) < 1e-5
+
+
+def test_an_arm_slightly_off_the_class_is_solved_by_the_closed_form_and_newton() -> None:
+    robot = synthetic("near", NEAR)
+    ik = robot.ik_solver()
+    assert ik.method == "analytic-ur"
+    lo, hi = robot.chain.lower(), robot.chain.upper()
+    rng = np.random.default_rng(12)
+    methods: dict[str, int] = {}
+    for _ in range(300):
+        q, seed = rng.uniform(lo, hi), rng.uniform(lo, hi)
+        target = _pose(robot, q)
+        result = ik.solve(target, seed)
+        methods[result.method] = methods.get(result.method, 0) + 1
+        assert _gap(_pose(robot, result.best.q), target) < 1e-5
+        assert np.all(result.best.q >= lo - 1e-9) and np.all(result.best.q <= hi + 1e-9)
+    assert methods.get("analytic-ur+newton", 0) >= 295, methods

@@ -33,12 +33,20 @@ class UrLengths:
     elbow_sign: int = 1
     wrist_sign: int = 1
     tool_rpy: tuple[float, float, float] = (-1.5707963267948966, 0.0, 0.0)
+    miss: float = 0.0
+    """m: axis 6 moved this far off axis 5 (a real arm's deviation from the class)."""
+    tilt: float = 0.0
+    """rad: the elbow's axis tilted this much out of parallel (likewise)."""
 
 
 UR10 = UrLengths(0.1273, 0.220941, 0.1719, 0.612, 0.5723, 0.1149, 0.1157, 0.0922)
 ODD = UrLengths(0.3, 0.05, 0.2, 0.45, 0.3, 0.07, 0.12, 0.15, (0.1, -0.2, 0.4), (0.3, -0.2, 0.5),
                 -1, -1, (0.4, -1.1, 0.7))
 """Other lengths, a tilted mount, the elbow's and wrist 1's axes reversed, a skewed tool."""
+NEAR = UrLengths(0.1625, 0.138, 0.131, 0.425, 0.3922, 0.127, 0.0997, 0.0996, miss=0.001,
+                 tilt=0.004)
+"""UR5e-like lengths, axes 5 and 6 a millimetre apart and the elbow 4 mrad out of parallel:
+in the class within its tolerance, not exactly."""
 
 _TURN = "-6.283185307179586", "6.283185307179586"
 _HALF = "-3.141592653589793", "3.141592653589793"
@@ -66,13 +74,13 @@ def ur_urdf(name: str, g: UrLengths) -> str:
         _joint("shoulder_pan_joint", "mount", "shoulder_link", (0, 0, g.d1), (0, 0, 0), "0 0 1"),
         _joint("shoulder_lift_joint", "shoulder_link", "upper_arm_link", (0, g.shoulder, 0),
                (0, half, 0), "0 1 0"),
-        _joint("elbow_joint", "upper_arm_link", "forearm_link", (0, -g.elbow, g.a2), (0, 0, 0),
-               f"0 {g.elbow_sign} 0", _HALF),
+        _joint("elbow_joint", "upper_arm_link", "forearm_link", (0, -g.elbow, g.a2),
+               (g.tilt, 0, 0), f"0 {g.elbow_sign} 0", _HALF),
         _joint("wrist_1_joint", "forearm_link", "wrist_1_link", (0, 0, g.a3), (0, half, 0),
                f"0 {g.wrist_sign} 0"),
         _joint("wrist_2_joint", "wrist_1_link", "wrist_2_link", (0, g.d4, 0), (0, 0, 0),
                "0 0 1"),
-        _joint("wrist_3_joint", "wrist_2_link", "wrist_3_link", (0, 0, g.d5), (0, 0, 0),
+        _joint("wrist_3_joint", "wrist_2_link", "wrist_3_link", (g.miss, 0, g.d5), (0, 0, 0),
                "0 1 0"),
         _joint("tool0_joint", "wrist_3_link", "tool0", (0, g.d6, 0), g.tool_rpy, None)]
     return (f'<robot name="{name}">' + "".join(f'<link name="{lk}"/>' for lk in links)
