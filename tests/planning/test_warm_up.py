@@ -34,7 +34,9 @@ arm.plan(joints=np.array([0.3, -0.5, 0.4, 0.0, 0.5, 0.0]), start=start, scene="t
 ur = "examples/robots/example-robot-data/robots/ur_description/"
 ur5 = Arm.from_files(ur + "urdf/ur5_robot.urdf", srdf=ur + "srdf/ur5.srdf", tip="ee_link")
 pose = ur5.fk(np.array([0.3, -1.0, 1.2, 0.4, 0.9, 0.7]))
-ur5.ik(pose, seed=np.array([0.2, -1.1, 1.1, 0.3, 0.8, 0.6]))
+previous = ur5.ik(pose, seed=np.array([0.2, -1.1, 1.1, 0.3, 0.8, 0.6])).best.q
+ur5.ik(ur5.fk(np.array([0.2, -1.0, 1.1, 0.4, 0.9, 0.7])), seed=previous)  # a read-only seed
+arm.ik(arm.fk(np.array([0.2, -0.5, 0.4, 0.0, 0.5, 0.0])), seed=previous)
 ur5.ik(pose, all_solutions=True)
 print(json.dumps({name: sorted(set(map(str, k.signatures)) - before[name])
                   for name, k in kernels.items()}))

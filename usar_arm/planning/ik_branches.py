@@ -160,6 +160,8 @@ class AnalyticBranches:
         limit, no branch)."""
         q = np.empty(len(ref))
         a = self.arrays
+        if not ref.flags.writeable:  # (a frozen seed, as a solution's q: read-only arrays are
+            ref = ref.copy()  # a type of their own to numba, which the warm-up does not compile)
         if self.ur is not None:
             status, pe, re = ur_kernel.nearest(
                 rot, pos, ref, a.constants, a.lower, a.upper, a.revolute, a.wide, a.axes,
