@@ -104,8 +104,8 @@ class ThreeParallelArm:
         for what, dev in checks:
             if dev > tolerance:
                 raise NotThreeParallel(f"{what}: off by {dev:.4f}")
-        meet, miss = _closest_point(np.array(w[4:]), np.array(p[4:]))
-        if miss > max(tolerance, 0.05):
+        meet, miss = _closest_point(np.array(w[4:]), np.array(p[4:]))  # (half their gap)
+        if 2.0 * miss > max(tolerance, 0.05):
             raise NotThreeParallel(f"axes 5 and 6 miss each other by {2 * miss:.4f} m")
         self.w, self.p = w, p
         self.tool = np.asarray(tool, float)
