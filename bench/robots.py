@@ -64,9 +64,9 @@ BOUNDARY_STEP = 1e-4
 collision task's "boundary" configurations: a robot point moves ~0.1 mm or less between them,
 so a checker with a margin, a convex hull or a coarse mesh answers one of them wrong)."""
 CLOSED_FORM_EXPECTED = {
-    "ur5": "not met: usar-arm solved the UR5 numerically; its closed form covers ortho-parallel "
-           "arms with a spherical wrist (opw) only, and the UR5's wrist axes do not meet. A UR "
-           "closed form exists (8 branches) but usar-arm has none"}
+    "ur5": "not met: usar-arm solved the UR5 numerically, although it has a closed form for "
+           "arms with three parallel axes (method analytic-ur): IKSolver.analytic_reason says "
+           "why it was not used"}
 """6-joint robots whose IK the issue expects in closed form."""
 COLLISION_CHECKED = ("usar-arm", "mplib", "roboplan")
 """IK solvers whose answers claim to be free of self-collision (ours: solved with the

@@ -2,10 +2,11 @@
 
 usar-arm plans for any serial arm's URDF, not only the arms it learns: the collision meshes are
 read with trimesh, ``package://`` paths resolve as ROS tools resolve them (here through the
-folder named after the package), and an arm without a closed form, like the UR5, gets the
-numeric IK solver with restarts. The SRDF gives the disabled collision pairs (links joined by a
-joint are never checked against each other, listed or not, as in MoveIt's setup assistant). The
-scene is the UR5's own: the shipped scenes are the KR60's cell.
+folder named after the package), and the IK takes the closed form the arm's axes allow: the
+UR5's three parallel axes have one (an arm with neither that nor an ortho-parallel structure
+gets the numeric solver with restarts). The SRDF gives the disabled collision pairs (links
+joined by a joint are never checked against each other, listed or not, as in MoveIt's setup
+assistant). The scene is the UR5's own: the shipped scenes are the KR60's cell.
 """
 
 from pathlib import Path
@@ -25,7 +26,8 @@ pose = transform(rpy_to_matrix((0.0, np.pi / 2, 0.0)), (0.45, 0.30, 0.20))
 start = np.array([-1.2, -1.2, 1.2, -1.57, -1.57, 0.0])
 solution = arm.ik(pose, seed=start).best.q
 reached = arm.fk(np.array(solution))
-print("IK, numeric: position error (m):", float(np.linalg.norm(reached[:3, 3] - pose[:3, 3])))
+error = float(np.linalg.norm(reached[:3, 3] - pose[:3, 3]))
+print(f"IK, {arm.robot.ik_solver().method}: position error (m): {error:.2g}")
 
 # From the start, over the post between it and the goal.
 plan = arm.plan(pose=pose, start=start, scene=HERE / "robots" / "ur5_cell.yaml")

@@ -168,7 +168,7 @@ def test_the_stage_json_has_the_keys_and_booleans() -> None:
         assert {"usar-arm", "roboplan", "mplib"} <= set(r["collision"]["solvers"])
         assert "tesseract" in r["collision"]["solvers"]
         assert {"usar-arm", "pytracik", "roboplan", "mplib"} <= set(r["ik"]["solvers"])
-        assert r["ik"]["solvers"]["usar-arm"]["method"] in ("numeric", "analytic")
+        assert r["ik"]["solvers"]["usar-arm"]["method"] in ("numeric", "analytic", "analytic-ur")
         col = r["collision"]["solvers"]["usar-arm"]
         assert isinstance(col["missed_contacts"], int)
         assert isinstance(col["invented_contacts"], int)

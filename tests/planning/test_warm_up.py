@@ -1,7 +1,8 @@
 """The install's warm-up compiles every kernel signature a plan uses, so that no command pays for
 compiling (the demo's first plan once took 7 s: the collision world handed its lever arms over
 read-only, a type the warm-up never compiled; then 3.3-3.9 s: its start configuration came
-read-only to the single-query kernel)."""
+read-only to the single-query kernel). The UR5's closed form (:mod:`usar_arm.planning.ur_kernel`)
+is warmed up too."""
 
 from __future__ import annotations
 
@@ -14,12 +15,13 @@ ROOT = Path(__file__).resolve().parents[2]
 PROBE = """
 import json
 import numpy as np
-from usar_arm.planning import bounds, ik_kernel
+from usar_arm.planning import bounds, ik_kernel, ur_kernel
 from usar_arm.planning.compiled import warm_up
 warm_up()
 kernels = {name: getattr(bounds, name) for name in ("check", "summary", "walk")}
-kernels.update({f"ik_kernel.{n}": getattr(ik_kernel, n) for n in dir(ik_kernel)
-                if hasattr(getattr(ik_kernel, n), "signatures")})
+for module in (ik_kernel, ur_kernel):
+    kernels.update({f"{module.__name__}.{n}": getattr(module, n) for n in dir(module)
+                    if hasattr(getattr(module, n), "signatures")})
 before = {name: set(map(str, k.signatures)) for name, k in kernels.items()}
 from usar_arm import Arm
 arm = Arm.from_files("robots/generated/KR60.urdf")
@@ -29,6 +31,13 @@ arm.plan(joints=np.array([0.2, -0.3, 0.5, 0.1, 0.4, 0.0]), scene="table", motion
 start = np.array([0.2, -0.3, 0.5, 0.1, 0.4, 0.0])
 start.setflags(write=False)  # as a frozen reading or home comes (the demo's first move)
 arm.plan(joints=np.array([0.3, -0.5, 0.4, 0.0, 0.5, 0.0]), start=start, scene="table")
+ur = "examples/robots/example-robot-data/robots/ur_description/"
+ur5 = Arm.from_files(ur + "urdf/ur5_robot.urdf", srdf=ur + "srdf/ur5.srdf", tip="ee_link")
+pose = ur5.fk(np.array([0.3, -1.0, 1.2, 0.4, 0.9, 0.7]))
+previous = ur5.ik(pose, seed=np.array([0.2, -1.1, 1.1, 0.3, 0.8, 0.6])).best.q
+ur5.ik(ur5.fk(np.array([0.2, -1.0, 1.1, 0.4, 0.9, 0.7])), seed=previous)  # a read-only seed
+arm.ik(arm.fk(np.array([0.2, -0.5, 0.4, 0.0, 0.5, 0.0])), seed=previous)
+ur5.ik(pose, all_solutions=True)
 print(json.dumps({name: sorted(set(map(str, k.signatures)) - before[name])
                   for name, k in kernels.items()}))
 """

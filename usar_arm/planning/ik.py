@@ -1,8 +1,9 @@
 """Inverse kinematics of a tool frame: analytic where the arm allows it, numeric for any arm.
 
-* Analytic (:mod:`.opw`) for ortho-parallel arms with a spherical wrist: all branches in closed
-  form, each polished by Newton steps on the exact Pinocchio model (the learnt arm is never
-  exactly OPW: wire rounding and millimetre offsets), kept when within tolerance.
+* Analytic for ortho-parallel arms with a spherical wrist (:mod:`.opw`) and for arms with three
+  parallel axes like the UR family (:mod:`.ur`): all branches in closed form, each polished by
+  Newton steps on the exact Pinocchio model (the learnt arm is never exactly OPW: wire rounding
+  and millimetre offsets), kept when within tolerance.
 * Numeric for any arm: Levenberg-Marquardt (damped least squares with adaptive damping) inside
   the joint limits, from the seed and then seeded random restarts, within a time budget.
 
@@ -81,7 +82,8 @@ class IKSolver:
 
     @property
     def analytic(self) -> OrthoParallelArm | None:
-        """The arm's closed form, or None when it is not ortho-parallel."""
+        """The arm's ortho-parallel closed form, or None when it is not ortho-parallel (a
+        three-parallel arm's is ``branches.ur``)."""
         return None if self.branches is None else self.branches.arm
 
     def reseed(self, seed: int | None = None) -> None:
@@ -91,8 +93,11 @@ class IKSolver:
 
     @property
     def method(self) -> str:
-        """``analytic`` or ``numeric``."""
-        return "analytic" if self.branches is not None else "numeric"
+        """``analytic`` (the ortho-parallel closed form), ``analytic-ur`` (the closed form of
+        three parallel axes) or ``numeric``."""
+        if self.branches is None:
+            return "numeric"
+        return "analytic" if self.branches.kind == "opw" else "analytic-ur"
 
     def solve(self, target: Array, seed: Array | None = None, all_solutions: bool = False,
               collision: CollisionWorld | None = None) -> IKResult:
@@ -117,7 +122,7 @@ class IKSolver:
         if self.branches is not None and not all_solutions:
             fast = self._nearest_compiled(rot, pos, ref, collision)
             if fast is not None:
-                return IKResult((fast,), time.perf_counter() - start, "analytic+newton")
+                return IKResult((fast,), time.perf_counter() - start, f"{self.method}+newton")
         sols: list[IKSolution] = []
         violation: Violation | None = None
         starts: list[Array] = []
@@ -125,13 +130,13 @@ class IKSolver:
         if self.branches is not None:
             sols, violation, starts = self._solve_analytic(rot, pos, ref, all_solutions,
                                                            collision, collided)
-            method = "analytic+newton"
+            method = f"{self.method}+newton"
         if not sols and not (self.branches is not None and collided):
             # (an arm with a closed form has no solutions beyond its branches: when they all
             # collide, searching numerically would only find them again)
             sols = self.numeric.search(rot, pos, ref, seed is not None, all_solutions,
                                        collision, start, starts, collided)
-            method = "numeric" if self.branches is None else "analytic+numeric"
+            method = "numeric" if self.branches is None else f"{self.method}+numeric"
         if not sols:
             self._raise_failure(rot, pos, ref, violation, collision, collided, start)
         sols.sort(key=lambda s: float(np.sum((s.q - ref) ** 2)))

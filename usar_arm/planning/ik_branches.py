@@ -1,11 +1,12 @@
 """The IK's branch bookkeeping: joint windings into the limits, limit violations, and the
-closed-form branches of an ortho-parallel arm (:mod:`.opw`) in order of distance to a seed.
+closed-form branches of an arm in order of distance to a seed: an ortho-parallel arm with a
+spherical wrist (:mod:`.opw`) or an arm with three parallel axes like the UR family (:mod:`.ur`).
 
 :class:`Windings` moves revolute angles by whole turns into their limits (the turn nearest the
-seed where a range is wider than 2 pi); :class:`AnalyticBranches` enumerates an OPW arm's
-branches lazily, nearest first, and holds the arrays of its compiled path
-(:func:`.ik_kernel.nearest`). Neither polishes a solution: that is :mod:`.ik_numeric`'s job.
-Radians and metres.
+seed where a range is wider than 2 pi); :class:`AnalyticBranches` enumerates an arm's branches
+nearest first (an OPW arm's lazily) and holds the arrays of its compiled path
+(:func:`.ik_kernel.nearest`, :func:`.ur_kernel.nearest`). Neither polishes a solution: that is
+:mod:`.ik_numeric`'s job. Radians and metres.
 """
 
 from __future__ import annotations
@@ -21,10 +22,11 @@ from numpy.typing import NDArray
 
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
-from usar_arm.planning import ik_kernel
+from usar_arm.planning import ik_kernel, ur_kernel
 from usar_arm.planning.ik_types import IKOptions
 from usar_arm.planning.opw import NotOrthoParallel, OrthoParallelArm
 from usar_arm.planning.poe import PoeModel
+from usar_arm.planning.ur import NotThreeParallel, ThreeParallelArm
 
 TWO_PI = 2.0 * math.pi
 WRIST_SINGULAR = 0.05
@@ -115,10 +117,11 @@ class AnalyticArrays(NamedTuple):
 
 
 class AnalyticBranches:
-    """The closed-form branches of an ortho-parallel arm with a spherical wrist.
+    """The closed-form branches of an ortho-parallel arm with a spherical wrist (``kind``
+    ``opw``), else of an arm with three parallel axes (``kind`` ``ur``).
 
     Raises:
-        NotOrthoParallel: the arm is not in the class (with the reason).
+        NotOrthoParallel: the arm is in neither class (with the reasons).
     """
 
     def __init__(self, chain: KinematicChain, frame: str, windings: Windings):
@@ -129,11 +132,24 @@ class AnalyticBranches:
         axes = np.array([f[:3, :3] @ np.asarray(j.axis) for j, f in frames])
         points = np.array([f[:3, 3] for _, f in frames])
         tool = np.ascontiguousarray(chain.frame_pose(frame, zero))
-        self.arm = OrthoParallelArm(axes, points, tool)
+        self.arm: OrthoParallelArm | None = None
+        self.ur: ThreeParallelArm | None = None
+        try:
+            self.arm = OrthoParallelArm(axes, points, tool)
+            constants = ik_kernel.pack(self.arm)
+        except NotOrthoParallel as opw:
+            try:
+                self.ur = ThreeParallelArm(axes, points, tool)
+            except NotThreeParallel as ur:
+                raise NotOrthoParallel(f"not ortho-parallel ({opw}) nor three-parallel ({ur})"
+                                       ) from None
+            constants = ur_kernel.pack(self.ur)
+        self.kind = "opw" if self.arm is not None else "ur"
+        """Which closed form: ``opw`` or ``ur``."""
         self.windings = windings
         poe = PoeModel(chain)
         self.arrays = AnalyticArrays(
-            ik_kernel.pack(self.arm), windings.lower, windings.upper,
+            constants, windings.lower, windings.upper,
             windings.revolute.astype(float), windings.wide.astype(float), poe.axes, poe.points,
             tool)
 
@@ -144,16 +160,38 @@ class AnalyticBranches:
         limit, no branch)."""
         q = np.empty(len(ref))
         a = self.arrays
-        status, pe, re = ik_kernel.nearest(
-            rot, pos, ref, a.constants, a.lower, a.upper, a.revolute, a.wide, a.axes, a.points,
-            a.tool, options.position_tolerance, options.orientation_tolerance,
-            options.newton_steps, MAX_NEWTON_STEP, ANALYTIC_SLACK, WRIST_SINGULAR, q)
+        if not ref.flags.writeable:  # (a frozen seed, as a solution's q: read-only arrays are
+            ref = ref.copy()  # a type of their own to numba, which the warm-up does not compile)
+        if self.ur is not None:
+            status, pe, re = ur_kernel.nearest(
+                rot, pos, ref, a.constants, a.lower, a.upper, a.revolute, a.wide, a.axes,
+                a.points, a.tool, options.position_tolerance, options.orientation_tolerance,
+                options.newton_steps, MAX_NEWTON_STEP, ANALYTIC_SLACK, q)
+        else:
+            status, pe, re = ik_kernel.nearest(
+                rot, pos, ref, a.constants, a.lower, a.upper, a.revolute, a.wide, a.axes,
+                a.points, a.tool, options.position_tolerance, options.orientation_tolerance,
+                options.newton_steps, MAX_NEWTON_STEP, ANALYTIC_SLACK, WRIST_SINGULAR, q)
         return (q, pe, re) if status == ik_kernel.SOLVED else None
+
+    def _ordered_ur(self, rot: Array, pos: Array, ref: Array) -> Iterator[list[float]]:
+        """Every branch of a three-parallel arm (wound into the limits; q6 the seed's where
+        the wrist is singular), nearest ``ref`` first."""
+        cand = np.empty((8, 6))
+        count = ur_kernel.branches_free(rot, pos, self.arrays.constants, float(ref[5]), cand)
+        refl = ref.tolist()
+        wound = [self.windings.wind_list(row, refl, 0) for row in cand[:count].tolist()]
+        wound.sort(key=lambda q: squared_distance(q, refl, 0, 6))
+        yield from wound
 
     def ordered(self, rot: Array, pos: Array, ref: Array) -> Iterator[list[float]]:
         """Every branch (wound into the limits), in order of distance to ``ref``, expanded
         lazily: an arm branch's wrist is only solved when its (q1, q2, q3) part alone is nearer
-        than the best full candidate, so the first is exact and usually costs one wrist solve."""
+        than the best full candidate, so the first is exact and usually costs one wrist solve
+        (a three-parallel arm's eight branches cost 2 us: all are computed)."""
+        if self.arm is None:
+            yield from self._ordered_ur(rot, pos, ref)
+            return
         r = rot.tolist()
         refl = ref.tolist()
         wind = self.windings.wind_list
@@ -181,6 +219,7 @@ class AnalyticBranches:
         q4 + c q6 is fixed by a spherical wrist, and a real wrist (axes a millimetre apart)
         has its exact solutions at particular splits, so several splits are offered: the
         seed's q4, 0, +-pi/2 and pi."""
+        assert self.arm is not None
         out = []
         for q4, q5, q6 in self.arm.wrist_branches(r, *arm):
             out.append((q4, q5, q6))
