@@ -240,13 +240,14 @@ def test_a_million_configurations_agree_with_brute_force(kr60: Robot, fanuc: Rob
     assert total >= 1_000_000
 
 
-@pytest.mark.parametrize("scene", ["table", "cage"])
+@pytest.mark.parametrize("scene", ["table", "cage", "boxes"])
 def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot,
                                                                      scene: str) -> None:
     """A learnt link is a body cylinder and its core along one axis: the kernel tests the
     capsule around both first, for every link pair and obstacle. That may only save work: the
     verdicts, and where a walk first meets a contact, are those of testing every body alone."""
-    world = kr60.collision_world(load_scene(scene))
+    world = kr60.collision_world(_random_scene(np.random.default_rng(9), 40) if scene == "boxes"
+                                 else load_scene(scene))
     packed = world._compiled._packed  # (the kernel's own arrays, as the world hands them over)
     links = packed[2]
     assert (links[:, bounds.GROUP] >= 0).all(), "every learnt body is in its link's group"
@@ -254,6 +255,7 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
     alone = list(packed)
     alone[2] = links.copy()
     alone[2][:, bounds.GROUP] = -1
+    alone[2][:, bounds.NEXT] = -1
     qs = np.random.default_rng(5).uniform(kr60.chain.lower(), kr60.chain.upper(), (3000, 6))
     grouped_verdicts = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)[1]
     alone_verdicts = bounds.check(qs, *alone, bounds.EPS, bounds.MARGIN)[1]
@@ -267,6 +269,17 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
         assert grouped[0] == single[0], (a.tolist(), b.tolist())
         hits += grouped[0] >= 0
     assert hits > 0
+
+
+def test_a_links_bodies_must_share_their_obstacles_to_be_cleared_together() -> None:
+    """The scene kernel clears a group's bodies against an obstacle at once, which is right
+    only when every body of the link is checked against it (pairs are disabled link by link)."""
+    from usar_arm.planning.verdicts import _group_chains
+    group = np.array([1, 1, -1, 4, 4, 4])
+    rs = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 0]])
+    assert _group_chains(group, rs).tolist() == [-1, 0, -1, 5, 3, -1]  # group body first
+    with pytest.raises(ValueError, match=r"bodies \[1, 0\] of one link"):
+        _group_chains(group, rs[1:])
 
 
 def test_only_bodies_along_one_axis_and_within_its_length_are_grouped() -> None:

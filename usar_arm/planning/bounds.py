@@ -40,6 +40,7 @@ from usar_arm.planning.bounds_arrays import (
     GROUP_RADIUS,
     HALF,
     HULL,
+    NEXT,
     O_BOUND,
     O_CENTRE,
     O_DIR,
@@ -186,20 +187,36 @@ def _judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, a
     :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each link visits
     only the subtrees its bounding sphere comes within the current bound (or ``eps``) of, the
     pairs below the others stay CLEAR. A pair whose quick bound is below ``refine`` units of
-    its link's motion (at least ``eps`` m) gets the tighter test too."""
+    its link's motion (at least ``eps`` m) gets the tighter test too.
+
+    A link whose bodies form a group (``GROUP``, ``NEXT``) walks the tree once, with the
+    cylinder around them all (the group body's axis, ``GROUP_RADIUS``); an obstacle that this
+    cylinder clears is cleared for every body of the link, else each body is tested as its
+    own. The bodies of one link are checked against the same obstacles (pairs are disabled
+    link by link: :meth:`.verdicts.CompiledVerdicts.check_pairs` makes sure)."""
     scene_gap = math.inf
     for i in range(pair_of.shape[0]):
+        group = int(links[i, GROUP])
+        if group >= 0 and group != i:
+            continue  # tested with its group's first body
+        grouped = group == i
+        radius_g = links[i, GROUP_RADIUS] if grouped else links[i, RADIUS]
+        bound_g = math.sqrt(links[i, HALF] ** 2 + radius_g ** 2) if grouped else links[i, BOUND]
+        move_g = move[i]
+        b = int(links[i, NEXT]) if grouped else -1
+        while b >= 0:
+            move_g = max(move_g, move[b])
+            b = int(links[b, NEXT])
         stack[0] = 0
         top = 1
-        refine_i = max(eps, refine * move[i])
         while top > 0:
             top -= 1
             nd = stack[top]
             bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
                                + (seg[5, i, 1] - tree[nd, 1]) ** 2
                                + (seg[5, i, 2] - tree[nd, 2]) ** 2)
-                     - tree[nd, 3] - links[i, BOUND])
-            if bound > max(scene_gap * move[i], eps):
+                     - tree[nd, 3] - bound_g)
+            if bound > max(scene_gap * move_g, eps):
                 continue  # every pair below is farther apart than the bound already found
             if nodes[nd, 0] >= 0:
                 stack[top] = nodes[nd, 0]
@@ -208,49 +225,62 @@ def _judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, a
                 continue
             for k in range(nodes[nd, 2], nodes[nd, 3]):
                 s = order[k]
-                p = pair_of[i, s]
-                if p < 0:
+                if pair_of[i, s] < 0:
                     continue
                 # Written out here, not called: a kernel call per pair with these array
-                # arguments costs more than the test itself.
+                # arguments costs more than the test itself. First the group's cylinder
+                # (when grouped), then each body b from the group's first.
                 o = obstacles[s]
-                if kind[s] == BOX or kind[s] == HULL:
-                    # The link's centre against the solid box, less the link's bounding
-                    # radius: tighter than two bounding spheres for a cell's large flat boxes.
-                    gap = (point_box_distance(seg[5, i], o[O_START:O_START + 3], axes[s],
-                                               o[O_SIZE:O_SIZE + 3]) - links[i, BOUND])
-                    if gap <= refine_i:
-                        gap = max(gap, cylinder_box_gap(
-                            seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF],
-                            o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
-                else:
-                    gap = (math.sqrt((seg[5, i, 0] - o[O_CENTRE]) ** 2
-                                     + (seg[5, i, 1] - o[O_CENTRE + 1]) ** 2
-                                     + (seg[5, i, 2] - o[O_CENTRE + 2]) ** 2)
-                           - links[i, BOUND] - o[O_BOUND])
-                    if gap <= refine_i:
-                        gap = max(gap, segment_distance(seg[0, i], seg[1, i],
-                                                        o[O_START:O_START + 3],
-                                                        o[O_DIR:O_DIR + 3])
-                                  - links[i, RADIUS] - o[O_SIZE])
-                if gap > eps:
-                    if move[i] > 0.0:
-                        scene_gap = min(scene_gap, gap / move[i])
-                    continue
-                scene_gap = 0.0
-                if kind[s] == BOX:
-                    touching = inner_box_contact(seg[5, i], seg[4, i], links[i, RHO],
-                                                  links[i, REACH], o[O_START:O_START + 3],
-                                                  axes[s], o[O_SIZE:O_SIZE + 3], margin,
-                                                  scratch)
-                elif kind[s] == HULL:
-                    touching = False
-                else:
-                    inner = segment_distance(seg[2, i], seg[3, i],
-                                             o[O_IN_START:O_IN_START + 3],
-                                             o[O_IN_DIR:O_IN_DIR + 3])
-                    touching = inner < links[i, RHO] + o[O_RHO] - margin
-                out[p] = CONTACT if touching else UNDECIDED
+                whole = grouped
+                b = i
+                while b >= 0:
+                    if whole:
+                        radius, bounding, mv = radius_g, bound_g, move_g
+                    else:
+                        radius, bounding, mv = links[b, RADIUS], links[b, BOUND], move[b]
+                    refine_b = max(eps, refine * mv)
+                    if kind[s] == BOX or kind[s] == HULL:
+                        # The centre against the solid box, less the bounding radius:
+                        # tighter than two bounding spheres for a cell's large flat boxes.
+                        gap = (point_box_distance(seg[5, b], o[O_START:O_START + 3], axes[s],
+                                                   o[O_SIZE:O_SIZE + 3]) - bounding)
+                        if gap <= refine_b:
+                            gap = max(gap, cylinder_box_gap(
+                                seg[5, b], seg[4, b], radius, links[b, HALF],
+                                o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
+                    else:
+                        gap = (math.sqrt((seg[5, b, 0] - o[O_CENTRE]) ** 2
+                                         + (seg[5, b, 1] - o[O_CENTRE + 1]) ** 2
+                                         + (seg[5, b, 2] - o[O_CENTRE + 2]) ** 2)
+                               - bounding - o[O_BOUND])
+                        if gap <= refine_b:
+                            gap = max(gap, segment_distance(seg[0, b], seg[1, b],
+                                                            o[O_START:O_START + 3],
+                                                            o[O_DIR:O_DIR + 3])
+                                      - radius - o[O_SIZE])
+                    if gap > eps:
+                        if mv > 0.0:
+                            scene_gap = min(scene_gap, gap / mv)
+                        b = int(links[b, NEXT]) if grouped and not whole else -1
+                        continue
+                    if whole:
+                        whole = False  # each body on its own, from the first (b == i)
+                        continue
+                    scene_gap = 0.0
+                    if kind[s] == BOX:
+                        touching = inner_box_contact(seg[5, b], seg[4, b], links[b, RHO],
+                                                      links[b, REACH], o[O_START:O_START + 3],
+                                                      axes[s], o[O_SIZE:O_SIZE + 3], margin,
+                                                      scratch)
+                    elif kind[s] == HULL:
+                        touching = False
+                    else:
+                        inner = segment_distance(seg[2, b], seg[3, b],
+                                                 o[O_IN_START:O_IN_START + 3],
+                                                 o[O_IN_DIR:O_IN_DIR + 3])
+                        touching = inner < links[b, RHO] + o[O_RHO] - margin
+                    out[pair_of[b, s]] = CONTACT if touching else UNDECIDED
+                    b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
 
 

@@ -25,14 +25,15 @@ BOX, SPHERE, CAPSULE, HULL = 0, 1, 2, 3
 half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding box (it can
 clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
 
-RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS = range(9)
-LINK_WIDTH = 9
+RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT = range(10)
+LINK_WIDTH = 10
 """Columns of the per-body array: the cylinder's radius and half-length (m), the radius of the
 balls inside it and how far their centres reach from its centre along the axis, the radius of a
 sphere around it, how many joints move it; the index of the link it belongs to (its bodies are
 rigid together), and when every body of that link lies within ``GROUP_RADIUS`` (m) of one body's
 axis segment, that body's index (``GROUP``; -1 otherwise): one capsule test then clears every
-body pair of two such links at once."""
+body pair of two such links at once, and one test clears a link's bodies against an obstacle;
+``NEXT``: the group's next body after this one (the group's body first; -1 after the last)."""
 
 O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
     0, 3, 6, 9, 12, 15, 16, 17)
@@ -52,7 +53,7 @@ def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
         out[k, REACH] = half[k] - rho
         out[k, BOUND] = math.sqrt(radius[k] * radius[k] + half[k] * half[k])
         out[k, MOVED] = moved_by[k]
-        out[k, OWNER], out[k, GROUP], out[k, GROUP_RADIUS] = k, -1.0, 0.0
+        out[k, OWNER], out[k, GROUP], out[k, GROUP_RADIUS], out[k, NEXT] = k, -1.0, 0.0, -1.0
     return out
 
 

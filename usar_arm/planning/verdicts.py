@@ -8,6 +8,7 @@ walk's skips safe. No python-fcl here (:mod:`.exact` decides the undecided). Met
 from __future__ import annotations
 
 import copy
+import itertools
 
 import numpy as np
 from numpy.typing import NDArray
@@ -78,6 +79,25 @@ def link_groups(links: list[str], radius: Array, half: Array, local: Array
     return owner, group, group_radius
 
 
+def _group_chains(group: IndexArray, rs: IndexArray) -> IndexArray:
+    """Per body, the next body of its group (the group's body first, then the others in
+    order; -1 after the last and for ungrouped bodies). The scene kernel clears a group's
+    bodies together, so they must be checked against the same obstacles.
+
+    Raises:
+        ValueError: two bodies of one group with different checked obstacles."""
+    chain = np.full(len(group), -1, dtype=np.int64)
+    for rep in np.unique(group[group >= 0]):
+        members = [int(rep), *[int(m) for m in np.flatnonzero(group == rep) if m != rep]]
+        obstacles = {m: set(rs[rs[:, 0] == m, 1].tolist()) for m in members}
+        if any(obstacles[m] != obstacles[members[0]] for m in members):
+            raise ValueError(f"bodies {members} of one link are checked against different "
+                             "obstacles; pairs must be disabled link by link")
+        for a, b in itertools.pairwise(members):
+            chain[a] = b
+    return chain
+
+
 def _plain(a: Array) -> Array:
     """``a`` as the kernels were compiled for: float64, C-contiguous, writeable. A read-only
     array (a frozen home configuration, a cached reading) is another type to numba: passing
@@ -141,6 +161,7 @@ class CompiledVerdicts:
         self._packed[2][:, bounds.OWNER] = self._owner
         self._packed[2][:, bounds.GROUP] = self._group
         self._packed[2][:, bounds.GROUP_RADIUS] = self._group_radius
+        self._packed[2][:, bounds.NEXT] = _group_chains(self._group, self.rs)
         if not self._exact.all():
             self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
             self._packed[2][~self._exact, bounds.REACH] = 0.0
