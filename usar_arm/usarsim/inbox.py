@@ -83,6 +83,7 @@ class Inbox:
     def deliver(self, line: str) -> None:
         """Parse one line and route it (called on the reader thread)."""
         wire_log.debug("<- %s", line)
+        arrived = time.monotonic()  # the line is whole: its arrival, before any parsing
         word = line.split("{", 1)[0].strip()
         try:
             msg = parse_line(line)
@@ -92,7 +93,7 @@ class Inbox:
         except ProtocolError as exc:
             self.reject(BadLine(word.upper() if _COMMAND_WORD.fullmatch(word) else "", exc))
             return
-        rec = Received(line, msg, time.monotonic(), printed_steps(line))
+        rec = Received(line, msg, arrived, printed_steps(line))
         if isinstance(msg, m.GameInfo) and self.game_info is None:
             with self.cond:
                 self.game_info = msg
