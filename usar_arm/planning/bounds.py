@@ -33,7 +33,6 @@ import numpy as np
 from usar_arm.core.spatial import Array
 from usar_arm.planning import scene_tree
 from usar_arm.planning.bounds_arrays import (
-    BOUND,
     BOX,
     CAPSULE,
     GROUP,
@@ -43,12 +42,6 @@ from usar_arm.planning.bounds_arrays import (
     NEXT,
     O_BOUND,
     O_CENTRE,
-    O_DIR,
-    O_IN_DIR,
-    O_IN_START,
-    O_RHO,
-    O_SIZE,
-    O_START,
     OWNER,
     RADIUS,
     REACH,
@@ -61,16 +54,12 @@ from usar_arm.planning.bounds_arrays import (
     prepare_links,
     prepare_obstacles,
 )
-from usar_arm.planning.gaps import (
-    cylinder_box_gap,
-    inner_box_contact,
-    point_box_distance,
-    segment_distance,
-)
+from usar_arm.planning.bounds_scene import CLEAR, CONTACT, UNDECIDED, judge_scene
+from usar_arm.planning.gaps import segment_distance
 from usar_arm.planning.jit import inline_kernel, kernel
 
 __all__ = ["BOX", "CAPSULE", "CLEAR", "CONTACT", "EPS", "GROUP", "GROUP_RADIUS", "HULL", "MARGIN",
-           "OWNER", "SPHERE", "UNDECIDED",
+           "NEXT", "OWNER", "SPHERE", "UNDECIDED",
            "check", "classify", "link_poses", "pack", "segment_distance", "summary", "walk",
            "warm_up"]
 
@@ -86,9 +75,6 @@ MARGIN = 1e-4
 """A pair is proven in contact only when balls inside both shapes overlap by more than this
 (m): far beyond the tolerance of any exact test, so python-fcl always agrees."""
 
-CLEAR, CONTACT, UNDECIDED = 0, 1, 2
-"""Verdicts of :func:`classify` on a pair: provably apart, provably touching (by more than
-the margin), or for the exact judge to decide."""
 
 
 @kernel
@@ -121,13 +107,13 @@ def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexAr
     is none). With ``move`` all ones, these are the clearance bounds themselves (m).
 
     Two kernels, each called once per configuration (a call per pair costs more than the
-    test itself): :func:`_judge_links` and :func:`_judge_scene`."""
+    test itself): :func:`_judge_links` and :func:`.bounds_scene.judge_scene`."""
     self_gap = _judge_links(seg, links, pairs, n_rr, eps, margin, move, out)
     for p in range(n_rr, pairs.shape[0]):
         out[p] = CLEAR
     if nodes.shape[0] == 0:
         return self_gap, math.inf
-    return self_gap, _judge_scene(seg, links, kind, obstacles, axes, tree, nodes, order,
+    return self_gap, judge_scene(seg, links, kind, obstacles, axes, tree, nodes, order,
                                   pair_of, eps, margin, move, refine, out, cand, scratch,
                                   stack)
 
@@ -175,113 +161,6 @@ def _judge_links(seg: Array, links: Array, pairs: IndexArray, n_rr: int, eps: fl
             self_gap = 0.0
         p = end
     return self_gap
-
-
-@inline_kernel
-def _judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, axes: Array,
-                 tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-                 eps: float, margin: float, move: Array, refine: float, out: VerdictArray,
-                 cand: Array, scratch: Array, stack: IndexArray) -> float:
-    """:func:`_judge` on the link-obstacle pairs, down the obstacles' sphere tree (``tree``,
-    ``nodes``, ``order`` of :func:`.scene_tree.build`, ``pair_of`` of
-    :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each link visits
-    only the subtrees its bounding sphere comes within the current bound (or ``eps``) of, the
-    pairs below the others stay CLEAR. A pair whose quick bound is below ``refine`` units of
-    its link's motion (at least ``eps`` m) gets the tighter test too.
-
-    A link whose bodies form a group (``GROUP``, ``NEXT``) walks the tree once, with the
-    cylinder around them all (the group body's axis, ``GROUP_RADIUS``); an obstacle that this
-    cylinder clears is cleared for every body of the link, else each body is tested as its
-    own. The bodies of one link are checked against the same obstacles (pairs are disabled
-    link by link: :meth:`.verdicts.CompiledVerdicts.check_pairs` makes sure)."""
-    scene_gap = math.inf
-    for i in range(pair_of.shape[0]):
-        group = int(links[i, GROUP])
-        if group >= 0 and group != i:
-            continue  # tested with its group's first body
-        grouped = group == i
-        radius_g = links[i, GROUP_RADIUS] if grouped else links[i, RADIUS]
-        bound_g = math.sqrt(links[i, HALF] ** 2 + radius_g ** 2) if grouped else links[i, BOUND]
-        move_g = move[i]
-        b = int(links[i, NEXT]) if grouped else -1
-        while b >= 0:
-            move_g = max(move_g, move[b])
-            b = int(links[b, NEXT])
-        stack[0] = 0
-        top = 1
-        while top > 0:
-            top -= 1
-            nd = stack[top]
-            bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
-                               + (seg[5, i, 1] - tree[nd, 1]) ** 2
-                               + (seg[5, i, 2] - tree[nd, 2]) ** 2)
-                     - tree[nd, 3] - bound_g)
-            if bound > max(scene_gap * move_g, eps):
-                continue  # every pair below is farther apart than the bound already found
-            if nodes[nd, 0] >= 0:
-                stack[top] = nodes[nd, 0]
-                stack[top + 1] = nodes[nd, 1]
-                top += 2
-                continue
-            for k in range(nodes[nd, 2], nodes[nd, 3]):
-                s = order[k]
-                if pair_of[i, s] < 0:
-                    continue
-                # Written out here, not called: a kernel call per pair with these array
-                # arguments costs more than the test itself. First the group's cylinder
-                # (when grouped), then each body b from the group's first.
-                o = obstacles[s]
-                whole = grouped
-                b = i
-                while b >= 0:
-                    if whole:
-                        radius, bounding, mv = radius_g, bound_g, move_g
-                    else:
-                        radius, bounding, mv = links[b, RADIUS], links[b, BOUND], move[b]
-                    refine_b = max(eps, refine * mv)
-                    if kind[s] == BOX or kind[s] == HULL:
-                        # The centre against the solid box, less the bounding radius:
-                        # tighter than two bounding spheres for a cell's large flat boxes.
-                        gap = (point_box_distance(seg[5, b], o[O_START:O_START + 3], axes[s],
-                                                   o[O_SIZE:O_SIZE + 3]) - bounding)
-                        if gap <= refine_b:
-                            gap = max(gap, cylinder_box_gap(
-                                seg[5, b], seg[4, b], radius, links[b, HALF],
-                                o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
-                    else:
-                        gap = (math.sqrt((seg[5, b, 0] - o[O_CENTRE]) ** 2
-                                         + (seg[5, b, 1] - o[O_CENTRE + 1]) ** 2
-                                         + (seg[5, b, 2] - o[O_CENTRE + 2]) ** 2)
-                               - bounding - o[O_BOUND])
-                        if gap <= refine_b:
-                            gap = max(gap, segment_distance(seg[0, b], seg[1, b],
-                                                            o[O_START:O_START + 3],
-                                                            o[O_DIR:O_DIR + 3])
-                                      - radius - o[O_SIZE])
-                    if gap > eps:
-                        if mv > 0.0:
-                            scene_gap = min(scene_gap, gap / mv)
-                        b = int(links[b, NEXT]) if grouped and not whole else -1
-                        continue
-                    if whole:
-                        whole = False  # each body on its own, from the first (b == i)
-                        continue
-                    scene_gap = 0.0
-                    if kind[s] == BOX:
-                        touching = inner_box_contact(seg[5, b], seg[4, b], links[b, RHO],
-                                                      links[b, REACH], o[O_START:O_START + 3],
-                                                      axes[s], o[O_SIZE:O_SIZE + 3], margin,
-                                                      scratch)
-                    elif kind[s] == HULL:
-                        touching = False
-                    else:
-                        inner = segment_distance(seg[2, b], seg[3, b],
-                                                 o[O_IN_START:O_IN_START + 3],
-                                                 o[O_IN_DIR:O_IN_DIR + 3])
-                        touching = inner < links[b, RHO] + o[O_RHO] - margin
-                    out[pair_of[b, s]] = CONTACT if touching else UNDECIDED
-                    b = int(links[b, NEXT]) if grouped else -1
-    return scene_gap
 
 
 @kernel

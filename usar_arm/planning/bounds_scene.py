@@ -1,0 +1,155 @@
+"""The scene side of the compiled broadphase (:mod:`.bounds`): a configuration's verdicts on the
+link-obstacle pairs, walked down the obstacles' sphere tree (:mod:`.scene_tree`), with the
+clearance bounds a walk along a segment skips by. Metres.
+
+A body is a cylinder (axis segment, radius, half-length); an obstacle a box (or a mesh's bounding
+box: HULL), a sphere or a capsule, as :func:`.bounds_arrays.prepare_obstacles` lays them out.
+
+:func:`judge_scene` walks the tree (``tree``, ``nodes``, ``order`` of :func:`.scene_tree.build`,
+``pair_of`` of :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each
+link visits only the subtrees its bounding sphere comes within the current bound (or ``eps``)
+of; the pairs below the others stay CLEAR. A pair is first bounded by its centre against the
+solid box (or by two spheres); when that is below ``refine`` units of its link's motion (at
+least ``eps`` m), by the exact cylinder against the box (or the capsules' axes) too. The
+per-pair tests are written out in the loop, not called: a kernel call per pair costs more than
+the test itself.
+
+A link whose bodies form a group (``GROUP``, ``NEXT``) walks the tree once, with the cylinder
+around them all (the group body's axis, ``GROUP_RADIUS``); an obstacle that this cylinder clears
+is cleared for every body of the link, else each body is tested as its own. The bodies of one
+link are checked against the same obstacles (pairs are disabled link by link:
+:meth:`.verdicts.CompiledVerdicts.check_pairs` makes sure).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from usar_arm.core.spatial import Array
+from usar_arm.planning.bounds_arrays import (
+    BOUND,
+    BOX,
+    GROUP,
+    GROUP_RADIUS,
+    HALF,
+    HULL,
+    NEXT,
+    O_BOUND,
+    O_CENTRE,
+    O_DIR,
+    O_IN_DIR,
+    O_IN_START,
+    O_RHO,
+    O_SIZE,
+    O_START,
+    RADIUS,
+    REACH,
+    RHO,
+    IndexArray,
+)
+from usar_arm.planning.gaps import (
+    cylinder_box_gap,
+    inner_box_contact,
+    point_box_distance,
+    segment_distance,
+)
+from usar_arm.planning.jit import inline_kernel
+
+CLEAR, CONTACT, UNDECIDED = 0, 1, 2
+"""Verdicts on a pair: provably apart, provably touching (by more than the margin), or for the
+exact judge to decide."""
+
+
+@inline_kernel
+def _group_motion(links: Array, move: Array, i: int) -> float:
+    """The largest motion (as ``move``) of the bodies of the group body ``i`` leads."""
+    motion = move[i]
+    b = int(links[i, NEXT])
+    while b >= 0:
+        motion = max(motion, move[b])
+        b = int(links[b, NEXT])
+    return motion
+
+
+@inline_kernel
+def judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, axes: Array,
+                tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
+                eps: float, margin: float, move: Array, refine: float,
+                out: np.ndarray, cand: Array, scratch: Array, stack: IndexArray) -> float:
+    """Verdicts on the link-obstacle pairs into ``out``, and the smallest cleared gap per unit
+    of the link's motion ``move`` (0 when a pair is not cleared). See the module's notes."""
+    scene_gap = math.inf
+    for i in range(pair_of.shape[0]):
+        if links[i, GROUP] >= 0 and links[i, GROUP] != i:
+            continue  # tested with its group's first body
+        grouped = links[i, GROUP] == i
+        radius_g = links[i, GROUP_RADIUS] if grouped else links[i, RADIUS]
+        bound_g = math.sqrt(links[i, HALF] ** 2 + radius_g ** 2) if grouped else links[i, BOUND]
+        move_g = _group_motion(links, move, i) if grouped else move[i]
+        stack[0], top = 0, 1
+        while top > 0:
+            top -= 1
+            nd = stack[top]
+            bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
+                               + (seg[5, i, 1] - tree[nd, 1]) ** 2
+                               + (seg[5, i, 2] - tree[nd, 2]) ** 2) - tree[nd, 3] - bound_g)
+            if bound > max(scene_gap * move_g, eps):
+                continue  # every pair below is farther apart than the bound already found
+            if nodes[nd, 0] >= 0:
+                stack[top], stack[top + 1] = nodes[nd, 0], nodes[nd, 1]
+                top += 2
+                continue
+            for k in range(nodes[nd, 2], nodes[nd, 3]):
+                s = order[k]
+                if pair_of[i, s] < 0:
+                    continue
+                # First the group's cylinder (when grouped), then each body b from the first.
+                o = obstacles[s]
+                whole = grouped
+                b = i
+                while b >= 0:
+                    if whole:
+                        radius, bounding, mv = radius_g, bound_g, move_g
+                    else:
+                        radius, bounding, mv = links[b, RADIUS], links[b, BOUND], move[b]
+                    near = max(eps, refine * mv)
+                    if kind[s] == BOX or kind[s] == HULL:  # the centre against the solid box
+                        gap = (point_box_distance(seg[5, b], o[O_START:O_START + 3], axes[s],
+                                                  o[O_SIZE:O_SIZE + 3]) - bounding)
+                        if gap <= near:
+                            gap = max(gap, cylinder_box_gap(
+                                seg[5, b], seg[4, b], radius, links[b, HALF],
+                                o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
+                    else:
+                        gap = (math.sqrt((seg[5, b, 0] - o[O_CENTRE]) ** 2
+                                         + (seg[5, b, 1] - o[O_CENTRE + 1]) ** 2
+                                         + (seg[5, b, 2] - o[O_CENTRE + 2]) ** 2)
+                               - bounding - o[O_BOUND])
+                        if gap <= near:
+                            gap = max(gap, segment_distance(
+                                seg[0, b], seg[1, b], o[O_START:O_START + 3],
+                                o[O_DIR:O_DIR + 3]) - radius - o[O_SIZE])
+                    if gap > eps:
+                        if mv > 0.0:
+                            scene_gap = min(scene_gap, gap / mv)
+                        b = int(links[b, NEXT]) if grouped and not whole else -1
+                    elif whole:
+                        whole = False  # each body on its own, from the first (b == i)
+                    else:
+                        scene_gap = 0.0
+                        if kind[s] == BOX:  # balls inside both overlap by over the margin
+                            touching = inner_box_contact(
+                                seg[5, b], seg[4, b], links[b, RHO], links[b, REACH],
+                                o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], margin,
+                                scratch)
+                        elif kind[s] == HULL:  # never for a mesh's box
+                            touching = False
+                        else:
+                            touching = segment_distance(
+                                seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
+                                o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin
+                        out[pair_of[b, s]] = CONTACT if touching else UNDECIDED
+                        b = int(links[b, NEXT]) if grouped else -1
+    return scene_gap
