@@ -200,13 +200,12 @@ def _joint_states(records: list[tuple[float, Any]], hops: list[tuple[float, floa
             "late_gaps_over_1.8_periods": int(np.sum(gaps > 1.8 * period)),
             "max_gap_s": float(gaps.max()),
             "latency_ms": _stats(((received - stamps) * 1000).tolist()),
-            # the same path in three hops (each its own percentiles: tails do not add up)
-            "hops_ms": {"node: line arrival -> publish call": _stats(
-                            ((source - stamps) * 1000).tolist()),
-                        "middleware: publish call -> receipt in this process": _stats(
-                            ((middleware - source) * 1000).tolist()),
-                        "subscriber: receipt -> rclpy callback": _stats(
-                            ((received - middleware) * 1000).tolist())}}
+            # the same path in three hops (each its own percentiles: tails do not add up):
+            # node: line arrival -> publish call; middleware: publish call -> receipt in this
+            # process; subscriber: receipt -> this rclpy callback
+            "hops_ms": {"node": _stats(((source - stamps) * 1000).tolist()),
+                        "middleware": _stats(((middleware - source) * 1000).tolist()),
+                        "subscriber": _stats(((received - middleware) * 1000).tolist())}}
 
 
 def main(argv: list[str] | None = None) -> int:
