@@ -101,6 +101,10 @@ class Client:
                                       context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        # rclpy's ActionClient registers a request's future only after sending it: a response
+        # the spinning thread takes in between is dropped and the future never completes
+        # (ros2/rclpy#1123, unfixed in these wheels). Requests and spins take turns.
+        self._turn = threading.Lock()
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
         self._clients: dict[str, ActionClient] = {}
@@ -109,7 +113,8 @@ class Client:
     def _spin(self) -> None:
         while self.context.ok():
             try:
-                self.executor.spin_once(timeout_sec=0.05)
+                with self._turn:
+                    self.executor.spin_once(timeout_sec=0.01)
             except Exception:  # shutting down
                 return
 
@@ -161,7 +166,15 @@ class Client:
     def send(self, name: str, goal: FollowJointTrajectory.Goal,
              timeout: float = 60.0) -> Any:
         """Send a goal; returns its handle once accepted (or rejected)."""
-        future = self.action(name).send_goal_async(goal, feedback_callback=self._feedback)
+        client = self.action(name)
+        with self._turn:
+            future = client.send_goal_async(goal, feedback_callback=self._feedback)
+        return _wait(future, timeout)
+
+    def cancel(self, handle: Any, timeout: float = 10.0) -> Any:
+        """Ask to cancel the goal; its cancel response."""
+        with self._turn:
+            future = handle.cancel_goal_async()
         return _wait(future, timeout)
 
     def _feedback(self, msg: Any) -> None:
@@ -169,7 +182,9 @@ class Client:
 
     def result(self, handle: Any, timeout: float = 60.0) -> Any:
         """The goal's (status, result) once it ends."""
-        response = _wait(handle.get_result_async(), timeout)
+        with self._turn:
+            future = handle.get_result_async()
+        response = _wait(future, timeout)
         return response.status, response.result
 
 
