@@ -395,19 +395,19 @@ def levenberg_marquardt(q: Array, target_rot: Array, target_pos: Array, axes: Ar
 
 
 @kernel
-def nearest(target_rot: Array, target_pos: Array, ref: Array, c: Array, lo: Array, hi: Array,
-            rev: Array, wide: Array, axes: Array, points: Array, tool: Array, tol_p: float,
-            tol_r: float, steps: int, max_step: float, analytic_slack: float,
-            wrist_singular: float, out: Array) -> tuple[int, float, float]:
-    """The solution nearest ``ref`` into ``out`` (6,): (SOLVED, position error m, rotation
-    error rad), or (FALLBACK, ...) when the Python path must decide (see the module)."""
-    cand = np.empty((8, 6))
-    count = branches(target_rot, target_pos, c, cand)
+def pick_nearest(cand: Array, count: int, target_rot: Array, target_pos: Array, ref: Array,
+                 lo: Array, hi: Array, rev: Array, wide: Array, axes: Array, points: Array,
+                 tool: Array, tol_p: float, tol_r: float, steps: int, max_step: float,
+                 analytic_slack: float, out: Array) -> tuple[int, float, float]:
+    """Of the first ``count`` closed-form branches in ``cand`` (8, 6), the one nearest ``ref``
+    into ``out`` (6,): each is wound into the limits nearest ``ref`` (in place), they are taken
+    in order of distance to ``ref`` (stable), and the first within ``analytic_slack`` rad of
+    the limits that Newton steps polish to the tolerances is returned, wound again, as
+    (SOLVED, position error m, rotation error rad). (FALLBACK, ...) when that one ends a hair
+    outside a limit or no branch qualifies: the Python path decides. Shared by every closed
+    form (this module's and :mod:`.ur_kernel`'s)."""
     dist = np.empty(count)
     for k in range(count):
-        q5 = cand[k, 4]
-        if abs(math.sin(q5)) < wrist_singular and abs(math.cos(q5)) > 0.5:
-            return FALLBACK, 0.0, 0.0
         wind(cand[k], ref, lo, hi, rev, wide)
         s = 0.0
         for i in range(6):
@@ -432,6 +432,25 @@ def nearest(target_rot: Array, target_pos: Array, ref: Array, c: Array, lo: Arra
             out[i] = q[i]
         return SOLVED, pe, re
     return FALLBACK, 0.0, 0.0
+
+
+@kernel
+def nearest(target_rot: Array, target_pos: Array, ref: Array, c: Array, lo: Array, hi: Array,
+            rev: Array, wide: Array, axes: Array, points: Array, tool: Array, tol_p: float,
+            tol_r: float, steps: int, max_step: float, analytic_slack: float,
+            wrist_singular: float, out: Array) -> tuple[int, float, float]:
+    """The solution nearest ``ref`` into ``out`` (6,): (SOLVED, position error m, rotation
+    error rad), or (FALLBACK, ...) when the Python path must decide (see the module): any
+    branch with its wrist near the singularity (|sin q5| below ``wrist_singular`` with q5
+    near 0 rather than pi) first, then as :func:`pick_nearest`."""
+    cand = np.empty((8, 6))
+    count = branches(target_rot, target_pos, c, cand)
+    for k in range(count):
+        q5 = cand[k, 4]
+        if abs(math.sin(q5)) < wrist_singular and abs(math.cos(q5)) > 0.5:
+            return FALLBACK, 0.0, 0.0
+    return pick_nearest(cand, count, target_rot, target_pos, ref, lo, hi, rev, wide, axes,
+                        points, tool, tol_p, tol_r, steps, max_step, analytic_slack, out)
 
 
 def warm_up() -> None:

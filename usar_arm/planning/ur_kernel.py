@@ -20,16 +20,7 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.ik_kernel import (
-    FALLBACK,
-    SOLVED,
-    _excess,
-    _rot,
-    _sp1,
-    _wrap,
-    polish,
-    wind,
-)
+from usar_arm.planning.ik_kernel import _rot, _sp1, _wrap, pick_nearest
 from usar_arm.planning.jit import kernel
 from usar_arm.planning.ur import SINGULAR_WRIST, ThreeParallelArm
 
@@ -164,35 +155,13 @@ def nearest(target_rot: Array, target_pos: Array, ref: Array, c: Array, lo: Arra
             tol_r: float, steps: int, max_step: float, analytic_slack: float, out: Array
             ) -> tuple[int, float, float]:
     """The solution nearest ``ref`` into ``out`` (6,): (SOLVED, position error m, rotation
-    error rad), or (FALLBACK, ...) when the Python path must decide (see the module)."""
+    error rad), or (FALLBACK, ...) when the Python path must decide (see the module); the
+    branches with the seed's q6 at the wrist singularity, chosen by
+    :func:`.ik_kernel.pick_nearest`."""
     cand = np.empty((8, 6))
     count = branches_free(target_rot, target_pos, c, ref[5], cand)
-    dist = np.empty(count)
-    for k in range(count):
-        wind(cand[k], ref, lo, hi, rev, wide)
-        s = 0.0
-        for i in range(6):
-            s += (cand[k, i] - ref[i]) ** 2
-        dist[k] = s
-    order = np.argsort(dist, kind="mergesort")
-    q = np.empty(6)
-    for r in range(count):
-        k = order[r]
-        if _excess(cand[k], lo, hi) > analytic_slack:
-            continue
-        for i in range(6):
-            q[i] = cand[k, i]
-        ok, pe, re = polish(q, target_rot, target_pos, axes, points, rev, tool, tol_p, tol_r,
-                            steps, max_step)
-        if not ok:
-            continue
-        wind(q, ref, lo, hi, rev, wide)
-        if _excess(q, lo, hi) > 1e-9:
-            return FALLBACK, 0.0, 0.0  # outside a limit: the Python path clamps or goes on
-        for i in range(6):
-            out[i] = q[i]
-        return SOLVED, pe, re
-    return FALLBACK, 0.0, 0.0
+    return pick_nearest(cand, count, target_rot, target_pos, ref, lo, hi, rev, wide, axes,
+                        points, tool, tol_p, tol_r, steps, max_step, analytic_slack, out)
 
 
 def warm_up() -> None:
