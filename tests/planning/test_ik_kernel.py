@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from usar_arm.planning import ik_kernel
@@ -92,6 +92,9 @@ def test_the_compiled_path_picks_the_python_path_s_branch_within_tolerance(
 
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.floats(0.0, 1.0), min_size=12, max_size=12))
+# found by the campaign under load: folded with the wrist centre near axis 2, q1, q2, q4 and q5
+# on their limits; the fitted closed form lands 0.39 rad beyond the limit of q2
+@example(u=[0.0, 0.0, 0.07421875, 0.0, 0.0, 0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 def test_every_answer_reaches_its_target_by_pinocchio(kr60: Robot, u: list) -> None:
     lo, hi = kr60.chain.lower(), kr60.chain.upper()
     q = lo + np.array(u[:6]) * (hi - lo)

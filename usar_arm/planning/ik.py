@@ -205,12 +205,14 @@ class IKSolver:
         found: list[IKSolution] = []
         violation: Violation | None = None
         tried: list[Array] = []
+        outside: list[Array] = []
         for q in self.branches.ordered(rot, pos, ref):
             tried.append(np.array(q))
             bad = self.windings.violation(q)
             if bad is not None and bad.excess > ANALYTIC_SLACK:
                 violation = _least(violation, bad)
-                continue  # clearly outside: not worth polishing
+                outside.append(np.array(q))
+                continue  # clearly outside: polished on the limits only if nothing else is
             sol = self.numeric.polish(np.array(q), rot, pos)
             if sol is None:
                 continue
@@ -226,7 +228,27 @@ class IKSolver:
             if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
                      self.options.distinct, collision, collided) and not all_solutions:
                 break
+        if not found:
+            self._on_the_limits(outside, rot, pos, ref, all_solutions, collision, collided, found)
         return found, (violation if not found else None), tried
+
+    def _on_the_limits(self, outside: list[Array], rot: Array, pos: Array, ref: Array,
+                       all_solutions: bool, collision: CollisionWorld | None,
+                       collided: list[Array], found: list[IKSolution]) -> None:
+        """Branches far outside the limits, held on the limits they cross and Newton on the
+        other joints (:meth:`.NumericIK.clamped`), appended to ``found``: near a singularity
+        (the KR60 folded with its wrist centre near axis 2) a closed form fitted to the arm
+        can land tenths of a radian away from the exact solution on a limit."""
+        for q in outside:
+            sol = self.numeric.clamped(q, rot, pos)
+            if sol is None:
+                continue
+            qq = self.windings.wind(np.array(sol.q), ref)
+            if self.windings.violation(qq) is not None:
+                continue
+            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
+                     self.options.distinct, collision, collided) and not all_solutions:
+                return
 
     def _raise_failure(self, rot: Array, pos: Array, ref: Array, violation: Violation | None,
                        collision: CollisionWorld | None, collided: list[Array],

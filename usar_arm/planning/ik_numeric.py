@@ -101,27 +101,38 @@ class NumericIK:
         return None
 
     def clamped(self, q: Array, rot: Array, pos: Array) -> IKSolution | None:
-        """A solution with the joints a hair outside their limits held on the limit: Newton
-        (least squares) on the other joints, kept if it reaches the tolerance. A joint that a
-        step pushes beyond its limit is held there too (an active set), so a target whose
-        solution sits in a corner of the limits, several joints on their limits, is reached."""
-        stuck = (q < self.lower) | (q > self.upper)
-        q = np.clip(q, self.lower, self.upper)
+        """A solution from ``q`` with the joints held on the limits they would cross: Newton
+        (least squares) steps from ``q`` clipped into its limits, kept if it reaches the
+        tolerance. Each step holds the joints that sit on a limit and would be pushed beyond
+        it (an active set, chosen again at every step, so a joint the closed form put far
+        outside is released once the others take its share), and clips the joints a step
+        takes across a limit onto it; a target whose solution sits in a corner of the limits,
+        several joints on their limits, is reached. A revolute joint outside its limits first
+        takes the winding less outside them (a range just short of a turn: the solution on one
+        limit is a step beyond the other)."""
+        q = np.clip(self.windings.wind(q, q), self.lower, self.upper)
         target = self.kin.target(rot, pos)
         for _ in range(2 * self.options.newton_steps):
             e, pe, re, jac = self.kin.local_error(q, self.fid, target)
             if pe < self.options.position_tolerance and re < self.options.orientation_tolerance:
                 return IKSolution(q, pe, re)
-            free = ~stuck
-            if not free.any():
+            step = self._held_step(q, e, jac)
+            if step is None:
                 return None
-            step = np.linalg.lstsq(jac[:, free], e, rcond=None)[0]
-            q = q.copy()
-            q[free] += step
-            out = (q < self.lower - 1e-9) | (q > self.upper + 1e-9)
-            if out.any():
-                q = np.clip(q, self.lower, self.upper)
-                stuck |= out
+            q = np.clip(self.windings.wind(q + step, q + step), self.lower, self.upper)
+        return None
+
+    def _held_step(self, q: Array, e: Array, jac: Array) -> Array | None:
+        """The least-squares step of the joints not held on a limit (None: all are held)."""
+        on_lower, on_upper = q <= self.lower + 1e-12, q >= self.upper - 1e-12
+        free = np.ones(len(q), dtype=bool)
+        while free.any():
+            step = np.zeros(len(q))
+            step[free] = np.linalg.lstsq(jac[:, free], e, rcond=None)[0]
+            pushed = free & ((on_lower & (step < 0)) | (on_upper & (step > 0)))
+            if not pushed.any():
+                return step
+            free &= ~pushed
         return None
 
     def search(self, rot: Array, pos: Array, ref: Array, seeded: bool, all_solutions: bool,
