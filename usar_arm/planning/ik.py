@@ -241,13 +241,8 @@ class IKSolver:
         can land tenths of a radian away from the exact solution on a limit."""
         for q in outside:
             sol = self.numeric.clamped(q, rot, pos)
-            if sol is None:
-                continue
-            qq = self.windings.wind(np.array(sol.q), ref)
-            if self.windings.violation(qq) is not None:
-                continue
-            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
-                     self.options.distinct, collision, collided) and not all_solutions:
+            if sol is not None and self.numeric.keep(sol, ref, found, all_solutions, collision,
+                                                     collided):
                 return
 
     def _raise_failure(self, rot: Array, pos: Array, ref: Array, violation: Violation | None,

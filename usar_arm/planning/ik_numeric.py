@@ -150,15 +150,21 @@ class NumericIK:
                   else self._rng.uniform(self.lower, self.upper))
             attempt += 1
             sol = self.levenberg_marquardt(q0, rot, pos, start + budget)
-            if sol is None:
-                continue
-            qq = self.windings.wind(np.array(sol.q), ref)
-            if self.windings.violation(qq) is not None:
-                continue
-            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
-                     self.options.distinct, collision, collided) and not all_solutions:
+            if sol is not None and self.keep(sol, ref, found, all_solutions, collision,
+                                             collided):
                 break
         return found
+
+    def keep(self, sol: IKSolution, ref: Array, found: list[IKSolution], all_solutions: bool,
+             collision: CollisionWorld | None, collided: list[Array]) -> bool:
+        """Append ``sol``, wound nearest ``ref``, to ``found`` when it is inside the limits,
+        new and (with ``collision``) free; True when the search is done (one was kept and not
+        every solution is wanted)."""
+        qq = self.windings.wind(np.array(sol.q), ref)
+        if self.windings.violation(qq) is not None:
+            return False
+        return admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
+                     self.options.distinct, collision, collided) and not all_solutions
 
     def levenberg_marquardt(self, q: Array, rot: Array, pos: Array, deadline: float,
                             iterations: int = LM_ITERATIONS) -> IKSolution | None:
