@@ -3,7 +3,7 @@ held on their limits, Levenberg-Marquardt from the seed and random restarts with
 budget, batched Newton for many targets, and the closest approach of an unreachable target.
 
 It works on the exact model (Pinocchio, or the compiled product of exponentials of
-:mod:`.ik_kernel` where the frame lies on one serial path). Metres and radians.
+:mod:`.lm_kernel` where the frame lies on one serial path). Metres and radians.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from scipy.linalg.lapack import dgesv
 
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
-from usar_arm.planning import ik_kernel
+from usar_arm.planning import lm_kernel
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ik_branches import MAX_NEWTON_STEP, Windings
 from usar_arm.planning.ik_types import IKOptions, IKSolution, admit, frozen
@@ -175,7 +175,7 @@ class NumericIK:
         if self._chain_arrays is not None:  # compiled, on the product of exponentials
             q = np.array(q, dtype=float)
             c = self._chain_arrays
-            ok, pe, re = ik_kernel.levenberg_marquardt(
+            ok, pe, re = lm_kernel.levenberg_marquardt(
                 q, rot, pos, c.axes, c.points, c.revolute, c.tool, tol_p, tol_r, iterations,
                 LM_DAMPING, LM_FLOOR, MAX_LM_STEP)
             return IKSolution(q, pe, re) if ok else None

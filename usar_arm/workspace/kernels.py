@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning import ik_kernel
+from usar_arm.planning import ik_kernel, lm_kernel
 from usar_arm.planning.jit import kernel
 
 IndexArray = NDArray[np.int64]
@@ -170,7 +170,7 @@ def numeric_solutions(rots: Array, poss: Array, seeds: Array, lo: Array, hi: Arr
                 break
             for i in range(n):
                 q[i] = seeds[s, i]
-            ok, _, _ = ik_kernel.levenberg_marquardt(q, rots[m], poss[m], axes, points, rev,
+            ok, _, _ = lm_kernel.levenberg_marquardt(q, rots[m], poss[m], axes, points, rev,
                                                      tool, tol_p, tol_r, iterations, damping,
                                                      floor, max_step)
             if not ok:
