@@ -4,6 +4,7 @@ module's own."""
 from __future__ import annotations
 
 import logging
+import signal
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -23,6 +24,23 @@ def _own_description_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator
     patch.setenv("USAR_ARM_CACHE", str(path))
     yield path
     patch.undo()
+
+
+@pytest.fixture
+def ctrl_c_reaches_children() -> Iterator[None]:
+    """Commands started by the test act on SIGINT as at a terminal, where a user's Ctrl-C
+    reaches them. A non-interactive shell starts a background job (``make test &`` in a
+    script, ``nohup ... &``) with SIGINT ignored, and an ignored signal stays ignored through
+    fork and exec, so Python would never raise KeyboardInterrupt in the command: the Ctrl-C
+    tests failed in every run of a campaign started that way. While the test runs, this
+    process catches SIGINT (Python's own handler), which exec resets to the default in the
+    children."""
+    previous = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @pytest.fixture(autouse=True)

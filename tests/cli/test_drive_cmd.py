@@ -233,7 +233,8 @@ def test_a_velocity_script_is_played_and_recorded(tmp_path: Path) -> None:
     assert (commands[-1].linear.x, commands[-1].angular.z) == (0.0, 0.0)
 
 
-def test_ctrl_c_stops_the_vehicle_and_keeps_the_record(tmp_path: Path) -> None:
+def test_ctrl_c_stops_the_vehicle_and_keeps_the_record(tmp_path: Path,
+                                                       ctrl_c_reaches_children: None) -> None:
     """SIGINT mid-drive: exit 130, the bag and the picture are written, the last command
     sent is a stop."""
     import signal

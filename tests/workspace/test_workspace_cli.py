@@ -86,7 +86,7 @@ def test_without_the_ray_extra_ray_says_how_to_install_it(tmp_path: Path) -> Non
 
 
 def test_ctrl_c_keeps_the_finished_chunks_writes_nothing_else_and_resume_finishes(
-        tmp_path: Path) -> None:
+        tmp_path: Path, ctrl_c_reaches_children: None) -> None:
     out = tmp_path / "map"
 
     # 0.08 m: about 100 chunks, some 4 s of work on two workers. At 0.12 m (32 chunks, 1.2 s
