@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
+from tests.cpu_share import watched
 from usar_arm.cli.main import main
 from usar_arm.control.trajectory import load_with_executed
 from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK
@@ -32,20 +33,25 @@ def planned(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_plan_execute_prints_the_report_keys_and_writes_trajectory_and_bag(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out, bag = tmp_path / "t.json", tmp_path / "run.bag"
-    code = main(["plan", "--pose", *ABOVE_PART, "--scene", "table", "--execute", "--json",
-                 "--out", str(out), "--bag", str(bag), "-q"])
+    with watched() as window:
+        code = main(["plan", "--pose", *ABOVE_PART, "--scene", "table", "--execute", "--json",
+                     "--out", str(out), "--bag", str(bag), "-q"])
+    if code != EXIT_OK:  # (aborted on a tracking error, when the simulator was starved)
+        window.judge_or_skip()
     assert code == EXIT_OK
     doc = json.loads(capsys.readouterr().out)
     for key in ("planning_seconds", "duration", "final_joint_error_rad", "max_tracking_error_rad",
                 "tip_error_m", "tip_error_rad", "rate_hz", "jitter_p99_ms"):
         assert isinstance(doc[key], float), key
+    assert (bag / "metadata.yaml").exists()
     # The tracking target (10 mrad): 2.8 mrad on an idle machine (bench/results/execution.json),
-    # 3.3-4.9 mrad measured beside a load of 6 on two cores (the in-process simulator lags);
-    # the rate, 99.95-100 Hz there.
+    # 3.3-4.9 mrad measured beside a load of 6 on two cores (the in-process simulator lags),
+    # an abort (156 mrad, beyond the 100 mrad bound) once beside a load of about 5: judged
+    # when the motion had the CPU (tests/cpu_share.py); the rate, 99.95-100 Hz there.
+    window.judge_or_skip()
     assert doc["max_tracking_error_rad"] < 0.010 and doc["rate_hz"] > 90
     _, executed = load_with_executed(out)
     assert executed is not None and len(executed.t) >= 15 and np.all(executed.t >= 0)
-    assert (bag / "metadata.yaml").exists()
 
 
 def test_execute_runs_a_saved_trajectory_and_plot_overlays_what_ran(

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.cpu_share import watched
 from usar_arm import Arm
 from usar_arm.control.executor import ExecutionOptions, Executor
 from usar_arm.core.errors import ExecutionAbortedError, InvalidInputError
@@ -29,12 +30,17 @@ def arm() -> Iterator[Arm]:
 def test_a_ptp_motion_is_tracked_and_settles_on_its_goal(arm: Arm) -> None:
     goal = np.array([0.6, -0.3, 0.35, 0.2, 0.6, -0.4])
     plan = arm.plan(joints=goal)
-    report = arm.execute(plan.trajectory)
+    aborted: ExecutionAbortedError | None = None
+    with watched() as window:
+        try:
+            report = arm.execute(plan.trajectory)
+        except ExecutionAbortedError as exc:
+            aborted = exc
+    if aborted is not None:  # (a starved simulator falls behind: a tracking error)
+        window.judge_or_skip()
+        raise aborted
     assert report.settled
     assert np.max(report.final_joint_error_rad) <= 2e-4  # tolerance 1e-4 + ASTA rounding
-    assert report.max_tracking_error_rad < 0.02  # feedforward removes the drives' lag
-    assert report.rate_hz == pytest.approx(100, rel=0.1)
-    assert len(report.executed.t) >= 10 * plan.trajectory.duration - 2
     assert report.tip is not None
     tip = report.tip.as_json()
     assert tip["tip_source"].startswith("GroundTruth sensor")
@@ -46,6 +52,12 @@ def test_a_ptp_motion_is_tracked_and_settles_on_its_goal(arm: Arm) -> None:
     keys = report.as_json()
     assert {"final_joint_error_rad", "max_tracking_error_rad", "tip_error_m", "tip_error_rad",
             "rate_hz", "jitter_p99_ms"} <= set(keys)
+    # Wall-clock targets: judged when the motion had the CPU (tests/cpu_share.py); 20.4 mrad
+    # was measured once beside a load of about 5 on two cores, 0.9-2.4 mrad on an idle one.
+    window.judge_or_skip()
+    assert report.max_tracking_error_rad < 0.02  # feedforward removes the drives' lag
+    assert report.rate_hz == pytest.approx(100, rel=0.1)
+    assert len(report.executed.t) >= 10 * plan.trajectory.duration - 2
 
 
 @pytest.mark.slow
