@@ -12,6 +12,7 @@ reference the compiled path is tested against.
 from __future__ import annotations
 
 import copy
+from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -29,6 +30,24 @@ from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.verdicts import CompiledVerdicts
 
 Pair = tuple[str, str]
+
+PROBE_STRIDE = 8
+"""Steps between the configurations :meth:`CollisionWorld.segment_free` checks first, coarse to
+fine, on an arm whose bounding volumes cannot prove a contact (meshes, boxes)."""
+
+
+def probe_order(m: int) -> list[int]:
+    """1 .. m - 1 coarse to fine: the middle of 0 .. m first, then the middles of its halves,
+    breadth first."""
+    out: list[int] = []
+    spans = deque([(0, m)])
+    while spans:
+        lo, hi = spans.popleft()
+        mid = (lo + hi) // 2
+        if lo < mid < hi:
+            out.append(mid)
+            spans.extend(((lo, mid), (mid, hi)))
+    return out
 
 
 def pair(a: str, b: str) -> Pair:
@@ -115,6 +134,7 @@ class CollisionWorld:
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
+        self._probes = not all(b.exact for b in bodies)
         self.set_disabled(disabled)
 
     def in_scene(self, scene: Scene) -> CollisionWorld:
@@ -280,15 +300,32 @@ class CollisionWorld:
 
         The compiled walk (:func:`.bounds.walk`) skips configurations that the clearance at
         an earlier one proves free (a continuous guarantee between them), stops at a proven
-        contact, and leaves the undecided ones to FCL, in order.
+        contact, and leaves the undecided ones to FCL, in order. Where the bounding volumes
+        cannot prove a contact (meshes, boxes), the walk would cross a blocked segment to its
+        end before FCL finds the contact: every :data:`PROBE_STRIDE`-th configuration is
+        checked first, coarse to fine, so a blocked segment ends at its first probe in contact.
         """
         if steps < 1:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
+        if self._probes and steps >= 2 * PROBE_STRIDE and self._probe_hits(a, b, steps):
+            return False
         hit, poses, verdicts = self._compiled.walk(a, b, steps)
         if hit >= 0:
             return False
         return not any(self._decide(p, v, stop_at_first=True)
                        for p, v in zip(poses, verdicts, strict=True))
+
+    def _probe_hits(self, a: Array, b: Array, steps: int) -> bool:
+        """True when one of the segment's every :data:`PROBE_STRIDE`-th configurations is in
+        collision (checked coarse to fine, stopping at the first)."""
+        ks = np.array(probe_order(steps // PROBE_STRIDE)) * PROBE_STRIDE
+        world, verdicts = self.bounded_poses(a + (b - a) * (ks / steps)[:, None])
+        for n in range(len(ks)):
+            row = verdicts[n]
+            if (row == bounds.CONTACT).any() or ((row == bounds.UNDECIDED).any() and self._decide(
+                    world[n], row, stop_at_first=True)):
+                return True
+        return False
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""
