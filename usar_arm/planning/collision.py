@@ -12,6 +12,7 @@ reference the compiled path is tested against.
 from __future__ import annotations
 
 import copy
+import functools
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -36,7 +37,8 @@ PROBE_STRIDE = 8
 fine, on an arm whose bounding volumes cannot prove a contact (meshes, boxes)."""
 
 
-def probe_order(m: int) -> list[int]:
+@functools.lru_cache(maxsize=256)
+def probe_order(m: int) -> tuple[int, ...]:
     """1 .. m - 1 coarse to fine: the middle of 0 .. m first, then the middles of its halves,
     breadth first."""
     out: list[int] = []
@@ -47,7 +49,7 @@ def probe_order(m: int) -> list[int]:
         if lo < mid < hi:
             out.append(mid)
             spans.extend(((lo, mid), (mid, hi)))
-    return out
+    return tuple(out)
 
 
 def pair(a: str, b: str) -> Pair:

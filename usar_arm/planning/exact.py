@@ -110,11 +110,9 @@ class ExactJudge:
             t = self.to_shape[i]
             if t is None:
                 o.setTransform(_fcl_transform(poses[i]))
-            else:
+            else:  # (matmul's results are contiguous already)
                 rot = poses[i][:3, :3]
-                o.setTransform(fcl.Transform(np.ascontiguousarray(rot @ t[:3, :3]),
-                                             np.ascontiguousarray(rot @ t[:3, 3]
-                                                                  + poses[i][:3, 3])))
+                o.setTransform(fcl.Transform(rot @ t[:3, :3], rot @ t[:3, 3] + poses[i][:3, 3]))
             placed[i] = o
         return o
 
