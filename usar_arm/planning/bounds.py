@@ -221,17 +221,18 @@ def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray
 
 
 @kernel
-def summary(q: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
-            kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
-            order: IndexArray, pair_of: IndexArray, eps: float, margin: float) -> int:
-    """One configuration ``q`` (n,) in one call, nothing allocated for the caller: CLEAR when
-    every pair is cleared, CONTACT when one is proven in contact, else UNDECIDED (then
-    :func:`check` gives the poses and verdicts for the exact judge)."""
+def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Array,
+            links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
+            axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
+            eps: float, margin: float) -> int:
+    """One configuration ``q`` (n,) in one call: the link cylinder poses into ``world``
+    (L, 3, 4) and the pair verdicts into ``row`` (P + Q,), both the caller's, and one verdict:
+    CLEAR when every pair is cleared, CONTACT when one is proven in contact, else UNDECIDED
+    (``world`` and ``row`` are then what the exact judge needs)."""
     n, n_link = q.shape[0], zero.shape[0]
     frames = np.empty((n + 1, 3, 4))
-    world = np.empty((n_link, 3, 4))
     seg = np.empty((6, n_link, 3))
-    row = np.zeros(pairs.shape[0], dtype=np.int8)
+    row[:] = CLEAR
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
     poses_into(q, joints, zero, links, frames, world)
     _segments(world, links, seg)
@@ -318,9 +319,9 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
 
 
 def warm_up() -> None:
-    """Compile :func:`check` and :func:`walk` for the argument types the collision world
-    passes (numba caches the machine code on disk, so later processes load it instead of
-    compiling for ~20 s).
+    """Compile :func:`check`, :func:`summary` and :func:`walk` for the argument types the
+    collision world passes (numba caches the machine code on disk, so later processes load it
+    instead of compiling for ~20 s).
     Run once after installing (``make demo`` and ``make test`` do):
     ``python -c "from usar_arm.planning.bounds import warm_up; warm_up()"``."""
     eye = np.eye(4)
@@ -329,7 +330,7 @@ def warm_up() -> None:
                   np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
-    summary(np.zeros(1), *packed, EPS, MARGIN)
+    summary(np.zeros(1), np.empty((1, 3, 4)), np.empty(1, np.int8), *packed, EPS, MARGIN)
     levers = np.ones((1, 1))
     levers.setflags(write=False)  # the collision world hands its cached levers over read-only
     walk(np.zeros(1), np.ones(1), 4, levers, *packed, EPS, MARGIN)

@@ -216,20 +216,18 @@ class CollisionWorld:
     # ------------------------------------------------------------------ queries
     def in_collision(self, q: Array) -> bool:
         """True when any checked pair overlaps at ``q``."""
-        quick = self._compiled.summary(q)
+        quick, world, verdicts = self._compiled.summary(q)
         if quick != bounds.UNDECIDED:
             return bool(quick == bounds.CONTACT)
-        world, verdicts = self.bounded_poses(q)
-        if not verdicts.any():
-            return False
-        return bool(self._decide(world[0], verdicts[0], stop_at_first=True))
+        return bool(self._decide(world, verdicts, stop_at_first=True))
 
     def contacts(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, sorted."""
         world, verdicts = self.bounded_poses(q)
         return sorted(set(self._decide(world[0], verdicts[0], stop_at_first=False)))
 
-    def _decide(self, poses: Array, verdicts: Array, stop_at_first: bool) -> list[Pair]:
+    def _decide(self, poses: Array, verdicts: NDArray[np.int8], stop_at_first: bool
+                ) -> list[Pair]:
         """The pairs in contact, given the compiled verdicts (link poses (L, 3, 4))."""
         return [self._pair_name(p) for p in
                 self._exact.undecided(poses, verdicts, self._rr, self._rs, stop_at_first)]

@@ -11,6 +11,7 @@ import copy
 
 import fcl
 import numpy as np
+from numpy.typing import NDArray
 
 from usar_arm.core.shapes import Shape
 from usar_arm.core.spatial import Array
@@ -119,8 +120,8 @@ class ExactJudge:
     def _collide(self, a: fcl.CollisionObject, b: fcl.CollisionObject) -> bool:
         return bool(fcl.collide(a, b, self._request, fcl.CollisionResult()) > 0)
 
-    def undecided(self, poses: Array, verdicts: Array, rr: IndexArray, rs: IndexArray,
-                  stop_at_first: bool) -> list[int]:
+    def undecided(self, poses: Array, verdicts: NDArray[np.int8], rr: IndexArray,
+                  rs: IndexArray, stop_at_first: bool) -> list[int]:
         """The checked pairs (indices: robot-robot ``rr`` first, then robot-scene ``rs``) in
         contact, given the compiled verdicts: proven contacts as they are, FCL's answer on the
         undecided ones (link poses (L, 3, 4))."""

@@ -173,10 +173,14 @@ class CompiledVerdicts:
         qs = _plain(np.atleast_2d(qs))
         return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
 
-    def summary(self, q: Array) -> int:
-        """One verdict for configuration ``q``: CLEAR when every pair is, CONTACT when one is,
-        else UNDECIDED."""
-        return int(bounds.summary(_plain(q), *self._packed, bounds.EPS, bounds.MARGIN))
+    def summary(self, q: Array) -> tuple[int, Array, NDArray[np.int8]]:
+        """One verdict for configuration ``q`` (CLEAR when every pair is, CONTACT when one is,
+        else UNDECIDED), the link cylinder poses (L, 3, 4) and the pair verdicts (P + Q,)."""
+        zero, pairs = self._packed[1], self._packed[3]
+        world = np.empty((zero.shape[0], 3, 4))
+        row = np.empty(pairs.shape[0], dtype=np.int8)
+        verdict = bounds.summary(_plain(q), world, row, *self._packed, bounds.EPS, bounds.MARGIN)
+        return int(verdict), world, row
 
     def walk(self, a: Array, b: Array, steps: int
              ) -> tuple[int, Array, NDArray[np.int8]]:
