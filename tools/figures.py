@@ -1,6 +1,7 @@
 """Figures in prose that come from the benchmark's results, never typed by hand.
 
-A figure in README.md or docs/*.md is written inside a marker that says where it comes from:
+A figure in README.md, docs/*.md or tools/README.md is written inside a marker that says where
+it comes from:
 
     <!-- fig execution.json#/cases/udk wire, no correction/max_m | *1e3 | .2f -->2.19<!-- /fig -->
 
@@ -85,8 +86,9 @@ def evaluate(spec: str, results: Path = RESULTS) -> str:
 
 
 def documents(root: Path = ROOT) -> list[Path]:
-    """README.md and every Markdown page under docs/."""
-    return [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    """README.md, every Markdown page under docs/, and tools/README.md."""
+    return [root / "README.md", *sorted((root / "docs").rglob("*.md")),
+            root / "tools" / "README.md"]
 
 
 def figures(paths: list[Path], results: Path = RESULTS) -> Iterator[Figure]:
