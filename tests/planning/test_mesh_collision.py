@@ -230,3 +230,19 @@ def test_the_probes_visit_every_inner_index_once_the_middle_first(m: int) -> Non
     order = probe_order(m)
     assert sorted(order) == list(range(1, m))
     assert not order or order[0] == m // 2
+
+
+def test_threads_querying_one_world_get_the_answers_of_one_thread(tmp_path: Path) -> None:
+    """The single-query path hands FCL its poses and verdicts in arrays of the calling thread's
+    own (the kernels release the GIL), so concurrent queries do not see each other's."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    urdf, srdf = write_robot(tmp_path)
+    robot = robot_from_files(urdf, srdf)
+    scene = Scene("test", (SceneObject("ball", Sphere(0.08), _pose(0.25, 0.1, 0.45)),))
+    world = robot.collision_world(scene)
+    qs = np.random.default_rng(11).uniform(robot.chain.lower(), robot.chain.upper(), (3000, 4))
+    alone = [world.in_collision(q) for q in qs]
+    with ThreadPoolExecutor(8) as pool:
+        together = list(pool.map(world.in_collision, qs, chunksize=1))
+    assert together == alone and 0 < sum(alone) < len(alone)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+import threading
 
 import numpy as np
 from numpy.typing import NDArray
@@ -150,6 +151,7 @@ class CompiledVerdicts:
     def check_pairs(self, rr: IndexArray, rs: IndexArray) -> None:
         """Check the robot-robot pairs ``rr`` (P, 2: link, link) and robot-scene pairs ``rs``
         (Q, 2: link, obstacle), in that order."""
+        self._scratch = threading.local()  # (per thread: summary's output arrays)
         rr = np.array(rr, dtype=np.int64).reshape(-1, 2)
         # the rows of one link pair next to each other, for the kernel's block test
         self.rr = rr[np.lexsort((self._owner[rr[:, 1]], self._owner[rr[:, 0]]))] if len(rr) \
@@ -175,10 +177,14 @@ class CompiledVerdicts:
 
     def summary(self, q: Array) -> tuple[int, Array, NDArray[np.int8]]:
         """One verdict for configuration ``q`` (CLEAR when every pair is, CONTACT when one is,
-        else UNDECIDED), the link cylinder poses (L, 3, 4) and the pair verdicts (P + Q,)."""
-        zero, pairs = self._packed[1], self._packed[3]
-        world = np.empty((zero.shape[0], 3, 4))
-        row = np.empty(pairs.shape[0], dtype=np.int8)
+        else UNDECIDED), the link cylinder poses (L, 3, 4) and the pair verdicts (P + Q,): the
+        calling thread's arrays, valid until its next call."""
+        buffers = getattr(self._scratch, "buffers", None)
+        if buffers is None:  # (allocated once per thread: a query that clears costs nothing)
+            zero, pairs = self._packed[1], self._packed[3]
+            buffers = (np.empty((zero.shape[0], 3, 4)), np.empty(pairs.shape[0], dtype=np.int8))
+            self._scratch.buffers = buffers
+        world, row = buffers
         verdict = bounds.summary(_plain(q), world, row, *self._packed, bounds.EPS, bounds.MARGIN)
         return int(verdict), world, row
 
