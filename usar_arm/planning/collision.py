@@ -27,6 +27,7 @@ from usar_arm.planning import bounds
 from usar_arm.planning.element_fit import bounding_cylinder, padded
 from usar_arm.planning.exact import ExactJudge
 from usar_arm.planning.kinematics import KinematicModel
+from usar_arm.planning.never import proven_never
 from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.verdicts import CompiledVerdicts
 
@@ -137,7 +138,27 @@ class CollisionWorld:
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
         self._probes = not all(b.exact for b in bodies)
+        self.never = self._prove_never()
         self.set_disabled(disabled)
+
+    def _prove_never(self) -> set[Pair]:
+        """Robot-robot pairs proven never in contact over a joint's whole range (:mod:`.never`:
+        links that one revolute joint alone moves against each other)."""
+        names = sorted(set(self._links))
+        reach = np.hypot(self._radius, self._half)
+
+        def centres(q: Array) -> Array:
+            self.set_configuration(q)
+            return np.array(self._world[:, :3, 3])
+
+        def gap(q: Array, body_pairs: list[tuple[int, int]]) -> float:
+            self.set_configuration(q)
+            return self._exact.distance(self._world, np.array(body_pairs, dtype=np.int64),
+                                        np.zeros((0, 2), dtype=np.int64))
+
+        candidates = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+        return {pair(a, b) for a, b in
+                proven_never(self.chain, self._links, centres, reach, candidates, gap)}
 
     def in_scene(self, scene: Scene) -> CollisionWorld:
         """The same arm (geometry, disabled pairs, padding) in another scene: only the scene's
@@ -163,7 +184,7 @@ class CollisionWorld:
         """Replace the set of robot-robot pairs that are never checked."""
         self.disabled = {pair(a, b) for a, b in pairs}
         allowed = {pair(link, o.name) for o in self.scene.objects for link in o.allow}
-        self._skip = self.disabled | allowed
+        self._skip = self.disabled | allowed | self.never
         n = len(self._links)
         rr = [(i, j) for i in range(n) for j in range(i + 1, n)
               if self._links[i] != self._links[j]
