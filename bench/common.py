@@ -121,10 +121,18 @@ def plain(x: Any, digits: int = 7) -> Any:
     return x
 
 
-def write_json(path: Path, doc: dict[str, Any], indent: int | None = 1) -> None:
-    """Write ``doc`` atomically (temp file + rename), compact lists of numbers."""
+PROBLEM_DIGITS = 17
+"""Significant digits of the problem files the solvers read: every float round-trips, so a
+solver answers exactly the configuration the judge judges (at 7 digits a q moved by up to
+1e-6 rad: a "boundary" configuration 1e-6 rad past a contact was handed to every solver on the
+free side while the judge judged it in contact)."""
+
+
+def write_json(path: Path, doc: dict[str, Any], indent: int | None = 1, digits: int = 7) -> None:
+    """Write ``doc`` atomically (temp file + rename), compact lists of numbers, floats to
+    ``digits`` significant digits (:data:`PROBLEM_DIGITS` for problems)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(plain(doc), indent=indent, allow_nan=False)
+    text = json.dumps(plain(doc, digits), indent=indent, allow_nan=False)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     with os.fdopen(fd, "w", encoding="utf-8") as f:
         f.write(text + "\n")
@@ -212,7 +220,8 @@ def run_alternating(spec: dict[str, Any], solvers: Sequence[Solver], workdir: Pa
     parts = chunks(spec["problems"], rounds)
     for r, whole in enumerate(parts):
         problem_file = workdir / f"{label}.round{r}.json"
-        write_json(problem_file, {**spec, "problems": whole}, indent=None)
+        write_json(problem_file, {**spec, "problems": whole}, indent=None,
+                   digits=PROBLEM_DIGITS)
         order = active[r % len(active):] + active[:r % len(active)] if active else []
         for s in order:
             part, source = whole, problem_file
@@ -220,7 +229,8 @@ def run_alternating(spec: dict[str, Any], solvers: Sequence[Solver], workdir: Pa
                 allowed = {p["id"] for p in spec["problems"][:s.limit]}
                 part = [p for p in whole if p["id"] in allowed]
                 source = workdir / f"{label}.round{r}.first{s.limit}.json"
-                write_json(source, {**spec, "problems": part}, indent=None)
+                write_json(source, {**spec, "problems": part}, indent=None,
+                           digits=PROBLEM_DIGITS)
                 if not part:
                     continue
             result_file = workdir / f"{label}.round{r}.{s.name.replace(' ', '_')}.json"

@@ -364,7 +364,7 @@ def run(ctx: Context) -> dict[str, Any]:
             spec = specs[task]
             label = f"robots_{key}_{task}"
             path = ctx.work / f"{label}.json"
-            common.write_json(path, spec, indent=None)
+            common.write_json(path, spec, indent=None, digits=common.PROBLEM_DIGITS)
             if not spec["problems"]:
                 cases[label] = {"skipped": "no problems"}
                 continue
