@@ -18,7 +18,7 @@ import os
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -54,7 +54,6 @@ class Window:
     wall_s: float = 0.0
     worst_wait_s: float = 0.0
     steal_s: float = 0.0
-    _start: tuple[float, dict[str, float], float] = field(default=(0.0, {}, 0.0), repr=False)
 
     @property
     def starved(self) -> bool:
@@ -79,11 +78,10 @@ class Window:
 def watched() -> Iterator[Window]:
     """Measure the ``with`` block's CPU share (see the module)."""
     window = Window()
-    window._start = (time.monotonic(), _waits(), _steal())
+    t0, waits0, steal0 = time.monotonic(), _waits(), _steal()
     try:
         yield window
     finally:
-        t0, waits0, steal0 = window._start
         waits = _waits()
         window.wall_s = time.monotonic() - t0
         window.worst_wait_s = max((w - waits0.get(tid, 0.0) for tid, w in waits.items()),

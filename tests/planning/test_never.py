@@ -98,3 +98,23 @@ def test_a_clearance_within_the_bound_of_the_samples_is_no_proof(tmp_path: Path)
     clearance = _sweep_clearance(reach, 0.0)
     assert 0.0 < clearance < 0.2 * STEP / 2  # (the tool's centre is 0.2 m from j2's axis)
     assert ("tool", "upper") not in _robot(tmp_path, reach=reach).collision_world().never
+
+
+def test_the_proof_is_made_once_per_robot_and_skips_the_pairs_the_srdf_disables(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from usar_arm.core.shapes import Sphere
+    from usar_arm.planning.collision import CollisionWorld
+    from usar_arm.planning.scene import Scene, SceneObject
+
+    proofs: list[int] = []
+    prove = CollisionWorld._prove_never
+    monkeypatch.setattr(CollisionWorld, "_prove_never",
+                        lambda self, disabled: proofs.append(1) or prove(self, disabled))
+    robot = _robot(tmp_path, reach=1.5)
+    first = robot.collision_world()
+    ball = Scene("ball", (SceneObject("ball", Sphere(0.05), np.eye(4)),))
+    second = robot.collision_world(ball)
+    assert len(proofs) == 1 and second.never == first.never
+    assert ("lower", "upper") not in first.never  # the SRDF disables it: not worth a proof
+    robot.collision_world(padding=0.01)  # other shapes: proven again
+    assert len(proofs) == 2

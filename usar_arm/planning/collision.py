@@ -116,10 +116,13 @@ class CollisionWorld:
         disabled: link pairs never checked (the SRDF's disable_collisions).
         scene: obstacles in base_link (default: none).
         padding: safety margin (m) added to every robot cylinder's radius and half-length.
+        never: the robot-robot pairs proven never in contact for this chain and padding, when
+            known already (:attr:`never` of another world of the arm); else proven here.
     """
 
     def __init__(self, chain: KinematicChain, kinematics: KinematicModel,
-                 disabled: Iterable[Pair] = (), scene: Scene = EMPTY, padding: float = 0.0):
+                 disabled: Iterable[Pair] = (), scene: Scene = EMPTY, padding: float = 0.0,
+                 never: Iterable[Pair] | None = None):
         self.chain = chain
         self.kinematics = kinematics
         self.scene = scene
@@ -138,12 +141,14 @@ class CollisionWorld:
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
         self._probes = not all(b.exact for b in bodies)
-        self.never = self._prove_never()
+        disabled = {pair(a, b) for a, b in disabled}
+        self.never = set(never) if never is not None else self._prove_never(disabled)
         self.set_disabled(disabled)
 
-    def _prove_never(self) -> set[Pair]:
-        """Robot-robot pairs proven never in contact over a joint's whole range (:mod:`.never`:
-        links that one revolute joint alone moves against each other)."""
+    def _prove_never(self, disabled: set[Pair]) -> set[Pair]:
+        """Robot-robot pairs, of those not ``disabled``, proven never in contact over a joint's
+        whole range (:mod:`.never`: links that one revolute joint alone moves against each
+        other)."""
         names = sorted(set(self._links))
         reach = np.hypot(self._radius, self._half)
 
@@ -156,7 +161,8 @@ class CollisionWorld:
             return self._exact.distance(self._world, np.array(body_pairs, dtype=np.int64),
                                         np.zeros((0, 2), dtype=np.int64))
 
-        candidates = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+        candidates = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]
+                      if (a, b) not in disabled]
         return {pair(a, b) for a, b in
                 proven_never(self.chain, self._links, centres, reach, candidates, gap)}
 
@@ -341,12 +347,8 @@ class CollisionWorld:
         collision (checked coarse to fine, stopping at the first)."""
         ks = np.array(probe_order(steps // PROBE_STRIDE)) * PROBE_STRIDE
         world, verdicts = self.bounded_poses(a + (b - a) * (ks / steps)[:, None])
-        for n in range(len(ks)):
-            row = verdicts[n]
-            if (row == bounds.CONTACT).any() or ((row == bounds.UNDECIDED).any() and self._decide(
-                    world[n], row, stop_at_first=True)):
-                return True
-        return False
+        return any(row.any() and self._decide(poses, row, stop_at_first=True)
+                   for poses, row in zip(world, verdicts, strict=True))
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""

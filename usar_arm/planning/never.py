@@ -51,12 +51,13 @@ def proven_never(chain: KinematicChain, links: Sequence[str], centre_of: Callabl
 
     Args:
         chain: the robot. links: the link of each collision body. centre_of: the bodies'
-            bounding-cylinder centres (B, 3) at a configuration. reach: per body, the radius of
-            a ball about that centre holding the body (m). gap: the exact clearance over body
-            pairs at a configuration.
+            bounding-cylinder centres (B, 3) at a configuration (asked once, at zero). reach:
+            per body, the radius of a ball about that centre holding the body (m). gap: the
+            exact clearance over body pairs at a configuration.
     """
     poe: PoeModel | None = None
     lower, upper = chain.lower(), chain.upper()
+    centres = centre_of(np.zeros(chain.dof))
     proven = set()
     for a, b in pairs:
         found = _one_joint(chain, a, b)
@@ -66,7 +67,6 @@ def proven_never(chain: KinematicChain, links: Sequence[str], centre_of: Callabl
         poe = poe or PoeModel(chain)
         axis, point = np.asarray(poe.axes[j], float), np.asarray(poe.points[j], float)
         q = np.zeros(chain.dof)
-        centres = centre_of(q)
         mine = [k for k, name in enumerate(links) if name == moving]
         body_pairs = [(i, k) for i in range(len(links)) for k in range(len(links))
                       if i < k and {links[i], links[k]} == {a, b}]

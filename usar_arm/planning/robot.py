@@ -89,6 +89,7 @@ class Robot:
     """How the description was read (group, tip, packages, hulls)."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
+    _never: dict[float, set[Pair]] = field(default_factory=dict)
 
     @property
     def kinematics(self) -> KinematicModel:
@@ -108,7 +109,10 @@ class Robot:
     def collision_world(self, scene: Scene = EMPTY, padding: float = 0.0) -> CollisionWorld:
         """A collision world of this arm in ``scene``."""
         validate_allow(scene, {lk.name for lk in self.chain.links})
-        return CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding)
+        world = CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding,
+                               self._never.get(padding))
+        self._never[padding] = world.never  # (proven once per padding: the scene plays no part)
+        return world
 
     def home(self) -> list[float]:
         """The ``home`` state, or without one each joint at 0 (the middle of its limits when 0
