@@ -366,12 +366,12 @@ class RayBackend:
         return list(ready)
 
     @staticmethod
-    def answer(ref: Any, wait: bool = True) -> tuple[str, Any]:
+    def answer(ref: Any, wait: float | None = None) -> tuple[str, Any]:
         """What the call ``ref`` answered: ("ok", its value); ("lost", why) when its actor
-        died; ("raised", why) when the call raised; without ``wait``, ("pending", None) when
-        it has not answered yet."""
+        died; ("raised", why) when the call raised; with ``wait`` (s), ("pending", None) when
+        it has not answered within that time (without, it has answered already)."""
         try:
-            if not wait and not ray.wait([ref], timeout=0)[0]:
+            if wait is not None and not ray.wait([ref], timeout=wait)[0]:
                 return "pending", None
             return "ok", ray.get(ref)
         except ray.exceptions.RayActorError as exc:

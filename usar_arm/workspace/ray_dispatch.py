@@ -5,7 +5,8 @@ result travels; the answers are collected as they finish (never one wait for tho
 references). No wait is unbounded: an actor that is not ready within the backend's
 ``start_timeout`` is an error naming it, and a call without an answer within its
 ``call_timeout`` counts as a failure of its chunk. A chunk whose actor dies or raises is
-retried once (on a fresh actor when it died; the chunks queued behind it are not charged); a
+retried once (on a fresh actor when it died; the chunks queued behind it are not charged, and
+when the death cannot be told apart from theirs, each runs alone before anyone is charged); a
 second failure stops the run. While a local instance starts, a helper process
 (:mod:`.warm_up_helper`) runs chunks too, at most one worker's share.
 
@@ -29,6 +30,10 @@ IN_FLIGHT = 2
 """Calls queued per actor: the next chunk is there when one finishes."""
 POLL = 1.0
 """s between checks of the deadlines while waiting."""
+SETTLE = 5.0
+"""s to wait for each call of a lost actor to settle: Ray fails the calls of a dead actor
+within a second, and the answer of a chunk it finished just before dying may still be on its
+way (taken as not answered, that chunk would be charged for the death of the next)."""
 HELPER_POLL = 0.05
 """s between looks at the actors while the helper runs a chunk (a chunk takes 0.05 to 1 s)."""
 
@@ -72,9 +77,9 @@ class Actors(Protocol):
     def wait_one(self, refs: list[Any], timeout: float) -> list[Any]:
         """The references of ``refs`` answered within ``timeout`` s (one at most)."""
 
-    def answer(self, ref: Any, wait: bool = True) -> tuple[str, Any]:
-        """("ok", value), ("lost", why), ("raised", why) or, without ``wait``, ("pending",
-        None)."""
+    def answer(self, ref: Any, wait: float | None = None) -> tuple[str, Any]:
+        """("ok", value), ("lost", why), ("raised", why) or, not answered within ``wait`` s,
+        ("pending", None)."""
 
 
 class Run:
@@ -85,6 +90,9 @@ class Run:
         self.queue = deque(todo)
         self.failures: dict[int, list[str]] = {}
         self.start_failures: dict[int, list[str]] = {}
+        self.alone: set[int] = set()
+        """Chunks lost with another when an actor died: each runs alone on its actor until
+        it answers, so that a second death is charged to the chunk that caused it."""
         self.share = len(todo) // (backend.head.num_cpus + 1) if backend.head else 0
         """Chunks a helper may run while a local instance starts: one worker's share."""
         self.helper = WarmUpHelper(job)
@@ -153,6 +161,9 @@ class Run:
         """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup)."""
         for slot in self.backend.slots:
             while self.queue and len(slot.calls) < IN_FLIGHT:
+                if slot.calls and (self.queue[0] in self.alone
+                                   or slot.calls[-1][1] in self.alone):
+                    break
                 i = self.queue.popleft()
                 if not slot.calls:
                     slot.since = time.monotonic()
@@ -181,23 +192,34 @@ class Run:
                 self._failed(i, answer)
                 return
             slot.since = time.monotonic()
+            self.alone.discard(i)
             yield i, answer
             return
 
-    def _actor_lost(self, k: int, reason: str) -> Iterator[tuple[int, Result]]:
+    def _actor_lost(self, k: int, reason: str,
+                    hung: bool = False) -> Iterator[tuple[int, Result]]:
         """The actor of slot ``k`` is gone: keep what it finished, charge the chunk it was
-        running (none when it never started: then the slot's start), queue the others again
-        uncharged, and start a fresh actor."""
+        running, queue the others again uncharged, and start a fresh actor.
+
+        The chunk it was running is its oldest call without an answer, except that a chunk
+        it finished just before dying may have lost its answer with it: so when the actor
+        died (not ``hung``, killed for its oldest call's deadline) with more than one call
+        unanswered, none is charged and each of them runs alone until it answers. Nothing is
+        charged when the actor never started (its slot's start is)."""
         slot = self.backend.slots[k]
         again: list[int] = []
-        for ref, i in slot.calls:
-            kind, answer = self.backend.answer(ref, wait=False)
+        for ref, i in slot.calls:  # (a finished chunk's answer may still be on its way)
+            kind, answer = self.backend.answer(ref, wait=SETTLE)
             if kind == "ok":
                 yield i, answer
                 continue
             again.append(i)
         slot.calls.clear()
-        charged = again.pop(0) if again and slot.ready is None else None
+        charged = None
+        if slot.ready is None and again and (hung or len(again) == 1):
+            charged = again.pop(0)
+        elif slot.ready is None and again:
+            self.alone.update(again)
         self.queue.extendleft(reversed(again))
         if slot.ready is not None:  # it never became ready: no chunk of it ran
             self.start_failures.setdefault(k, []).append(reason)
@@ -230,4 +252,5 @@ class Run:
                     "its CPUs taken by another job?)")
             if slot.ready is None and slot.calls and now - slot.since > backend.call_timeout:
                 backend.kill(slot)
-                yield from self._actor_lost(k, f"no answer within {backend.call_timeout:g} s")
+                yield from self._actor_lost(k, f"no answer within {backend.call_timeout:g} s",
+                                            hung=True)
