@@ -17,7 +17,12 @@ shapes, with a margin of ``EPS`` metres against rounding:
 * link-box (and link-mesh, through the box that bounds the mesh in its own frame): an axis
   among the box's three face normals, the cylinder's axis, the three cross products of the
   two, and the line between the centres, on which the projections of the exact cylinder
-  (|u.z| h + r sqrt(1 - (u.z)^2)) and of the box (sum |u.b_i| e_i) do not overlap.
+  (|u.z| h + r sqrt(1 - (u.z)^2)) and of the box (sum |u.b_i| e_i) do not overlap;
+* a mesh body's pair that its cylinder leaves undecided: the balls around its surface, all
+  apart from the other body (:mod:`.bounds_balls`).
+
+In a walk, a body-obstacle pair closes by how far the body's points move per step, a body-body
+pair only by the joints between the two bodies (:func:`_closing`).
 
 Forward kinematics is the product of exponentials of the chain's joints (space frame), the same
 representation as :mod:`.poe`; Pinocchio stays the reference it is tested against.
@@ -31,14 +36,17 @@ from typing import Any
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning import scene_tree
+from usar_arm.planning import bounds_balls, scene_tree
 from usar_arm.planning.bounds_arrays import (
     BOX,
     CAPSULE,
+    COVER_FROM,
+    COVER_TO,
     GROUP,
     GROUP_RADIUS,
     HALF,
     HULL,
+    MOVED,
     NEXT,
     O_BOUND,
     O_CENTRE,
@@ -58,10 +66,31 @@ from usar_arm.planning.bounds_scene import CLEAR, CONTACT, UNDECIDED, judge_scen
 from usar_arm.planning.gaps import segment_distance
 from usar_arm.planning.jit import inline_kernel, kernel
 
-__all__ = ["BOX", "CAPSULE", "CLEAR", "CONTACT", "EPS", "GROUP", "GROUP_RADIUS", "HULL", "MARGIN",
-           "NEXT", "OWNER", "SPHERE", "UNDECIDED",
-           "check", "classify", "link_poses", "pack", "segment_distance", "summary", "walk",
-           "warm_up"]
+__all__ = [
+    "BOX",
+    "CAPSULE",
+    "CLEAR",
+    "CONTACT",
+    "COVER_FROM",
+    "COVER_TO",
+    "EPS",
+    "GROUP",
+    "GROUP_RADIUS",
+    "HULL",
+    "MARGIN",
+    "NEXT",
+    "OWNER",
+    "SPHERE",
+    "UNDECIDED",
+    "check",
+    "classify",
+    "link_poses",
+    "pack",
+    "segment_distance",
+    "summary",
+    "walk",
+    "warm_up",
+]
 
 VerdictArray = np.ndarray[Any, np.dtype[np.int8]]
 """Per-pair verdicts (CLEAR, CONTACT, UNDECIDED)."""
@@ -94,33 +123,41 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 
 
 @inline_kernel
-def _judge(seg: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
-           obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
-           pair_of: IndexArray, eps: float, margin: float, move: Array, refine: float,
-           out: VerdictArray, cand: Array, scratch: Array, stack: IndexArray
+def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
+           kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
+           order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
+           margin: float, move: Array, cum: Array, refine: float, out: VerdictArray, cand: Array,
+           scratch: Array, stack: IndexArray, balls: tuple[Array, Array, np.ndarray]
            ) -> tuple[float, float]:
     """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and, over the
     cleared link-link and link-obstacle pairs, the smallest lower bound of a pair's clearance
-    divided by how far the pair can close per unit of motion (``move`` (L,): per link, how
-    far its points can move; a link-link pair closes by the sum of both): how many units of
-    motion cannot bring any pair into contact (0 when a pair is not cleared; inf when there
-    is none). With ``move`` all ones, these are the clearance bounds themselves (m).
+    divided by how far the pair can close per unit of motion: how many units of motion cannot
+    bring any pair into contact (0 when a pair is not cleared; inf when there is none).
+    ``move`` (L,): per body, how far its points can move (a body-obstacle pair closes by that);
+    ``cum`` (L, n + 1): per body, how far joints 0 .. J - 1 can move its points, summed over
+    the joints (a body-body pair closes only by the joints between them, :func:`_closing`).
 
     Two kernels, each called once per configuration (a call per pair costs more than the
-    test itself): :func:`_judge_links` and :func:`.bounds_scene.judge_scene`."""
-    self_gap = _judge_links(seg, links, pairs, n_rr, eps, margin, move, out)
+    test itself): :func:`_judge_links` and :func:`.bounds_scene.judge_scene`; both give a pair
+    their cylinders leave undecided a second look with the mesh bodies' balls
+    (:mod:`.bounds_balls`; ``balls``: their world centres and which bodies are placed, scratch
+    of the caller's, reset here). ``world`` (L, 3, 4): the bodies' poses."""
+    balls[2][:] = 0
+    self_gap = _judge_links(seg, world, links, pairs, n_rr, groups, leaves, eps, margin, cum,
+                            out, balls)
     for p in range(n_rr, pairs.shape[0]):
         out[p] = CLEAR
     if nodes.shape[0] == 0:
         return self_gap, math.inf
-    return self_gap, judge_scene(seg, links, kind, obstacles, axes, tree, nodes, order,
-                                  pair_of, eps, margin, move, refine, out, cand, scratch,
-                                  stack)
+    return self_gap, judge_scene(seg, world, links, kind, obstacles, axes, tree, nodes, order,
+                                  pair_of, groups, leaves, eps, margin, move, refine, out, cand,
+                                  scratch, stack, balls)
 
 
 @inline_kernel
-def _judge_links(seg: Array, links: Array, pairs: IndexArray, n_rr: int, eps: float,
-                 margin: float, move: Array, out: VerdictArray) -> float:
+def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
+                 groups: Array, leaves: Array, eps: float, margin: float, cum: Array,
+                 out: VerdictArray, balls: tuple[Array, Array, np.ndarray]) -> float:
     """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
     smallest cleared gap per unit of closing motion (0 when a pair is not cleared)."""
     self_gap = math.inf
@@ -141,7 +178,7 @@ def _judge_links(seg: Array, links: Array, pairs: IndexArray, n_rr: int, eps: fl
                 closing = 0.0
                 for r in range(p, end):
                     out[r] = CLEAR
-                    closing = max(closing, move[pairs[r, 0]] + move[pairs[r, 1]])
+                    closing = max(closing, _closing(cum, links, pairs[r, 0], pairs[r, 1]))
                 if closing > 0.0:
                     self_gap = min(self_gap, gap / closing)
                 p = end
@@ -150,23 +187,78 @@ def _judge_links(seg: Array, links: Array, pairs: IndexArray, n_rr: int, eps: fl
             i, j = pairs[r, 0], pairs[r, 1]
             gap = (segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j])
                    - links[i, RADIUS] - links[j, RADIUS])
+            if gap <= eps:  # proven in contact, or the balls of a mesh body have a look
+                inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
+                if inner < links[i, RHO] + links[j, RHO] - margin:
+                    out[r] = CONTACT
+                    self_gap = 0.0
+                    continue
+                gap = _balls_gap(i, j, seg, world, links, groups, leaves, eps, balls)
             if gap > eps:
                 out[r] = CLEAR
-                closing = move[i] + move[j]
+                closing = _closing(cum, links, i, j)
                 if closing > 0.0:
                     self_gap = min(self_gap, gap / closing)
                 continue
-            inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
-            out[r] = CONTACT if inner < links[i, RHO] + links[j, RHO] - margin else UNDECIDED
+            out[r] = UNDECIDED
             self_gap = 0.0
         p = end
     return self_gap
 
 
+@inline_kernel
+def _closing(cum: Array, links: Array, i: int, j: int) -> float:
+    """How far bodies ``i`` and ``j`` can close per unit of motion: the joints that move both
+    move them together (the first ``MOVED`` joints move a body), so only those between them
+    count, by how far they move the farther body's points (``cum`` as :func:`_judge`)."""
+    a, b = int(links[i, MOVED]), int(links[j, MOVED])
+    if a <= b:
+        return cum[j, b] - cum[j, a]
+    return cum[i, a] - cum[i, b]
+
+
+@inline_kernel
+def _balls_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: Array,
+               leaves: Array, eps: float, balls: tuple[Array, Array, np.ndarray]) -> float:
+    """The balls' lower bound of the gap (m) of bodies ``i`` and ``j`` (-inf when neither
+    has a ball cover)."""
+    wg, wl, placed = balls
+    if bounds_balls.has_balls(links, i):
+        bounds_balls.place(world, links, groups, leaves, i, wg, wl, placed)
+        if bounds_balls.has_balls(links, j):
+            bounds_balls.place(world, links, groups, leaves, j, wg, wl, placed)
+        return bounds_balls.pair_gap(i, j, seg, links, groups, leaves, wg, wl, eps)
+    if bounds_balls.has_balls(links, j):
+        bounds_balls.place(world, links, groups, leaves, j, wg, wl, placed)
+        return bounds_balls.pair_gap(j, i, seg, links, groups, leaves, wg, wl, eps)
+    return -math.inf
+
+
+def ball_scratch(links: Array, groups: Array, leaves: Array
+                 ) -> tuple[Array, Array, np.ndarray]:
+    """The scratch of :func:`_judge`'s balls: their world centres and the placed bodies."""
+    return (np.empty((groups.shape[0], 3)), np.empty((leaves.shape[0], 3)),
+            np.zeros(links.shape[0], dtype=np.int8))
+
+
+ball_scratch_kernel = kernel(ball_scratch)
+
+
+@kernel
+def _still(links: Array) -> tuple[Array, Array]:
+    """``move`` and ``cum`` of :func:`_judge` for a single configuration (ones: its scene gaps
+    are in metres, as the sphere tree's pruning wants; zeros: no closing of body pairs)."""
+    depth = 0
+    for k in range(links.shape[0]):
+        depth = max(depth, int(links[k, MOVED]))
+    return np.ones(links.shape[0]), np.zeros((links.shape[0], depth + 1))
+
+
 @kernel
 def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
               obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
-              pair_of: IndexArray, eps: float, margin: float) -> VerdictArray:
+              pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float
+              ) -> VerdictArray:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
     link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links`,
     :func:`prepare_obstacles` and :mod:`.scene_tree`."""
@@ -176,11 +268,13 @@ def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: In
     cand = np.empty((8, 3))
     scratch = np.empty(3)
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
-    move = np.ones(n_link)
+    move, cum = _still(links)
+    balls = ball_scratch_kernel(links, groups, leaves)
     for c in range(n_cfg):
         _segments(world[c], links, seg)
-        _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of, eps,
-               margin, move, 0.0, out[c], cand, scratch, stack)
+        _judge(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
+               pair_of, groups, leaves, eps, margin, move, cum, 0.0, out[c], cand, scratch, stack,
+               balls)
     return out
 
 
@@ -205,26 +299,26 @@ def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: Index
                                           obstacles[:, O_BOUND])
     pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
     return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, tree, nodes, order,
-                     pair_of, eps, margin)
+                     pair_of, np.zeros((0, 6)), np.zeros((0, 4)), eps, margin)
 
 
 @kernel
 def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
           kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
-          order: IndexArray, pair_of: IndexArray, eps: float, margin: float
-          ) -> tuple[Array, VerdictArray]:
+          order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
+          margin: float) -> tuple[Array, VerdictArray]:
     """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
     (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
     world = link_poses(qs, joints, zero, links)
     return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
-                            pair_of, eps, margin)
+                            pair_of, groups, leaves, eps, margin)
 
 
 @kernel
 def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Array,
             links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
             axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-            eps: float, margin: float) -> int:
+            groups: Array, leaves: Array, eps: float, margin: float) -> int:
     """One configuration ``q`` (n,) in one call: the link cylinder poses into ``world``
     (L, 3, 4) and the pair verdicts into ``row`` (P + Q,), both the caller's, and one verdict:
     CLEAR when every pair is cleared, CONTACT when one is proven in contact, else UNDECIDED
@@ -236,8 +330,10 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
     poses_into(q, joints, zero, links, frames, world)
     _segments(world, links, seg)
-    _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of, eps,
-           margin, np.ones(n_link), 0.0, row, np.empty((8, 3)), np.empty(3), stack)
+    move, cum = _still(links)
+    _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
+           groups, leaves, eps, margin, move, cum, 0.0, row, np.empty((8, 3)),
+           np.empty(3), stack, ball_scratch_kernel(links, groups, leaves))
     verdict = CLEAR
     for p in range(row.shape[0]):
         if row[p] == CONTACT:
@@ -251,7 +347,8 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
 def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
          links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
          axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-         eps: float, margin: float) -> tuple[int, int, IndexArray, Array, VerdictArray]:
+         groups: Array, leaves: Array, eps: float, margin: float
+         ) -> tuple[int, int, IndexArray, Array, VerdictArray]:
     """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
     configurations, skipping those that the clearance already proves free.
 
@@ -269,9 +366,11 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     """
     n, n_link, n_pairs = a.shape[0], zero.shape[0], pairs.shape[0]
     move = np.zeros(n_link)  # per link, how far its points move per step (m)
+    cum = np.zeros((n_link, n + 1))  # ... by the first j joints
     for k in range(n_link):
         for j in range(n):
-            move[k] += levers[j, k] * abs(b[j] - a[j]) / steps
+            cum[k, j + 1] = cum[k, j] + levers[j, k] * abs(b[j] - a[j]) / steps
+        move[k] = cum[k, n]
     motion = 0.0
     for k in range(n_link):
         motion = max(motion, move[k])
@@ -282,6 +381,7 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
     cand = np.empty((8, 3))
     scratch = np.empty(3)
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
+    balls = ball_scratch_kernel(links, groups, leaves)
     row = np.zeros(n_pairs, dtype=np.int8)
     where = np.empty(steps + 1, dtype=np.int64)
     poses = np.empty((steps + 1, n_link, 3, 4))
@@ -294,9 +394,9 @@ def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Arr
             q[j] = a[j] + (b[j] - a[j]) * f
         poses_into(q, joints, zero, links, frames, world)
         _segments(world, links, seg)
-        self_gap, scene_gap = _judge(seg, links, pairs, n_rr, kind, obstacles, axes, tree,
-                                     nodes, order, pair_of, eps, margin, move, REFINE, row,
-                                     cand, scratch, stack)
+        self_gap, scene_gap = _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes,
+                                     tree, nodes, order, pair_of, groups, leaves, eps, margin,
+                                     move, cum, REFINE, row, cand, scratch, stack, balls)
         evaluated += 1
         undecided = False
         for p in range(n_pairs):

@@ -25,15 +25,18 @@ BOX, SPHERE, CAPSULE, HULL = 0, 1, 2, 3
 half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding box (it can
 clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
 
-RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT = range(10)
-LINK_WIDTH = 10
+RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT, COVER_FROM, COVER_TO = (
+    range(12))
+LINK_WIDTH = 12
 """Columns of the per-body array: the cylinder's radius and half-length (m), the radius of the
 balls inside it and how far their centres reach from its centre along the axis, the radius of a
 sphere around it, how many joints move it; the index of the link it belongs to (its bodies are
 rigid together), and when every body of that link lies within ``GROUP_RADIUS`` (m) of one body's
 axis segment, that body's index (``GROUP``; -1 otherwise): one capsule test then clears every
 body pair of two such links at once, and one test clears a link's bodies against an obstacle;
-``NEXT``: the group's next body after this one (the group's body first; -1 after the last)."""
+``NEXT``: the group's next body after this one (the group's body first; -1 after the last);
+``COVER_FROM``, ``COVER_TO``: the range of its ball groups (:mod:`.bounds_balls`; equal when it
+has no ball cover)."""
 
 O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
     0, 3, 6, 9, 12, 15, 16, 17)
@@ -54,6 +57,7 @@ def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
         out[k, BOUND] = math.sqrt(radius[k] * radius[k] + half[k] * half[k])
         out[k, MOVED] = moved_by[k]
         out[k, OWNER], out[k, GROUP], out[k, GROUP_RADIUS], out[k, NEXT] = k, -1.0, 0.0, -1.0
+        out[k, COVER_FROM] = out[k, COVER_TO] = 0.0
     return out
 
 
@@ -159,13 +163,36 @@ def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
 
 
 Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array, Array,
-               IndexArray, IndexArray, IndexArray]
+               IndexArray, IndexArray, IndexArray, Array, Array]
+
+
+def pack_covers(covers: list[tuple[Array, Array] | None]) -> tuple[IndexArray, Array, Array]:
+    """Per body (L,), its ball cover ((groups (G, 6), leaves (M, 4)) of
+    :class:`.ball_cover.BallCover`, or None) as one array each: the range of each body's groups
+    (L, 2), the groups (their leaf ranges shifted) and the leaves."""
+    ranges = np.zeros((len(covers), 2), dtype=np.int64)
+    groups, leaves = [np.zeros((0, 6))], [np.zeros((0, 4))]
+    n_groups = n_leaves = 0
+    for k, c in enumerate(covers):
+        ranges[k] = n_groups, n_groups
+        if c is None:
+            continue
+        g = np.array(c[0], dtype=float)
+        g[:, 4:6] += n_leaves
+        groups.append(g)
+        leaves.append(np.asarray(c[1], dtype=float))
+        n_groups += len(g)
+        n_leaves += len(c[1])
+        ranges[k, 1] = n_groups
+    return ranges, np.ascontiguousarray(np.vstack(groups)), np.ascontiguousarray(np.vstack(leaves))
 
 
 def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: Array,
          half: Array, moved_by: IndexArray, rr: IndexArray, rs: IndexArray, kind: IndexArray,
-         pose: Array, size: Array) -> Packed:
-    """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once."""
+         pose: Array, size: Array,
+         covers: list[tuple[Array, Array] | None] | None = None) -> Packed:
+    """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once;
+    ``covers``: per body, its ball cover or None (see :func:`pack_covers`; default none)."""
     joints = np.ascontiguousarray(np.hstack([
         axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))
     links = prepare_links(np.ascontiguousarray(radius, dtype=float),
@@ -179,5 +206,7 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
     tree, nodes, order = scene_tree.build(obstacles[:, O_CENTRE:O_CENTRE + 3],
                                           obstacles[:, O_BOUND])
     pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
+    ranges, groups, leaves = pack_covers(covers if covers is not None else [None] * len(radius))
+    links[:, COVER_FROM], links[:, COVER_TO] = ranges[:, 0], ranges[:, 1]
     return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
-            obstacles, obstacle_axes, tree, nodes, order, pair_of)
+            obstacles, obstacle_axes, tree, nodes, order, pair_of, groups, leaves)

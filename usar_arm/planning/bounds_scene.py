@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.planning import bounds_balls
 from usar_arm.planning.bounds_arrays import (
     BOUND,
     BOX,
@@ -74,12 +75,24 @@ def _group_motion(links: Array, move: Array, i: int) -> float:
 
 
 @inline_kernel
-def judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, axes: Array,
-                tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-                eps: float, margin: float, move: Array, refine: float,
-                out: np.ndarray, cand: Array, scratch: Array, stack: IndexArray) -> float:
+def _balls_clear(b: int, kind: int, o: Array, axes: Array, world: Array, links: Array,
+                 groups: Array, leaves: Array, wg: Array, wl: Array, placed: np.ndarray,
+                 eps: float, scratch: Array) -> bool:
+    """Body ``b``'s balls clear the obstacle (its gap (m) into ``scratch[0]``)."""
+    bounds_balls.place(world, links, groups, leaves, b, wg, wl, placed)
+    scratch[0] = bounds_balls.obstacle_gap(b, kind, o, axes, links, groups, leaves, wg, wl, eps)
+    return bool(scratch[0] > eps)
+
+
+@inline_kernel
+def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstacles: Array,
+                axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
+                pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float,
+                move: Array, refine: float, out: np.ndarray, cand: Array, scratch: Array,
+                stack: IndexArray, balls: tuple[Array, Array, np.ndarray]) -> float:
     """Verdicts on the link-obstacle pairs into ``out``, and the smallest cleared gap per unit
     of the link's motion ``move`` (0 when a pair is not cleared). See the module's notes."""
+    wg, wl, placed = balls
     scene_gap = math.inf
     for i in range(pair_of.shape[0]):
         if links[i, GROUP] >= 0 and links[i, GROUP] != i:
@@ -137,19 +150,31 @@ def judge_scene(seg: Array, links: Array, kind: IndexArray, obstacles: Array, ax
                         b = int(links[b, NEXT]) if grouped and not whole else -1
                     elif whole:
                         whole = False  # each body on its own, from the first (b == i)
+                    elif bounds_balls.has_balls(links, b) and _balls_clear(
+                            b, kind[s], o, axes[s], world, links, groups, leaves, wg, wl,
+                            placed, eps, scratch):
+                        if mv > 0.0:
+                            scene_gap = min(scene_gap, scratch[0] / mv)
+                        b = int(links[b, NEXT]) if grouped else -1
                     else:
                         scene_gap = 0.0
-                        if kind[s] == BOX:  # balls inside both overlap by over the margin
-                            touching = inner_box_contact(
-                                seg[5, b], seg[4, b], links[b, RHO], links[b, REACH],
-                                o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], margin,
-                                scratch)
-                        elif kind[s] == HULL:  # never for a mesh's box
-                            touching = False
-                        else:
-                            touching = segment_distance(
-                                seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
-                                o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin
-                        out[pair_of[b, s]] = CONTACT if touching else UNDECIDED
+                        out[pair_of[b, s]] = (CONTACT if _touching(seg, links, b, kind[s], o,
+                                                                   axes[s], margin, scratch)
+                                              else UNDECIDED)
                         b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
+
+
+@inline_kernel
+def _touching(seg: Array, links: Array, b: int, kind: int, o: Array, axes: Array,
+              margin: float, scratch: Array) -> bool:
+    """Body ``b`` and the obstacle are proven in contact: balls inside both overlap by more
+    than ``margin`` (never for a mesh's box)."""
+    if kind == BOX:
+        return bool(inner_box_contact(seg[5, b], seg[4, b], links[b, RHO], links[b, REACH],
+                                      o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3], margin,
+                                      scratch))
+    if kind == HULL:
+        return False
+    return bool(segment_distance(seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
+                                 o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin)

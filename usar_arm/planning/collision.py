@@ -21,9 +21,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from usar_arm.core.model import KinematicChain
-from usar_arm.core.shapes import CylinderShape, Shape
+from usar_arm.core.shapes import CylinderShape, Mesh, Shape
 from usar_arm.core.spatial import Array, invert
 from usar_arm.planning import bounds
+from usar_arm.planning.ball_cover import BallCover, cover_in
 from usar_arm.planning.element_fit import bounding_cylinder, padded
 from usar_arm.planning.exact import ExactJudge
 from usar_arm.planning.kinematics import KinematicModel
@@ -34,8 +35,11 @@ from usar_arm.planning.verdicts import CompiledVerdicts
 Pair = tuple[str, str]
 
 PROBE_STRIDE = 8
-"""Steps between the configurations :meth:`CollisionWorld.segment_free` checks first, coarse to
-fine, on an arm whose bounding volumes cannot prove a contact (meshes, boxes)."""
+"""Least steps between the configurations :meth:`CollisionWorld.segment_free` checks first,
+coarse to fine, on an arm whose bounding volumes cannot prove a contact (meshes, boxes)."""
+PROBES = 16
+"""At most this many probes on a segment (the stride grows on long ones): on a free segment,
+the walk that follows skips most configurations, so probing them all would cost more than it."""
 
 
 @functools.lru_cache(maxsize=256)
@@ -72,7 +76,8 @@ class _Body:
     """One collision element of a link as the two judges see it: the compiled verdicts its
     bounding cylinder (``local``: pose in the link frame; radius, half-length, m; ``exact``:
     contact proofs allowed), FCL its shape (``to_shape``: the shape's pose in the cylinder's
-    frame, None when the same)."""
+    frame, None when the same); a mesh's also the balls around its surface in the cylinder's
+    frame (:mod:`.ball_cover`), which clear pairs its cylinder cannot."""
 
     link: str
     shape: Shape
@@ -81,6 +86,7 @@ class _Body:
     half: float
     exact: bool
     to_shape: Array | None
+    cover: BallCover | None = None
 
 
 def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
@@ -97,8 +103,11 @@ def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
             grown = padded(s, padding)
             fit = bounding_cylinder(grown)
             same = bool(np.array_equal(fit.frame, np.eye(4)))
+            to_shape = None if same else invert(fit.frame)
+            balls = (cover_in(grown.vertices, grown.faces, to_shape)
+                     if isinstance(grown, Mesh) else None)
             out.append(_Body(lk.name, grown, c.origin.matrix() @ fit.frame, fit.radius,
-                             fit.half, fit.exact, None if same else invert(fit.frame)))
+                             fit.half, fit.exact, to_shape, balls))
     return out
 
 
@@ -136,7 +145,9 @@ class CollisionWorld:
         self._poses = np.zeros((len(self._links), 4, 4))
         self._compiled = CompiledVerdicts(chain, self._links, self._radius, self._half,
                                           self._local, scene,
-                                          np.array([b.exact for b in bodies], dtype=bool))
+                                          np.array([b.exact for b in bodies], dtype=bool),
+                                          [None if b.cover is None else
+                                           (b.cover.groups, b.cover.leaves) for b in bodies])
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
@@ -329,8 +340,9 @@ class CollisionWorld:
         an earlier one proves free (a continuous guarantee between them), stops at a proven
         contact, and leaves the undecided ones to FCL, in order. Where the bounding volumes
         cannot prove a contact (meshes, boxes), the walk would cross a blocked segment to its
-        end before FCL finds the contact: every :data:`PROBE_STRIDE`-th configuration is
-        checked first, coarse to fine, so a blocked segment ends at its first probe in contact.
+        end before FCL finds the contact: every :data:`PROBE_STRIDE`-th configuration (at most
+        :data:`PROBES` of them) is checked first, coarse to fine, so a blocked segment ends at
+        its first probe in contact.
         """
         if steps < 1:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
@@ -343,12 +355,21 @@ class CollisionWorld:
                        for p, v in zip(poses, verdicts, strict=True))
 
     def _probe_hits(self, a: Array, b: Array, steps: int) -> bool:
-        """True when one of the segment's every :data:`PROBE_STRIDE`-th configurations is in
-        collision (checked coarse to fine, stopping at the first)."""
-        ks = np.array(probe_order(steps // PROBE_STRIDE)) * PROBE_STRIDE
-        world, verdicts = self.bounded_poses(a + (b - a) * (ks / steps)[:, None])
-        return any(row.any() and self._decide(poses, row, stop_at_first=True)
-                   for poses, row in zip(world, verdicts, strict=True))
+        """True when one of the segment's probes (every :data:`PROBE_STRIDE`-th configuration,
+        or sparser so that there are at most :data:`PROBES`) is in collision (checked coarse
+        to fine, stopping at the first). The compiled verdicts run on batches of 1, 2, 4...
+        probes: most blocked segments end at the first probes."""
+        stride = max(PROBE_STRIDE, -(-steps // PROBES))
+        ks = np.array(probe_order(steps // stride)) * stride
+        start, size = 0, 1
+        while start < len(ks):
+            chunk = ks[start:start + size]
+            world, verdicts = self.bounded_poses(a + (b - a) * (chunk / steps)[:, None])
+            if any(row.any() and self._decide(poses, row, stop_at_first=True)
+                   for poses, row in zip(world, verdicts, strict=True)):
+                return True
+            start, size = start + size, 2 * size
+        return False
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""

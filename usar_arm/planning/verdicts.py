@@ -118,10 +118,12 @@ a mesh): no overlap of such balls is ever below zero, so the verdicts never prov
 class CompiledVerdicts:
     """The compiled broadphase of collision bodies (each a cylinder: radius and half-length
     padded, m; pose in its link ``links[k]``'s frame ``local`` (L, 4, 4); ``exact[k]`` False
-    when it only bounds the body's shape) in a scene."""
+    when it only bounds the body's shape; ``covers[k]``: the balls around a mesh body's surface,
+groups and leaves of :class:`.ball_cover.BallCover`) in a scene."""
 
     def __init__(self, chain: KinematicChain, links: list[str], radius: Array, half: Array,
-                 local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None):
+                 local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None,
+                 covers: list[tuple[Array, Array] | None] | None = None):
         poe = PoeModel(chain)
         zero = chain.link_poses(np.zeros(chain.dof))
         self.chain = chain
@@ -129,6 +131,7 @@ class CompiledVerdicts:
         self.radius, self.half = radius, half
         self._local = local
         self._exact = np.ones(len(links), bool) if exact is None else np.asarray(exact, bool)
+        self._covers = covers  # (per body: its balls' groups and leaves, or None)
         self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
         self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
         self._revolute = np.ascontiguousarray(poe.revolute, dtype=np.int64).reshape(-1)
@@ -159,7 +162,7 @@ class CompiledVerdicts:
         self.rs = np.array(rs, dtype=np.int64).reshape(-1, 2)
         self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
                                    self.radius, self.half, self._moved_by, self.rr, self.rs,
-                                   self._kind, self._opose, self._osize)
+                                   self._kind, self._opose, self._osize, self._covers)
         self._packed[2][:, bounds.OWNER] = self._owner
         self._packed[2][:, bounds.GROUP] = self._group
         self._packed[2][:, bounds.GROUP_RADIUS] = self._group_radius

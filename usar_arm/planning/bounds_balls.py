@@ -1,0 +1,142 @@
+"""The second look of the compiled broadphase (:mod:`.bounds`) at a pair its cylinders leave
+undecided: the balls that cover a mesh body's surface (:mod:`.ball_cover`), group balls first,
+then their leaves. A pair is cleared when every ball of its mesh bodies is apart from the other
+body (its balls, or the capsule around its cylinder; an obstacle's solid box, sphere or capsule),
+with the same margin ``eps`` as the cylinders. Metres.
+
+Each gap is a lower bound of the distance between the mesh's surface and the other body (every
+point of the surface is in a leaf, and every leaf in its group), so a walk skips by it as by a
+cylinder's. ``links`` carries each body's range of groups (``COVER_FROM``, ``COVER_TO``; equal
+when it has none); ``groups`` (G, 6) and ``leaves`` (M, 4) are in the body's cylinder frame and
+are placed in the world (``wg`` (G, 3), ``wl`` (M, 3)) once per body and configuration
+(``placed`` (L,), zeroed per configuration by the caller).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from usar_arm.core.spatial import Array
+from usar_arm.planning.bounds_arrays import (
+    BOX,
+    COVER_FROM,
+    COVER_TO,
+    HULL,
+    O_DIR,
+    O_SIZE,
+    O_START,
+    RADIUS,
+)
+from usar_arm.planning.gaps import point_box_distance
+from usar_arm.planning.jit import inline_kernel
+
+
+@inline_kernel
+def has_balls(links: Array, b: int) -> bool:
+    """Body ``b`` has a ball cover."""
+    return links[b, COVER_TO] > links[b, COVER_FROM]
+
+
+@inline_kernel
+def place(world: Array, links: Array, groups: Array, leaves: Array, b: int, wg: Array,
+          wl: Array, placed: np.ndarray) -> None:
+    """Body ``b``'s balls at its pose ``world[b]`` (3, 4), once per configuration."""
+    if placed[b]:
+        return
+    placed[b] = 1
+    t = world[b]
+    for g in range(int(links[b, COVER_FROM]), int(links[b, COVER_TO])):
+        for a in range(3):
+            wg[g, a] = t[a, 0] * groups[g, 0] + t[a, 1] * groups[g, 1] + t[a, 2] * groups[g, 2] \
+                + t[a, 3]
+        for m in range(int(groups[g, 4]), int(groups[g, 5])):
+            for a in range(3):
+                wl[m, a] = (t[a, 0] * leaves[m, 0] + t[a, 1] * leaves[m, 1]
+                            + t[a, 2] * leaves[m, 2] + t[a, 3])
+
+
+@inline_kernel
+def _to_segment(p: Array, start: Array, d: Array) -> float:
+    """Distance (m) from the point ``p`` to the segment start + t d, t in [0, 1]."""
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    x, y, z = p[0] - start[0], p[1] - start[1], p[2] - start[2]
+    t = 0.0
+    if dd > 0.0:
+        t = min(max((x * d[0] + y * d[1] + z * d[2]) / dd, 0.0), 1.0)
+    x, y, z = x - t * d[0], y - t * d[1], z - t * d[2]
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@inline_kernel
+def _apart(p: Array, q: Array) -> float:
+    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
+
+
+@inline_kernel
+def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Array,
+             wg: Array, wl: Array, eps: float) -> float:
+    """A lower bound (m) of the distance between body ``i``'s covered surface and body ``j``
+    (its balls when it has some, else the capsule around its cylinder; ``seg`` as
+    :func:`.bounds._segments`), both placed; at most ``eps`` as soon as a pair of balls is."""
+    best = math.inf
+    j_balls = has_balls(links, j)
+    r_j = links[j, RADIUS]
+    for g in range(int(links[i, COVER_FROM]), int(links[i, COVER_TO])):
+        gap = _to_segment(wg[g], seg[0, j], seg[1, j]) - groups[g, 3] - r_j
+        if gap > eps:
+            best = min(best, gap)
+            continue
+        if not j_balls:
+            for m in range(int(groups[g, 4]), int(groups[g, 5])):
+                gap = _to_segment(wl[m], seg[0, j], seg[1, j]) - leaves[m, 3] - r_j
+                if gap <= eps:
+                    return gap
+                best = min(best, gap)
+            continue
+        for h in range(int(links[j, COVER_FROM]), int(links[j, COVER_TO])):
+            gap = _apart(wg[g], wg[h]) - groups[g, 3] - groups[h, 3]
+            if gap > eps:
+                best = min(best, gap)
+                continue
+            for m in range(int(groups[g, 4]), int(groups[g, 5])):
+                gap = _apart(wl[m], wg[h]) - leaves[m, 3] - groups[h, 3]
+                if gap > eps:
+                    best = min(best, gap)
+                    continue
+                for n in range(int(groups[h, 4]), int(groups[h, 5])):
+                    gap = _apart(wl[m], wl[n]) - leaves[m, 3] - leaves[n, 3]
+                    if gap <= eps:
+                        return gap
+                    best = min(best, gap)
+    return best
+
+
+@inline_kernel
+def _to_obstacle(p: Array, kind: int, o: Array, axes: Array) -> float:
+    """Distance (m) from the point ``p`` to the obstacle (row ``o`` of
+    :func:`.bounds_arrays.prepare_obstacles`): its solid box (a mesh's: its bounding box), or
+    the capsule around it (a sphere's is the sphere)."""
+    if kind == BOX or kind == HULL:
+        return point_box_distance(p, o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3])
+    return _to_segment(p, o[O_START:O_START + 3], o[O_DIR:O_DIR + 3]) - o[O_SIZE]
+
+
+@inline_kernel
+def obstacle_gap(b: int, kind: int, o: Array, axes: Array, links: Array, groups: Array,
+                 leaves: Array, wg: Array, wl: Array, eps: float) -> float:
+    """A lower bound (m) of the distance between body ``b``'s covered surface (placed) and an
+    obstacle (see :func:`_to_obstacle`); at most ``eps`` as soon as a leaf is."""
+    best = math.inf
+    for g in range(int(links[b, COVER_FROM]), int(links[b, COVER_TO])):
+        gap = _to_obstacle(wg[g], kind, o, axes) - groups[g, 3]
+        if gap > eps:
+            best = min(best, gap)
+            continue
+        for m in range(int(groups[g, 4]), int(groups[g, 5])):
+            gap = _to_obstacle(wl[m], kind, o, axes) - leaves[m, 3]
+            if gap <= eps:
+                return gap
+            best = min(best, gap)
+    return best
