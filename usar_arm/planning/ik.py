@@ -35,7 +35,6 @@ from usar_arm.planning.ik_types import (
     IKResult,
     IKSolution,
     admit,
-    frozen,
     is_new,
 )
 from usar_arm.planning.kinematics import KinematicModel
@@ -216,17 +215,13 @@ class IKSolver:
             sol = self.numeric.polish(np.array(q), rot, pos)
             if sol is None:
                 continue
-            qq = self.windings.wind(np.array(sol.q), ref)
-            bad = self.windings.violation(qq)
-            if bad is not None and bad.excess < LIMIT_CLAMP:
-                sol = self.numeric.clamped(qq, rot, pos) or sol
-                qq = np.array(sol.q)
-                bad = self.windings.violation(qq)
-            if bad is not None:
+            kept, bad = self.numeric.settle(sol, ref, rot, pos, clamp=LIMIT_CLAMP)
+            if kept is None:
+                assert bad is not None
                 violation = _least(violation, bad)
                 continue
-            if admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
-                     self.options.distinct, collision, collided) and not all_solutions:
+            if admit(kept, found, self.options.distinct, collision, collided) \
+                    and not all_solutions:
                 break
         if not found:
             self._on_the_limits(outside, rot, pos, ref, all_solutions, collision, collided, found)

@@ -19,7 +19,7 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning import lm_kernel
 from usar_arm.planning.collision import CollisionWorld
-from usar_arm.planning.ik_branches import MAX_NEWTON_STEP, Windings
+from usar_arm.planning.ik_branches import MAX_NEWTON_STEP, Violation, Windings
 from usar_arm.planning.ik_types import IKOptions, IKSolution, admit, frozen
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.poe import PoeModel
@@ -155,16 +155,31 @@ class NumericIK:
                 break
         return found
 
+    def settle(self, sol: IKSolution, ref: Array, rot: Array | None = None,
+               pos: Array | None = None, clamp: float = 0.0
+               ) -> tuple[IKSolution | None, Violation | None]:
+        """``sol`` wound nearest ``ref``; when it is less than ``clamp`` (rad or m) outside a
+        limit, held on the limits it crosses, reaching the target ``rot``, ``pos`` with the
+        other joints (:meth:`clamped`). Returns (the solution, None) when it is inside the
+        limits, else (None, how far out)."""
+        qq = self.windings.wind(np.array(sol.q), ref)
+        bad = self.windings.violation(qq)
+        if bad is not None and bad.excess < clamp and rot is not None and pos is not None:
+            sol = self.clamped(qq, rot, pos) or sol
+            qq = np.array(sol.q)
+            bad = self.windings.violation(qq)
+        if bad is not None:
+            return None, bad
+        return IKSolution(frozen(qq), sol.position_error, sol.orientation_error), None
+
     def keep(self, sol: IKSolution, ref: Array, found: list[IKSolution], all_solutions: bool,
              collision: CollisionWorld | None, collided: list[Array]) -> bool:
         """Append ``sol``, wound nearest ``ref``, to ``found`` when it is inside the limits,
         new and (with ``collision``) free; True when the search is done (one was kept and not
         every solution is wanted)."""
-        qq = self.windings.wind(np.array(sol.q), ref)
-        if self.windings.violation(qq) is not None:
-            return False
-        return admit(IKSolution(frozen(qq), sol.position_error, sol.orientation_error), found,
-                     self.options.distinct, collision, collided) and not all_solutions
+        kept, _ = self.settle(sol, ref)
+        return kept is not None and admit(kept, found, self.options.distinct, collision,
+                                          collided) and not all_solutions
 
     def levenberg_marquardt(self, q: Array, rot: Array, pos: Array, deadline: float,
                             iterations: int = LM_ITERATIONS) -> IKSolution | None:
