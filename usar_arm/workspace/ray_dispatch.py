@@ -216,10 +216,11 @@ class Run:
             again.append(i)
         slot.calls.clear()
         charged = None
-        if slot.ready is None and again and (hung or len(again) == 1):
-            charged = again.pop(0)
-        elif slot.ready is None and again:
-            self.alone.update(again)
+        if slot.ready is None and again:
+            if hung or len(again) == 1:
+                charged = again.pop(0)
+            else:
+                self.alone.update(again)
         self.queue.extendleft(reversed(again))
         if slot.ready is not None:  # it never became ready: no chunk of it ran
             self.start_failures.setdefault(k, []).append(reason)
