@@ -20,14 +20,13 @@ from typing import Any
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.planning.element_fit import GROW
 
 LEAF = 0.02
 """Edge of the cells whose triangles share a leaf ball (m): leaves of about 1.5 cm radius."""
 GROUP = 0.08
 """Edge of the cells whose leaves share a group ball (m)."""
 Indices = np.ndarray[Any, np.dtype[np.int64]]
-GROW = 1e-9
-"""Absolute growth (m) of every radius against rounding."""
 
 
 @dataclass(frozen=True)
@@ -85,7 +84,9 @@ def cover(vertices: Array, faces: np.ndarray[Any, Any], leaf: float = LEAF,
     if not len(tris):
         raise ValueError("a mesh without triangles has no surface to cover")
     cell = _cells(tris.mean(axis=1), leaf)
-    leaves = _balls([tris[cell == c].reshape(-1, 3) for c in range(cell.max() + 1)])
+    order = np.argsort(cell, kind="stable")
+    starts = np.searchsorted(cell[order], np.arange(1, cell.max() + 1))
+    leaves = _balls([t.reshape(-1, 3) for t in np.split(tris[order], starts)])
     owner = _cells(leaves[:, :3], group)
     order = np.argsort(owner, kind="stable")
     leaves, owner = leaves[order], owner[order]

@@ -193,7 +193,8 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                     out[r] = CONTACT
                     self_gap = 0.0
                     continue
-                gap = _balls_gap(i, j, seg, world, links, groups, leaves, eps, balls)
+                gap = bounds_balls.bodies_gap(i, j, seg, world, links, groups, leaves, eps,
+                                              balls)
             if gap > eps:
                 out[r] = CLEAR
                 closing = _closing(cum, links, i, j)
@@ -215,23 +216,6 @@ def _closing(cum: Array, links: Array, i: int, j: int) -> float:
     if a <= b:
         return cum[j, b] - cum[j, a]
     return cum[i, a] - cum[i, b]
-
-
-@inline_kernel
-def _balls_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: Array,
-               leaves: Array, eps: float, balls: tuple[Array, Array, np.ndarray]) -> float:
-    """The balls' lower bound of the gap (m) of bodies ``i`` and ``j`` (-inf when neither
-    has a ball cover)."""
-    wg, wl, placed = balls
-    if bounds_balls.has_balls(links, i):
-        bounds_balls.place(world, links, groups, leaves, i, wg, wl, placed)
-        if bounds_balls.has_balls(links, j):
-            bounds_balls.place(world, links, groups, leaves, j, wg, wl, placed)
-        return bounds_balls.pair_gap(i, j, seg, links, groups, leaves, wg, wl, eps)
-    if bounds_balls.has_balls(links, j):
-        bounds_balls.place(world, links, groups, leaves, j, wg, wl, placed)
-        return bounds_balls.pair_gap(j, i, seg, links, groups, leaves, wg, wl, eps)
-    return -math.inf
 
 
 def ball_scratch(links: Array, groups: Array, leaves: Array

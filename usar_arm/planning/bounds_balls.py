@@ -29,7 +29,7 @@ from usar_arm.planning.bounds_arrays import (
     O_START,
     RADIUS,
 )
-from usar_arm.planning.gaps import point_box_distance
+from usar_arm.planning.gaps import point_box_distance, point_segment_distance
 from usar_arm.planning.jit import inline_kernel
 
 
@@ -58,20 +58,36 @@ def place(world: Array, links: Array, groups: Array, leaves: Array, b: int, wg: 
 
 
 @inline_kernel
-def _to_segment(p: Array, start: Array, d: Array) -> float:
-    """Distance (m) from the point ``p`` to the segment start + t d, t in [0, 1]."""
-    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-    x, y, z = p[0] - start[0], p[1] - start[1], p[2] - start[2]
-    t = 0.0
-    if dd > 0.0:
-        t = min(max((x * d[0] + y * d[1] + z * d[2]) / dd, 0.0), 1.0)
-    x, y, z = x - t * d[0], y - t * d[1], z - t * d[2]
-    return math.sqrt(x * x + y * y + z * z)
+def _apart(p: Array, q: Array) -> float:
+    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
 
 
 @inline_kernel
-def _apart(p: Array, q: Array) -> float:
-    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
+def bodies_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: Array,
+               leaves: Array, eps: float, balls: tuple[Array, Array, np.ndarray]) -> float:
+    """:func:`pair_gap` of bodies ``i`` and ``j`` from the side of one that has balls,
+    placing them (``balls``: ``wg``, ``wl``, ``placed``); -inf when neither has any."""
+    wg, wl, placed = balls
+    if not has_balls(links, i):
+        if not has_balls(links, j):
+            return -math.inf
+        i, j = j, i
+    place(world, links, groups, leaves, i, wg, wl, placed)
+    if has_balls(links, j):
+        place(world, links, groups, leaves, j, wg, wl, placed)
+    return pair_gap(i, j, seg, links, groups, leaves, wg, wl, eps)
+
+
+@inline_kernel
+def body_obstacle_gap(b: int, kind: int, o: Array, axes: Array, world: Array, links: Array,
+                      groups: Array, leaves: Array, eps: float,
+                      balls: tuple[Array, Array, np.ndarray]) -> float:
+    """:func:`obstacle_gap` of body ``b``, placing it; -inf when it has no balls."""
+    if not has_balls(links, b):
+        return -math.inf
+    wg, wl, placed = balls
+    place(world, links, groups, leaves, b, wg, wl, placed)
+    return obstacle_gap(b, kind, o, axes, links, groups, leaves, wg, wl, eps)
 
 
 @inline_kernel
@@ -84,13 +100,13 @@ def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Ar
     j_balls = has_balls(links, j)
     r_j = links[j, RADIUS]
     for g in range(int(links[i, COVER_FROM]), int(links[i, COVER_TO])):
-        gap = _to_segment(wg[g], seg[0, j], seg[1, j]) - groups[g, 3] - r_j
+        gap = point_segment_distance(wg[g], seg[0, j], seg[1, j]) - groups[g, 3] - r_j
         if gap > eps:
             best = min(best, gap)
             continue
         if not j_balls:
             for m in range(int(groups[g, 4]), int(groups[g, 5])):
-                gap = _to_segment(wl[m], seg[0, j], seg[1, j]) - leaves[m, 3] - r_j
+                gap = point_segment_distance(wl[m], seg[0, j], seg[1, j]) - leaves[m, 3] - r_j
                 if gap <= eps:
                     return gap
                 best = min(best, gap)
@@ -120,7 +136,7 @@ def _to_obstacle(p: Array, kind: int, o: Array, axes: Array) -> float:
     the capsule around it (a sphere's is the sphere)."""
     if kind == BOX or kind == HULL:
         return point_box_distance(p, o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3])
-    return _to_segment(p, o[O_START:O_START + 3], o[O_DIR:O_DIR + 3]) - o[O_SIZE]
+    return point_segment_distance(p, o[O_START:O_START + 3], o[O_DIR:O_DIR + 3]) - o[O_SIZE]
 
 
 @inline_kernel

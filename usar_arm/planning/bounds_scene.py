@@ -75,16 +75,6 @@ def _group_motion(links: Array, move: Array, i: int) -> float:
 
 
 @inline_kernel
-def _balls_clear(b: int, kind: int, o: Array, axes: Array, world: Array, links: Array,
-                 groups: Array, leaves: Array, wg: Array, wl: Array, placed: np.ndarray,
-                 eps: float, scratch: Array) -> bool:
-    """Body ``b``'s balls clear the obstacle (its gap (m) into ``scratch[0]``)."""
-    bounds_balls.place(world, links, groups, leaves, b, wg, wl, placed)
-    scratch[0] = bounds_balls.obstacle_gap(b, kind, o, axes, links, groups, leaves, wg, wl, eps)
-    return bool(scratch[0] > eps)
-
-
-@inline_kernel
 def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstacles: Array,
                 axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
                 pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float,
@@ -92,7 +82,6 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                 stack: IndexArray, balls: tuple[Array, Array, np.ndarray]) -> float:
     """Verdicts on the link-obstacle pairs into ``out``, and the smallest cleared gap per unit
     of the link's motion ``move`` (0 when a pair is not cleared). See the module's notes."""
-    wg, wl, placed = balls
     scene_gap = math.inf
     for i in range(pair_of.shape[0]):
         if links[i, GROUP] >= 0 and links[i, GROUP] != i:
@@ -150,17 +139,17 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                         b = int(links[b, NEXT]) if grouped and not whole else -1
                     elif whole:
                         whole = False  # each body on its own, from the first (b == i)
-                    elif bounds_balls.has_balls(links, b) and _balls_clear(
-                            b, kind[s], o, axes[s], world, links, groups, leaves, wg, wl,
-                            placed, eps, scratch):
-                        if mv > 0.0:
-                            scene_gap = min(scene_gap, scratch[0] / mv)
-                        b = int(links[b, NEXT]) if grouped else -1
-                    else:
-                        scene_gap = 0.0
-                        out[pair_of[b, s]] = (CONTACT if _touching(seg, links, b, kind[s], o,
-                                                                   axes[s], margin, scratch)
-                                              else UNDECIDED)
+                    else:  # a mesh body's balls have a look, else FCL decides
+                        gap = bounds_balls.body_obstacle_gap(b, kind[s], o, axes[s], world,
+                                                             links, groups, leaves, eps, balls)
+                        if gap > eps:
+                            if mv > 0.0:
+                                scene_gap = min(scene_gap, gap / mv)
+                        else:
+                            scene_gap = 0.0
+                            out[pair_of[b, s]] = (CONTACT if _touching(
+                                seg, links, b, kind[s], o, axes[s], margin, scratch)
+                                                  else UNDECIDED)
                         b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
 

@@ -91,6 +91,18 @@ def cylinder_box_gap(c: Array, z: Array, r: float, h: float, b_centre: Array,
 
 
 @kernel
+def point_segment_distance(p: Array, start: Array, d: Array) -> float:
+    """Distance (m) from the point ``p`` to the segment start + t d, t in [0, 1]."""
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    x, y, z = p[0] - start[0], p[1] - start[1], p[2] - start[2]
+    t = 0.0
+    if dd > 0.0:
+        t = min(max((x * d[0] + y * d[1] + z * d[2]) / dd, 0.0), 1.0)
+    x, y, z = x - t * d[0], y - t * d[1], z - t * d[2]
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@kernel
 def point_box_distance(x: Array, centre: Array, axes: Array, half: Array) -> float:
     """Distance (m) from the point ``x`` to the solid box (0 inside)."""
     total = 0.0

@@ -118,8 +118,8 @@ a mesh): no overlap of such balls is ever below zero, so the verdicts never prov
 class CompiledVerdicts:
     """The compiled broadphase of collision bodies (each a cylinder: radius and half-length
     padded, m; pose in its link ``links[k]``'s frame ``local`` (L, 4, 4); ``exact[k]`` False
-    when it only bounds the body's shape; ``covers[k]``: the balls around a mesh body's surface,
-groups and leaves of :class:`.ball_cover.BallCover`) in a scene."""
+    when it only bounds the body's shape; ``covers[k]``: the balls around a mesh body's
+    surface, groups and leaves of :class:`.ball_cover.BallCover`) in a scene."""
 
     def __init__(self, chain: KinematicChain, links: list[str], radius: Array, half: Array,
                  local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None,
