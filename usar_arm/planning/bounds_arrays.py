@@ -25,9 +25,9 @@ BOX, SPHERE, CAPSULE, HULL = 0, 1, 2, 3
 half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding box (it can
 clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
 
-RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT, COVER_FROM, COVER_TO = (
-    range(12))
-LINK_WIDTH = 12
+(RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT, COVER_FROM, COVER_TO,
+ INNER_FROM, INNER_TO) = range(14)
+LINK_WIDTH = 14
 """Columns of the per-body array: the cylinder's radius and half-length (m), the radius of the
 balls inside it and how far their centres reach from its centre along the axis, the radius of a
 sphere around it, how many joints move it; the index of the link it belongs to (its bodies are
@@ -36,7 +36,8 @@ axis segment, that body's index (``GROUP``; -1 otherwise): one capsule test then
 body pair of two such links at once, and one test clears a link's bodies against an obstacle;
 ``NEXT``: the group's next body after this one (the group's body first; -1 after the last);
 ``COVER_FROM``, ``COVER_TO``: the range of its ball groups (:mod:`.bounds_balls`; equal when it
-has no ball cover)."""
+has no ball cover); ``INNER_FROM``, ``INNER_TO``: the range, among the leaves, of the balls
+inside a closed mesh (:mod:`.inner_balls`; equal when it has none)."""
 
 O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
     0, 3, 6, 9, 12, 15, 16, 17)
@@ -58,6 +59,7 @@ def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
         out[k, MOVED] = moved_by[k]
         out[k, OWNER], out[k, GROUP], out[k, GROUP_RADIUS], out[k, NEXT] = k, -1.0, 0.0, -1.0
         out[k, COVER_FROM] = out[k, COVER_TO] = 0.0
+        out[k, INNER_FROM] = out[k, INNER_TO] = 0.0
     return out
 
 
@@ -166,15 +168,20 @@ Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array, A
                IndexArray, IndexArray, IndexArray, Array, Array]
 
 
-def pack_covers(covers: list[tuple[Array, Array] | None]) -> tuple[IndexArray, Array, Array]:
-    """Per body (L,), its ball cover ((groups (G, 6), leaves (M, 4)) of
-    :class:`.ball_cover.BallCover`, or None) as one array each: the range of each body's groups
-    (L, 2), the groups (their leaf ranges shifted) and the leaves."""
-    ranges = np.zeros((len(covers), 2), dtype=np.int64)
-    groups, leaves = [np.zeros((0, 6))], [np.zeros((0, 4))]
+Cover = tuple[Array, Array, Array]
+"""A mesh body's balls: the groups (G, 6) and leaves (M, 4) of its
+:class:`.ball_cover.BallCover`, and the balls inside it (K, 4) of :mod:`.inner_balls`."""
+
+
+def pack_covers(covers: list[Cover | None]) -> tuple[IndexArray, Array, Array]:
+    """Per body (L,), its balls (:data:`Cover`, or None) as one array each: the ranges of each
+    body's groups and of its inner balls (L, 4), the groups (their leaf ranges shifted) and the
+    leaves, every body's inner balls after all the cover leaves."""
+    ranges = np.zeros((len(covers), 4), dtype=np.int64)
+    groups, leaves, inner = [np.zeros((0, 6))], [np.zeros((0, 4))], [np.zeros((0, 4))]
     n_groups = n_leaves = 0
     for k, c in enumerate(covers):
-        ranges[k] = n_groups, n_groups
+        ranges[k, :2] = n_groups, n_groups
         if c is None:
             continue
         g = np.array(c[0], dtype=float)
@@ -184,13 +191,20 @@ def pack_covers(covers: list[tuple[Array, Array] | None]) -> tuple[IndexArray, A
         n_groups += len(g)
         n_leaves += len(c[1])
         ranges[k, 1] = n_groups
-    return ranges, np.ascontiguousarray(np.vstack(groups)), np.ascontiguousarray(np.vstack(leaves))
+    for k, c in enumerate(covers):
+        ranges[k, 2:] = n_leaves, n_leaves
+        if c is not None:
+            inner.append(np.asarray(c[2], dtype=float).reshape(-1, 4))
+            n_leaves += len(inner[-1])
+            ranges[k, 3] = n_leaves
+    return ranges, np.ascontiguousarray(np.vstack(groups)), np.ascontiguousarray(
+        np.vstack(leaves + inner))
 
 
 def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: Array,
          half: Array, moved_by: IndexArray, rr: IndexArray, rs: IndexArray, kind: IndexArray,
          pose: Array, size: Array,
-         covers: list[tuple[Array, Array] | None] | None = None) -> Packed:
+         covers: list[Cover | None] | None = None) -> Packed:
     """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once;
     ``covers``: per body, its ball cover or None (see :func:`pack_covers`; default none)."""
     joints = np.ascontiguousarray(np.hstack([
@@ -208,5 +222,6 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
     pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
     ranges, groups, leaves = pack_covers(covers if covers is not None else [None] * len(radius))
     links[:, COVER_FROM], links[:, COVER_TO] = ranges[:, 0], ranges[:, 1]
+    links[:, INNER_FROM], links[:, INNER_TO] = ranges[:, 2], ranges[:, 3]
     return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
             obstacles, obstacle_axes, tree, nodes, order, pair_of, groups, leaves)

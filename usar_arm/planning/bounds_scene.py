@@ -36,6 +36,8 @@ from usar_arm.planning.bounds_arrays import (
     GROUP_RADIUS,
     HALF,
     HULL,
+    INNER_FROM,
+    INNER_TO,
     NEXT,
     O_BOUND,
     O_CENTRE,
@@ -54,6 +56,7 @@ from usar_arm.planning.gaps import (
     cylinder_box_gap,
     inner_box_contact,
     point_box_distance,
+    point_segment_distance,
     segment_distance,
 )
 from usar_arm.planning.jit import inline_kernel
@@ -148,17 +151,19 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                         else:
                             scene_gap = 0.0
                             out[pair_of[b, s]] = (CONTACT if _touching(
-                                seg, links, b, kind[s], o, axes[s], margin, scratch)
-                                                  else UNDECIDED)
+                                seg, world, links, leaves, b, kind[s], o, axes[s], margin,
+                                scratch) else UNDECIDED)
                         b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
 
 
 @inline_kernel
-def _touching(seg: Array, links: Array, b: int, kind: int, o: Array, axes: Array,
-              margin: float, scratch: Array) -> bool:
+def _touching(seg: Array, world: Array, links: Array, leaves: Array, b: int, kind: int,
+              o: Array, axes: Array, margin: float, scratch: Array) -> bool:
     """Body ``b`` and the obstacle are proven in contact: balls inside both overlap by more
-    than ``margin`` (never for a mesh's box)."""
+    than ``margin`` (for a mesh, see :func:`_inside_mesh`; never for a mesh's box)."""
+    if links[b, INNER_TO] > links[b, INNER_FROM]:
+        return _inside_mesh(seg, world, links, leaves, b, kind, o, axes, margin, scratch)
     if kind == BOX:
         return bool(inner_box_contact(seg[5, b], seg[4, b], links[b, RHO], links[b, REACH],
                                       o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3], margin,
@@ -167,3 +172,44 @@ def _touching(seg: Array, links: Array, b: int, kind: int, o: Array, axes: Array
         return False
     return bool(segment_distance(seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
                                  o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin)
+
+
+@inline_kernel
+def _inside_mesh(seg: Array, world: Array, links: Array, leaves: Array, b: int, kind: int,
+                 o: Array, axes: Array, margin: float, x: Array) -> bool:
+    """A closed mesh body ``b`` and a solid obstacle are proven in contact: one of the mesh's
+    inner balls (:mod:`.inner_balls`, rows ``INNER_FROM:INNER_TO`` of ``leaves``) reaches more
+    than ``margin`` into the obstacle, and the obstacle reaches more than ``margin`` out of the
+    sphere that holds the mesh (``BOUND`` about the cylinder's centre). The obstacle then holds a
+    point inside the mesh and one outside, so the mesh's surface crosses it. A box is the
+    obstacle itself; a sphere or cylinder is seen through the balls inside it."""
+    if kind == HULL:
+        return False
+    c = seg[5, b]
+    if kind == BOX:
+        far = 0.0
+        for a in range(3):
+            d = ((o[O_START] - c[0]) * axes[a, 0] + (o[O_START + 1] - c[1]) * axes[a, 1]
+                 + (o[O_START + 2] - c[2]) * axes[a, 2])
+            far += (abs(d) + o[O_SIZE + a]) ** 2
+        far = math.sqrt(far)
+    else:
+        p, u = o[O_IN_START:O_IN_START + 3], o[O_IN_DIR:O_IN_DIR + 3]
+        far = max(math.sqrt((p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + (p[2] - c[2]) ** 2),
+                  math.sqrt((p[0] + u[0] - c[0]) ** 2 + (p[1] + u[1] - c[1]) ** 2
+                            + (p[2] + u[2] - c[2]) ** 2)) + o[O_RHO]
+    if far <= links[b, BOUND] + margin:
+        return False
+    t = world[b]
+    for m in range(int(links[b, INNER_FROM]), int(links[b, INNER_TO])):
+        for a in range(3):
+            x[a] = (t[a, 0] * leaves[m, 0] + t[a, 1] * leaves[m, 1] + t[a, 2] * leaves[m, 2]
+                    + t[a, 3])
+        if kind == BOX:
+            reach = point_box_distance(x, o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3])
+        else:
+            reach = point_segment_distance(x, o[O_IN_START:O_IN_START + 3],
+                                           o[O_IN_DIR:O_IN_DIR + 3]) - o[O_RHO]
+        if reach < leaves[m, 3] - margin:
+            return True
+    return False

@@ -27,6 +27,7 @@ from usar_arm.planning import bounds
 from usar_arm.planning.ball_cover import BallCover, cover_in
 from usar_arm.planning.element_fit import bounding_cylinder, padded
 from usar_arm.planning.exact import ExactJudge
+from usar_arm.planning.inner_balls import axis_balls_in
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.never import proven_never
 from usar_arm.planning.scene import EMPTY, Scene
@@ -77,7 +78,8 @@ class _Body:
     bounding cylinder (``local``: pose in the link frame; radius, half-length, m; ``exact``:
     contact proofs allowed), FCL its shape (``to_shape``: the shape's pose in the cylinder's
     frame, None when the same); a mesh's also the balls around its surface in the cylinder's
-    frame (:mod:`.ball_cover`), which clear pairs its cylinder cannot."""
+    frame (:mod:`.ball_cover`), which clear pairs its cylinder cannot, and the balls inside it
+    when it is closed (:mod:`.inner_balls`, (K, 4)), which prove contacts with obstacles."""
 
     link: str
     shape: Shape
@@ -87,6 +89,7 @@ class _Body:
     exact: bool
     to_shape: Array | None
     cover: BallCover | None = None
+    inner: Array | None = None
 
 
 def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
@@ -104,10 +107,12 @@ def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
             fit = bounding_cylinder(grown)
             same = bool(np.array_equal(fit.frame, np.eye(4)))
             to_shape = None if same else invert(fit.frame)
-            balls = (cover_in(grown.vertices, grown.faces, to_shape)
-                     if isinstance(grown, Mesh) else None)
+            balls, inner = None, None
+            if isinstance(grown, Mesh):
+                balls = cover_in(grown.vertices, grown.faces, to_shape)
+                inner = axis_balls_in(grown.vertices, grown.faces, to_shape, fit.half)
             out.append(_Body(lk.name, grown, c.origin.matrix() @ fit.frame, fit.radius,
-                             fit.half, fit.exact, to_shape, balls))
+                             fit.half, fit.exact, to_shape, balls, inner))
     return out
 
 
@@ -147,7 +152,9 @@ class CollisionWorld:
                                           self._local, scene,
                                           np.array([b.exact for b in bodies], dtype=bool),
                                           [None if b.cover is None else
-                                           (b.cover.groups, b.cover.leaves) for b in bodies])
+                                           (b.cover.groups, b.cover.leaves,
+                                            np.zeros((0, 4)) if b.inner is None else b.inner)
+                                           for b in bodies])
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
                                  self._radius, self._half, scene)
         self._levers: Array | None = None

@@ -18,6 +18,7 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds
 from usar_arm.planning.bounds import IndexArray
+from usar_arm.planning.bounds_arrays import Cover
 from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
 
@@ -119,11 +120,12 @@ class CompiledVerdicts:
     """The compiled broadphase of collision bodies (each a cylinder: radius and half-length
     padded, m; pose in its link ``links[k]``'s frame ``local`` (L, 4, 4); ``exact[k]`` False
     when it only bounds the body's shape; ``covers[k]``: the balls around a mesh body's
-    surface, groups and leaves of :class:`.ball_cover.BallCover`) in a scene."""
+    surface, groups and leaves of :class:`.ball_cover.BallCover`, and the balls inside it:
+    :data:`.bounds_arrays.Cover`) in a scene."""
 
     def __init__(self, chain: KinematicChain, links: list[str], radius: Array, half: Array,
                  local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None,
-                 covers: list[tuple[Array, Array] | None] | None = None):
+                 covers: list[Cover | None] | None = None):
         poe = PoeModel(chain)
         zero = chain.link_poses(np.zeros(chain.dof))
         self.chain = chain
@@ -131,7 +133,7 @@ class CompiledVerdicts:
         self.radius, self.half = radius, half
         self._local = local
         self._exact = np.ones(len(links), bool) if exact is None else np.asarray(exact, bool)
-        self._covers = covers  # (per body: its balls' groups and leaves, or None)
+        self._covers = covers  # (per body: its balls' groups, leaves and inner balls, or None)
         self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
         self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
         self._revolute = np.ascontiguousarray(poe.revolute, dtype=np.int64).reshape(-1)
