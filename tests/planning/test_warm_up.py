@@ -49,3 +49,28 @@ def test_a_plan_after_the_warm_up_compiles_nothing_new() -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     new = {name: sigs for name, sigs in json.loads(done.stdout.splitlines()[-1]).items() if sigs}
     assert new == {}, f"compiled at first use, not by the warm-up: {new}"
+
+
+def test_a_changed_kernel_source_drops_the_compiled_caches(tmp_path: Path) -> None:
+    """numba keys a cache by its own module's file only, and the kernels inline other modules'
+    helpers: a change to any kernel source must drop every cached kernel."""
+    from usar_arm.planning.jit import drop_stale_caches
+
+    folders = (tmp_path / "planning", tmp_path / "workspace")
+    for folder in folders:
+        (folder / "__pycache__").mkdir(parents=True)
+        (folder / "kernels.py").write_text("from usar_arm.planning.jit import kernel\n")
+        (folder / "__pycache__" / "kernels.f-1.py311.nbi").write_bytes(b"index")
+        (folder / "__pycache__" / "kernels.f-1.py311.1.nbc").write_bytes(b"code")
+    (folders[0] / "other.py").write_text("print('no kernel here')\n")
+
+    def cached() -> int:
+        return sum(len(list(f.glob("__pycache__/*.nb[ic]"))) for f in folders)
+
+    assert drop_stale_caches(folders) and cached() == 0  # (no stamp yet: dropped, stamped)
+    (folders[1] / "__pycache__" / "kernels.f-1.py311.nbi").write_bytes(b"index")
+    assert not drop_stale_caches(folders) and cached() == 1  # same sources: kept
+    (folders[0] / "other.py").write_text("print('still no kernel')\n")
+    assert not drop_stale_caches(folders) and cached() == 1  # not a kernel source
+    (folders[1] / "kernels.py").write_text("from usar_arm.planning.jit import kernel  # new\n")
+    assert drop_stale_caches(folders) and cached() == 0
