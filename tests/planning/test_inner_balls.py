@@ -57,7 +57,8 @@ def test_overlapping_shells_give_balls_only_where_one_shell_holds_the_centre() -
     low.apply_translation((0.0, 0.0, -0.05))
     high = low.copy()
     high.apply_translation((0.0, 0.0, 0.1))
-    both = trimesh.util.concatenate([low, high])
+    both = trimesh.Trimesh(np.vstack([low.vertices, high.vertices]),
+                           np.vstack([low.faces, high.faces + len(low.vertices)]), process=False)
     assert closed(both.faces)
     balls = axis_balls(both.vertices, both.faces, 0.15)
     z = balls[:, 2]
@@ -134,3 +135,14 @@ def test_a_box_wholly_inside_a_closed_mesh_is_not_in_contact(tmp_path: Path) -> 
     assert world.contacts_brute_force(q) == []  # FCL: the surface does not touch it
     assert not world.in_collision(q)
     assert world.contacts(q) == []
+
+
+def test_a_high_poly_mesh_is_taken_in_blocks_with_the_same_balls(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from usar_arm.planning import inner_balls
+
+    cylinder = trimesh.creation.cylinder(radius=0.05, height=0.3, sections=64)
+    whole = axis_balls(cylinder.vertices, cylinder.faces, 0.15)
+    monkeypatch.setattr(inner_balls, "PAIRS", 1000)  # blocks of 32 triangles here
+    np.testing.assert_array_equal(axis_balls(cylinder.vertices, cylinder.faces, 0.15), whole)
+    assert len(whole) > 20

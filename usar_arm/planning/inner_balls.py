@@ -28,6 +28,9 @@ LEAST = 0.003
 """Smallest radius (m) a ball is kept with."""
 SHRINK = 1e-6
 """Taken off each radius (m): the ball stays off the surface by more than rounding."""
+PAIRS = 200_000
+"""Point-triangle pairs computed at once: a high-poly mesh is taken in blocks of triangles, so
+the temporaries stay near 100 MB whatever its size."""
 _RAYS = np.array([[0.5773, 0.5774, 0.5774], [-0.2673, 0.5345, 0.8018],
                   [0.8729, -0.2182, 0.4364]])
 
@@ -42,9 +45,20 @@ def closed(faces: np.ndarray[Any, Any]) -> bool:
     return bool(np.all(counts % 2 == 0))
 
 
+def _blocks(points: Array, triangles: Array) -> list[Array]:
+    """``triangles`` in blocks of at most :data:`PAIRS` point-triangle pairs."""
+    size = max(1, PAIRS // max(1, len(points)))
+    return [triangles[k:k + size] for k in range(0, len(triangles), size)]
+
+
 def crossings(points: Array, triangles: Array, ray: Array) -> np.ndarray[Any, Any]:
     """Per point (N, 3), how many triangles (T, 3, 3) the ray from it along ``ray`` crosses
     (Moller-Trumbore, both faces)."""
+    return np.asarray(sum((_crossings(points, block, ray) for block in
+                           _blocks(points, triangles)), np.zeros(len(points), dtype=np.int64)))
+
+
+def _crossings(points: Array, triangles: Array, ray: Array) -> np.ndarray[Any, Any]:
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     e1, e2 = b - a, c - a
     p = np.cross(ray, e2)
@@ -63,6 +77,11 @@ def crossings(points: Array, triangles: Array, ray: Array) -> np.ndarray[Any, An
 def surface_distance(points: Array, triangles: Array) -> Array:
     """Per point (N, 3), its distance (m) to the nearest of ``triangles`` (T, 3, 3): the
     closest point on each triangle by its Voronoi regions (vertex, edge, face)."""
+    return np.asarray(np.min([_distance(points, block) for block in _blocks(points, triangles)],
+                             axis=0))
+
+
+def _distance(points: Array, triangles: Array) -> Array:
     a, b, c = (triangles[None, :, k] for k in range(3))
     p = points[:, None, :]
     ab, ac, ap = b - a, c - a, p - a
