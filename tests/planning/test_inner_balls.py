@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -89,14 +89,37 @@ def test_balls_inside_random_convex_meshes_are_inside(points: np.ndarray, lift: 
     _check_inside(hull, balls)
 
 
+def _nearest_by_projection(x: np.ndarray, triangles: np.ndarray) -> float:
+    """The distance from ``x`` to the nearest triangle, written here: the foot of the
+    perpendicular on each triangle's plane when its barycentric coordinates are in the triangle,
+    and the nearest point of each of its three edges."""
+    best = np.inf
+    for a, b, c in triangles:
+        n = np.cross(b - a, c - a)
+        foot = x - np.dot(x - a, n) / np.dot(n, n) * n
+        gram = np.array([[np.dot(b - a, b - a), np.dot(b - a, c - a)],
+                         [np.dot(b - a, c - a), np.dot(c - a, c - a)]])
+        v, w = np.linalg.solve(gram, [np.dot(foot - a, b - a), np.dot(foot - a, c - a)])
+        if v >= 0 and w >= 0 and v + w <= 1:
+            best = min(best, float(np.linalg.norm(x - foot)))
+        for s, e in ((a, b), (b, c), (c, a)):
+            t = np.clip(np.dot(x - s, e - s) / np.dot(e - s, e - s), 0.0, 1.0)
+            best = min(best, float(np.linalg.norm(x - s - t * (e - s))))
+    return best
+
+
 @settings(max_examples=60, deadline=None)
 @given(points=arrays(np.float64, st.tuples(st.integers(1, 30), st.just(3)),
                      elements=st.floats(-0.3, 0.3, allow_nan=False)))
-def test_surface_distance_equals_trimeshs_closest_points(points: np.ndarray) -> None:
+@example(points=np.full((1, 3), 2.0 ** -24))  # trimesh's closest_point was 1.04e-8 m off here
+def test_surface_distance_is_the_distance_to_the_nearest_triangle(points: np.ndarray) -> None:
+    """Against a judge written here (trimesh's closest_point is not one: near the centre of
+    this ellipsoid it picked a triangle 1.04e-8 m farther than the nearest)."""
     mesh = trimesh.creation.icosphere(subdivisions=1, radius=0.1)
     mesh.apply_scale((1.0, 0.6, 1.4))
-    _, distance, _ = trimesh.proximity.closest_point(mesh, points)
-    np.testing.assert_allclose(surface_distance(points, mesh.triangles), distance, atol=1e-9)
+    truth = [_nearest_by_projection(x, mesh.triangles) for x in points]
+    np.testing.assert_allclose(surface_distance(points, mesh.triangles), truth, rtol=0,
+                               atol=1e-12)
 
 
 def _rod_world(tmp_path: Path, obstacle: SceneObject) -> tuple[CollisionWorld, np.ndarray]:
