@@ -132,8 +132,8 @@ def test_the_balls_only_clear_pairs_the_cylinders_left_undecided(toy: Robot) -> 
     bare[2][:, bounds.COVER_FROM] = bare[2][:, bounds.COVER_TO] = 0
     qs = np.random.default_rng(8).uniform(toy.chain.lower(), toy.chain.upper(),
                                           (2000, toy.chain.dof))
-    poses, with_balls = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)
-    _, without = bounds.check(qs, *tuple(bare), bounds.EPS, bounds.MARGIN)
+    poses, with_balls, _ = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)
+    _, without, _ = bounds.check(qs, *tuple(bare), bounds.EPS, bounds.MARGIN)
     changed = with_balls != without
     assert (without[changed] == bounds.UNDECIDED).all()
     assert (with_balls[changed] == bounds.CLEAR).all()

@@ -5,14 +5,17 @@ A robot link is a cylinder (radius r, half-length h about its local z axis). Eac
 gets one of three verdicts (:func:`classify`): CLEAR (provably apart), CONTACT (provably
 overlapping) or UNDECIDED, which goes to python-fcl, the exact judge (:mod:`.collision`).
 
-CONTACT is proven with balls that lie inside both shapes (radius min(r, h), centres on the
-cylinder's axis) and overlap by more than ``MARGIN`` (0.1 mm): a certainty about the exact
-shapes, far outside any exact test's tolerance. Meshes never get CONTACT (python-fcl sees a
+CONTACT is proven with balls that lie inside both shapes and overlap by more than ``MARGIN``
+(0.1 mm): a certainty about the exact shapes, far outside any exact test's tolerance. The balls
+have radius min(r, h) with centres on the cylinder's axis, or, for a rim, radius 0.2 mm at the
+shrunk cylinder's deepest points (:func:`.gaps.rim_box_contact`,
+:func:`.gaps.rim_cylinders_contact`). Meshes never get CONTACT (python-fcl sees a
 mesh as a surface). CLEAR is a separating-axis or distance argument that holds for the exact
 shapes, with a margin of ``EPS`` metres against rounding:
 
 * link-link and link-cylinder obstacle: the capsules (segment + radius) that enclose both
-  cylinders are farther apart than the sum of their radii;
+  cylinders are farther apart than the sum of their radii; a cylinder obstacle's box too (as
+  a box, below);
 * link-sphere: the link's capsule axis is farther from the sphere's centre than r + R;
 * link-box (and link-mesh, through the box that bounds the mesh in its own frame): an axis
   among the box's three face normals, the cylinder's axis, the three cross products of the
@@ -54,6 +57,7 @@ from usar_arm.planning.bounds_arrays import (
     RADIUS,
     REACH,
     RHO,
+    SOLID,
     SPHERE,
     IndexArray,
     link_poses,
@@ -63,7 +67,7 @@ from usar_arm.planning.bounds_arrays import (
     prepare_obstacles,
 )
 from usar_arm.planning.bounds_scene import CLEAR, CONTACT, UNDECIDED, judge_scene
-from usar_arm.planning.gaps import segment_distance
+from usar_arm.planning.gaps import rim_cylinders_contact, segment_distance
 from usar_arm.planning.jit import inline_kernel, kernel
 
 __all__ = [
@@ -80,6 +84,7 @@ __all__ = [
     "MARGIN",
     "NEXT",
     "OWNER",
+    "SOLID",
     "SPHERE",
     "UNDECIDED",
     "check",
@@ -144,7 +149,7 @@ def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
     of the caller's, reset here). ``world`` (L, 3, 4): the bodies' poses."""
     balls[2][:] = 0
     self_gap = _judge_links(seg, world, links, pairs, n_rr, groups, leaves, eps, margin, cum,
-                            out, balls)
+                            out, scratch, balls)
     for p in range(n_rr, pairs.shape[0]):
         out[p] = CLEAR
     if nodes.shape[0] == 0:
@@ -157,9 +162,11 @@ def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
 @inline_kernel
 def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
                  groups: Array, leaves: Array, eps: float, margin: float, cum: Array,
-                 out: VerdictArray, balls: tuple[Array, Array, np.ndarray]) -> float:
+                 out: VerdictArray, scratch: Array, balls: tuple[Array, Array, np.ndarray]
+                 ) -> float:
     """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
-    smallest cleared gap per unit of closing motion (0 when a pair is not cleared)."""
+    smallest cleared gap per unit of closing motion (0 when a pair is not cleared).
+    ``scratch`` (3,): a point, for the rim proofs."""
     self_gap = math.inf
     p = 0
     while p < n_rr:
@@ -189,7 +196,10 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                    - links[i, RADIUS] - links[j, RADIUS])
             if gap <= eps:  # proven in contact, or the balls of a mesh body have a look
                 inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
-                if inner < links[i, RHO] + links[j, RHO] - margin:
+                if inner < links[i, RHO] + links[j, RHO] - margin or (
+                        links[i, SOLID] > 0.5 and links[j, SOLID] > 0.5 and rim_cylinders_contact(
+                            seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF], seg[5, j],
+                            seg[4, j], links[j, RADIUS], links[j, HALF], margin, scratch)):
                     out[r] = CONTACT
                     self_gap = 0.0
                     continue
@@ -242,12 +252,14 @@ def _still(links: Array) -> tuple[Array, Array]:
 def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
               obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
               pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float
-              ) -> VerdictArray:
+              ) -> tuple[VerdictArray, VerdictArray]:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
-    link poses ``world`` (N, L, 3, 4); the prepared arrays of :func:`prepare_links`,
-    :func:`prepare_obstacles` and :mod:`.scene_tree`."""
+    link poses ``world`` (N, L, 3, 4), and each configuration's (N,) (:func:`_row_verdict`);
+    the prepared arrays of :func:`prepare_links`, :func:`prepare_obstacles` and
+    :mod:`.scene_tree`."""
     n_cfg, n_link = world.shape[0], world.shape[1]
     out = np.zeros((n_cfg, pairs.shape[0]), dtype=np.int8)
+    overall = np.empty(n_cfg, dtype=np.int8)
     seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
@@ -259,7 +271,21 @@ def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: In
         _judge(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
                pair_of, groups, leaves, eps, margin, move, cum, 0.0, out[c], cand, scratch, stack,
                balls)
-    return out
+        overall[c] = _row_verdict(out[c])
+    return out, overall
+
+
+@inline_kernel
+def _row_verdict(row: VerdictArray) -> int:
+    """One configuration's verdict from its pairs': CONTACT when one is proven in contact,
+    else UNDECIDED when one is undecided, else CLEAR."""
+    verdict = CLEAR
+    for p in range(row.shape[0]):
+        if row[p] == CONTACT:
+            return CONTACT
+        if row[p] == UNDECIDED:
+            verdict = UNDECIDED
+    return verdict
 
 
 def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: IndexArray,
@@ -283,19 +309,21 @@ def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: Index
                                           obstacles[:, O_BOUND])
     pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
     return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, tree, nodes, order,
-                     pair_of, np.zeros((0, 6)), np.zeros((0, 4)), eps, margin)
+                     pair_of, np.zeros((0, 6)), np.zeros((0, 4)), eps, margin)[0]
 
 
 @kernel
 def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
           kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
           order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
-          margin: float) -> tuple[Array, VerdictArray]:
-    """Link cylinder poses (N, L, 3, 4) and pair verdicts (N, P + Q) for configurations ``qs``
+          margin: float) -> tuple[Array, VerdictArray, VerdictArray]:
+    """Link cylinder poses (N, L, 3, 4), pair verdicts (N, P + Q) and each configuration's
+    verdict (N,) (CLEAR, CONTACT or UNDECIDED, as :func:`summary`) for configurations ``qs``
     (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
     world = link_poses(qs, joints, zero, links)
-    return world, _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
-                            pair_of, groups, leaves, eps, margin)
+    verdicts, overall = _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes,
+                                  order, pair_of, groups, leaves, eps, margin)
+    return world, verdicts, overall
 
 
 @kernel
@@ -318,13 +346,7 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
     _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
            groups, leaves, eps, margin, move, cum, 0.0, row, np.empty((8, 3)),
            np.empty(3), stack, ball_scratch_kernel(links, groups, leaves))
-    verdict = CLEAR
-    for p in range(row.shape[0]):
-        if row[p] == CONTACT:
-            return CONTACT
-        if row[p] == UNDECIDED:
-            verdict = UNDECIDED
-    return verdict
+    return _row_verdict(row)
 
 
 @kernel

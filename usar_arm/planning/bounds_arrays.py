@@ -26,8 +26,8 @@ half-length; its enclosing capsule clears pairs), and a triangle mesh's bounding
 clear a pair but never proves a contact: python-fcl treats a mesh as a surface)."""
 
 (RADIUS, HALF, RHO, REACH, BOUND, MOVED, OWNER, GROUP, GROUP_RADIUS, NEXT, COVER_FROM, COVER_TO,
- INNER_FROM, INNER_TO) = range(14)
-LINK_WIDTH = 14
+ INNER_FROM, INNER_TO, SOLID) = range(15)
+LINK_WIDTH = 15
 """Columns of the per-body array: the cylinder's radius and half-length (m), the radius of the
 balls inside it and how far their centres reach from its centre along the axis, the radius of a
 sphere around it, how many joints move it; the index of the link it belongs to (its bodies are
@@ -37,14 +37,18 @@ body pair of two such links at once, and one test clears a link's bodies against
 ``NEXT``: the group's next body after this one (the group's body first; -1 after the last);
 ``COVER_FROM``, ``COVER_TO``: the range of its ball groups (:mod:`.bounds_balls`; equal when it
 has no ball cover); ``INNER_FROM``, ``INNER_TO``: the range, among the leaves, of the balls
-inside a closed mesh (:mod:`.inner_balls`; equal when it has none)."""
+inside a closed mesh (:mod:`.inner_balls`; equal when it has none); ``SOLID``: 1 when the body
+is its cylinder (not a sphere, capsule, box or mesh inside it), so that balls at its rim prove
+contacts (:func:`.gaps.rim_box_contact`), else 0."""
 
-O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE = (
-    0, 3, 6, 9, 12, 15, 16, 17)
-OBSTACLE_WIDTH = 20
+O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE, O_BOX = (
+    0, 3, 6, 9, 12, 15, 16, 17, 20)
+OBSTACLE_WIDTH = 23
 """Columns of the per-obstacle array: size (3), the enclosing segment's start and direction,
 the inner balls' segment's start and direction, their radius, the radius of a sphere about the
-centre that contains the obstacle, and the centre (3)."""
+centre that contains the obstacle, the centre (3), and the half extents (3) of the box about the
+centre (along the obstacle's axes) that contains it: a cylinder's box clears what its capsule's
+round ends cannot."""
 
 
 @kernel
@@ -60,6 +64,7 @@ def prepare_links(radius: Array, half: Array, moved_by: IndexArray) -> Array:
         out[k, OWNER], out[k, GROUP], out[k, GROUP_RADIUS], out[k, NEXT] = k, -1.0, 0.0, -1.0
         out[k, COVER_FROM] = out[k, COVER_TO] = 0.0
         out[k, INNER_FROM] = out[k, INNER_TO] = 0.0
+        out[k, SOLID] = 1.0
     return out
 
 
@@ -77,11 +82,15 @@ def prepare_obstacles(kind: IndexArray, pose: Array, size: Array) -> tuple[Array
         if kind[s] == CAPSULE:
             out[s, O_RHO] = min(size[s, 0], size[s, 1])
             out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2)
+            out[s, O_BOX] = out[s, O_BOX + 1] = size[s, 0]
+            out[s, O_BOX + 2] = size[s, 1]
         elif kind[s] == SPHERE:
             out[s, O_RHO] = size[s, 0]
             out[s, O_BOUND] = size[s, 0]
+            out[s, O_BOX:O_BOX + 3] = size[s, 0]
         else:
             out[s, O_BOUND] = math.sqrt(size[s, 0] ** 2 + size[s, 1] ** 2 + size[s, 2] ** 2)
+            out[s, O_BOX:O_BOX + 3] = size[s]
         for a in range(3):
             for b in range(3):
                 axes[s, a, b] = pose[s, b, a]

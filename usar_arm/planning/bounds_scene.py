@@ -32,6 +32,7 @@ from usar_arm.planning import bounds_balls
 from usar_arm.planning.bounds_arrays import (
     BOUND,
     BOX,
+    CAPSULE,
     GROUP,
     GROUP_RADIUS,
     HALF,
@@ -40,6 +41,7 @@ from usar_arm.planning.bounds_arrays import (
     INNER_TO,
     NEXT,
     O_BOUND,
+    O_BOX,
     O_CENTRE,
     O_DIR,
     O_IN_DIR,
@@ -50,6 +52,7 @@ from usar_arm.planning.bounds_arrays import (
     RADIUS,
     REACH,
     RHO,
+    SOLID,
     IndexArray,
 )
 from usar_arm.planning.gaps import (
@@ -57,6 +60,8 @@ from usar_arm.planning.gaps import (
     inner_box_contact,
     point_box_distance,
     point_segment_distance,
+    rim_box_contact,
+    rim_cylinders_contact,
     segment_distance,
 )
 from usar_arm.planning.jit import inline_kernel
@@ -136,6 +141,10 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                             gap = max(gap, segment_distance(
                                 seg[0, b], seg[1, b], o[O_START:O_START + 3],
                                 o[O_DIR:O_DIR + 3]) - radius - o[O_SIZE])
+                        if gap <= near and kind[s] == CAPSULE:  # the box about the cylinder
+                            gap = max(gap, cylinder_box_gap(
+                                seg[5, b], seg[4, b], radius, links[b, HALF],
+                                o[O_CENTRE:O_CENTRE + 3], axes[s], o[O_BOX:O_BOX + 3], cand))
                     if gap > eps:
                         if mv > 0.0:
                             scene_gap = min(scene_gap, gap / mv)
@@ -161,17 +170,27 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
 def _touching(seg: Array, world: Array, links: Array, leaves: Array, b: int, kind: int,
               o: Array, axes: Array, margin: float, scratch: Array) -> bool:
     """Body ``b`` and the obstacle are proven in contact: balls inside both overlap by more
-    than ``margin`` (for a mesh, see :func:`_inside_mesh`; never for a mesh's box)."""
+    than ``margin`` (for a mesh, see :func:`_inside_mesh`; never for a mesh's box or a
+    cylinder that only bounds its body): the balls on the body's axis, then at its rim
+    (:func:`.gaps.rim_box_contact`, :func:`.gaps.rim_cylinders_contact`)."""
     if links[b, INNER_TO] > links[b, INNER_FROM]:
         return _inside_mesh(seg, world, links, leaves, b, kind, o, axes, margin, scratch)
-    if kind == BOX:
-        return bool(inner_box_contact(seg[5, b], seg[4, b], links[b, RHO], links[b, REACH],
-                                      o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3], margin,
-                                      scratch))
-    if kind == HULL:
+    if kind == HULL or links[b, RHO] <= 0.0:  # a mesh's box; a cylinder that only bounds
         return False
-    return bool(segment_distance(seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
-                                 o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin)
+    c, z, r, h = seg[5, b], seg[4, b], links[b, RADIUS], links[b, HALF]
+    rims = links[b, SOLID] > 0.5  # (a sphere's or a capsule's cylinder has no rim of its own)
+    if kind == BOX:
+        return bool(inner_box_contact(c, z, links[b, RHO], links[b, REACH],
+                                      o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3], margin,
+                                      scratch)
+                    or (rims and rim_box_contact(c, z, r, h, o[O_START:O_START + 3], axes,
+                                                 o[O_SIZE:O_SIZE + 3], margin, scratch)))
+    if segment_distance(seg[2, b], seg[3, b], o[O_IN_START:O_IN_START + 3],
+                        o[O_IN_DIR:O_IN_DIR + 3]) < links[b, RHO] + o[O_RHO] - margin:
+        return True
+    return kind == CAPSULE and rims and bool(rim_cylinders_contact(
+        c, z, r, h, o[O_CENTRE:O_CENTRE + 3], axes[2], o[O_SIZE], o[O_SIZE + 1], margin,
+        scratch))
 
 
 @inline_kernel

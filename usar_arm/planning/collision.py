@@ -154,7 +154,9 @@ class CollisionWorld:
                                           [None if b.cover is None else
                                            (b.cover.groups, b.cover.leaves,
                                             np.zeros((0, 4)) if b.inner is None else b.inner)
-                                           for b in bodies])
+                                           for b in bodies],
+                                          np.array([isinstance(b.shape, CylinderShape)
+                                                    for b in bodies], dtype=bool))
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
@@ -201,7 +203,8 @@ class CollisionWorld:
         (N, P + Q) verdicts of the compiled tests on the robot-robot then robot-scene pairs:
         :data:`~.bounds.CLEAR`, :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED` (for
         FCL)."""
-        return self._compiled.check(qs)
+        world, verdicts, _ = self._compiled.check(qs)
+        return world, verdicts
 
     # ------------------------------------------------------------------ state
     def set_disabled(self, pairs: Iterable[Pair]) -> None:
@@ -333,9 +336,9 @@ class CollisionWorld:
         whole batch; FCL's narrowphase runs only for the pairs they could not clear, stopping
         at a configuration's first contact. The fast path for edges and trajectories.
         """
-        world, verdicts = self.bounded_poses(qs)
-        hit = (verdicts == bounds.CONTACT).any(axis=1)
-        for n in np.flatnonzero(~hit & (verdicts == bounds.UNDECIDED).any(axis=1)):
+        world, verdicts, overall = self._compiled.check(qs)
+        hit = overall == bounds.CONTACT
+        for n in np.flatnonzero(overall == bounds.UNDECIDED):
             hit[n] = bool(self._decide(world[n], verdicts[n], stop_at_first=True))
         return hit
 

@@ -115,18 +115,159 @@ def point_box_distance(x: Array, centre: Array, axes: Array, half: Array) -> flo
     return math.sqrt(total)
 
 
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+"""The golden section's ratio (:func:`inner_box_contact`'s search along the axis)."""
+SEARCH = 48
+"""Golden-section steps of :func:`inner_box_contact` (the interval shrinks by 0.618 a step:
+a 1 m segment to 1e-10 m)."""
+
+
+@kernel
+def _axis_box_distance(c: Array, z: Array, offset: float, b_centre: Array, b_axes: Array,
+                       b_half: Array, x: Array) -> float:
+    """Distance (m) from the axis point ``c + offset z`` (into scratch ``x``) to the solid box."""
+    for a in range(3):
+        x[a] = c[a] + z[a] * offset
+    return point_box_distance(x, b_centre, b_axes, b_half)
+
+
 @kernel
 def inner_box_contact(c: Array, z: Array, rho: float, reach: float, b_centre: Array,
                        b_axes: Array, b_half: Array, margin: float, x: Array) -> bool:
     """True when a ball of radius ``rho`` inside the cylinder (its centre on the axis within
     ``reach`` of the centre ``c``) reaches more than ``margin`` into the box: a proof of
-    contact. Tries the two ends of that segment and its point nearest the box's centre."""
-    t = ((b_centre[0] - c[0]) * z[0] + (b_centre[1] - c[1]) * z[1]
-         + (b_centre[2] - c[2]) * z[2])
-    t = min(max(t, -reach), reach)
-    for offset in (-reach, reach, t):
-        for a in range(3):
-            x[a] = c[a] + z[a] * offset
-        if point_box_distance(x, b_centre, b_axes, b_half) < rho - margin:
+    contact (every point tried is a real centre, so the answer is sound however the point was
+    found).
+
+    The centre is the segment's point nearest the box: where the segment crosses the box
+    (clipped against the box's three slabs), the middle of the part inside; else the minimum
+    of the distance along the segment, a convex function, by golden section. A link that goes
+    through a thin, wide slab (a floor) far from the slab's centre is proven this way."""
+    limit = rho - margin
+    if limit <= 0.0:
+        return False
+    lo, hi = -reach, reach
+    for a in range(3):
+        u = b_axes[a]
+        p = ((c[0] - b_centre[0]) * u[0] + (c[1] - b_centre[1]) * u[1]
+             + (c[2] - b_centre[2]) * u[2])
+        d = z[0] * u[0] + z[1] * u[1] + z[2] * u[2]
+        if abs(d) <= 1e-300:
+            if abs(p) > b_half[a]:
+                hi = lo - 1.0  # parallel to this slab and outside it
+        else:
+            t1, t2 = (-b_half[a] - p) / d, (b_half[a] - p) / d
+            lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
+    if lo <= hi:
+        return _axis_box_distance(c, z, 0.5 * (lo + hi), b_centre, b_axes, b_half, x) < limit
+    lo, hi = -reach, reach
+    if (_axis_box_distance(c, z, lo, b_centre, b_axes, b_half, x) < limit
+            or _axis_box_distance(c, z, hi, b_centre, b_axes, b_half, x) < limit):
+        return True
+    m1, m2 = hi - GOLDEN * (hi - lo), lo + GOLDEN * (hi - lo)
+    f1 = _axis_box_distance(c, z, m1, b_centre, b_axes, b_half, x)
+    f2 = _axis_box_distance(c, z, m2, b_centre, b_axes, b_half, x)
+    for _ in range(SEARCH):
+        if f1 < limit or f2 < limit:
             return True
-    return False
+        if f1 <= f2:  # the minimum is in [lo, m2]
+            hi, m2, f2 = m2, m1, f1
+            m1 = hi - GOLDEN * (hi - lo)
+            f1 = _axis_box_distance(c, z, m1, b_centre, b_axes, b_half, x)
+        else:  # in [m1, hi]
+            lo, m1, f1 = m1, m2, f2
+            m2 = lo + GOLDEN * (hi - lo)
+            f2 = _axis_box_distance(c, z, m2, b_centre, b_axes, b_half, x)
+    return f1 < limit or f2 < limit
+
+
+RIM = 2.0
+"""The balls of the rim proofs (:func:`rim_box_contact`, :func:`rim_cylinders_contact`) have
+this many proof margins as radius: a rim that reaches about 1.8 margins into the other shape
+is proven (a smaller ball proves shallower contacts; it must exceed one margin)."""
+
+
+@kernel
+def point_cylinder_distance(x: Array, c: Array, z: Array, r: float, h: float) -> float:
+    """Distance (m) from the point ``x`` to the solid cylinder (centre ``c``, unit axis ``z``,
+    radius ``r``, half-length ``h``; 0 inside)."""
+    v0, v1, v2 = x[0] - c[0], x[1] - c[1], x[2] - c[2]
+    t = v0 * z[0] + v1 * z[1] + v2 * z[2]
+    w0, w1, w2 = v0 - t * z[0], v1 - t * z[1], v2 - t * z[2]
+    radial = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2) - r
+    axial = abs(t) - h
+    return math.sqrt(max(radial, 0.0) ** 2 + max(axial, 0.0) ** 2)
+
+
+@kernel
+def cylinder_support(c: Array, z: Array, r: float, h: float, d0: float, d1: float, d2: float,
+                     x: Array) -> None:
+    """The point of the solid cylinder (as :func:`point_cylinder_distance`) farthest along
+    the direction (d0, d1, d2), into ``x`` (the end disc's centre when the direction is the
+    axis; the middle of the axis when it is square to it)."""
+    t = d0 * z[0] + d1 * z[1] + d2 * z[2]
+    w0, w1, w2 = d0 - t * z[0], d1 - t * z[1], d2 - t * z[2]
+    nw = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    s = h if t > 0.0 else (-h if t < 0.0 else 0.0)
+    k = r / nw if nw > 1e-12 else 0.0
+    for a in range(3):
+        x[a] = c[a] + s * z[a]
+    x[0] += k * w0
+    x[1] += k * w1
+    x[2] += k * w2
+
+
+@kernel
+def rim_box_contact(c: Array, z: Array, r: float, h: float, b_centre: Array, b_axes: Array,
+                    b_half: Array, margin: float, x: Array) -> bool:
+    """True when a small ball inside the cylinder (radius :data:`RIM` margins, centred in the
+    cylinder shrunk by that radius) reaches more than ``margin`` into the box: the proof for
+    a rim or an edge that dips into a box, which the balls on the axis do not reach. The
+    centres tried are the shrunk cylinder's points deepest along each of the box's six face
+    normals and towards the box's centre (any centre in the shrunk cylinder is sound)."""
+    ball = RIM * margin
+    if r <= ball or h <= ball:
+        return False
+    limit = ball - margin
+    rs, hs = r - ball, h - ball
+    for a in range(3):
+        u = b_axes[a]
+        for sign in (-1.0, 1.0):
+            cylinder_support(c, z, rs, hs, sign * u[0], sign * u[1], sign * u[2], x)
+            if point_box_distance(x, b_centre, b_axes, b_half) < limit:
+                return True
+    cylinder_support(c, z, rs, hs, b_centre[0] - c[0], b_centre[1] - c[1], b_centre[2] - c[2],
+                     x)
+    return point_box_distance(x, b_centre, b_axes, b_half) < limit
+
+
+@kernel
+def _rim_into(c1: Array, z1: Array, r1: float, h1: float, c2: Array, z2: Array, r2: float,
+              h2: float, ball: float, limit: float, x: Array) -> bool:
+    """:func:`rim_cylinders_contact` one way: the shrunk first cylinder's points deepest
+    along the second's axis (both ways), towards its axis and towards its centre."""
+    rs, hs = r1 - ball, h1 - ball
+    for sign in (-1.0, 1.0):
+        cylinder_support(c1, z1, rs, hs, sign * z2[0], sign * z2[1], sign * z2[2], x)
+        if point_cylinder_distance(x, c2, z2, r2, h2) < limit:
+            return True
+    v0, v1, v2 = c2[0] - c1[0], c2[1] - c1[1], c2[2] - c1[2]
+    cylinder_support(c1, z1, rs, hs, v0, v1, v2, x)
+    if point_cylinder_distance(x, c2, z2, r2, h2) < limit:
+        return True
+    t = v0 * z2[0] + v1 * z2[1] + v2 * z2[2]
+    cylinder_support(c1, z1, rs, hs, v0 - t * z2[0], v1 - t * z2[1], v2 - t * z2[2], x)
+    return point_cylinder_distance(x, c2, z2, r2, h2) < limit
+
+
+@kernel
+def rim_cylinders_contact(c1: Array, z1: Array, r1: float, h1: float, c2: Array, z2: Array,
+                          r2: float, h2: float, margin: float, x: Array) -> bool:
+    """True when a small ball inside one solid cylinder (as :func:`rim_box_contact`) reaches
+    more than ``margin`` into the other (centre, unit axis, radius, half-length each): the
+    rim proof between two cylinders, tried both ways."""
+    ball = RIM * margin
+    limit = ball - margin
+    return ((min(r1, h1) > ball and _rim_into(c1, z1, r1, h1, c2, z2, r2, h2, ball, limit, x))
+            or (min(r2, h2) > ball
+                and _rim_into(c2, z2, r2, h2, c1, z1, r1, h1, ball, limit, x)))

@@ -121,11 +121,14 @@ class CompiledVerdicts:
     padded, m; pose in its link ``links[k]``'s frame ``local`` (L, 4, 4); ``exact[k]`` False
     when it only bounds the body's shape; ``covers[k]``: the balls around a mesh body's
     surface, groups and leaves of :class:`.ball_cover.BallCover`, and the balls inside it:
-    :data:`.bounds_arrays.Cover`) in a scene."""
+    :data:`.bounds_arrays.Cover`; ``solid[k]`` False when the body is not the cylinder itself
+    but a sphere or capsule whose balls it shares: no rim proofs; default: every exact body is
+    its cylinder) in a scene."""
 
     def __init__(self, chain: KinematicChain, links: list[str], radius: Array, half: Array,
                  local: Array, scene: Scene, exact: NDArray[np.bool_] | None = None,
-                 covers: list[Cover | None] | None = None):
+                 covers: list[Cover | None] | None = None,
+                 solid: NDArray[np.bool_] | None = None):
         poe = PoeModel(chain)
         zero = chain.link_poses(np.zeros(chain.dof))
         self.chain = chain
@@ -133,6 +136,8 @@ class CompiledVerdicts:
         self.radius, self.half = radius, half
         self._local = local
         self._exact = np.ones(len(links), bool) if exact is None else np.asarray(exact, bool)
+        self._solid = self._exact & (np.ones(len(links), bool) if solid is None
+                                     else np.asarray(solid, bool))
         self._covers = covers  # (per body: its balls' groups, leaves and inner balls, or None)
         self._axes = np.ascontiguousarray(poe.axes, dtype=float).reshape(-1, 3)
         self._points = np.ascontiguousarray(poe.points, dtype=float).reshape(-1, 3)
@@ -172,11 +177,13 @@ class CompiledVerdicts:
         if not self._exact.all():
             self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
             self._packed[2][~self._exact, bounds.REACH] = 0.0
+        self._packed[2][:, bounds.SOLID] = self._solid
 
-    def check(self, qs: Array) -> tuple[Array, NDArray[np.int8]]:
-        """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
+    def check(self, qs: Array) -> tuple[Array, NDArray[np.int8], NDArray[np.int8]]:
+        """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n),
         (N, P + Q) verdicts on the checked pairs (:data:`~.bounds.CLEAR`,
-        :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED`)."""
+        :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED`) and one per configuration (N,)
+        (CONTACT when a pair is proven in contact, else UNDECIDED when one is undecided)."""
         qs = _plain(np.atleast_2d(qs))
         return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
 
