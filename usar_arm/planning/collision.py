@@ -24,7 +24,8 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.core.shapes import CylinderShape, Mesh, Shape
 from usar_arm.core.spatial import Array, invert
 from usar_arm.planning import bounds
-from usar_arm.planning.ball_cover import BallCover, cover_in
+from usar_arm.planning.ball_cover import cover_in
+from usar_arm.planning.bounds_arrays import Cover
 from usar_arm.planning.element_fit import bounding_cylinder, padded
 from usar_arm.planning.exact import ExactJudge
 from usar_arm.planning.inner_balls import axis_balls_in
@@ -77,9 +78,11 @@ class _Body:
     """One collision element of a link as the two judges see it: the compiled verdicts its
     bounding cylinder (``local``: pose in the link frame; radius, half-length, m; ``exact``:
     contact proofs allowed), FCL its shape (``to_shape``: the shape's pose in the cylinder's
-    frame, None when the same); a mesh's also the balls around its surface in the cylinder's
-    frame (:mod:`.ball_cover`), which clear pairs its cylinder cannot, and the balls inside it
-    when it is closed (:mod:`.inner_balls`, (K, 4)), which prove contacts with obstacles."""
+    frame, None when the same); a mesh's also its balls in the cylinder's frame
+    (:data:`.bounds_arrays.Cover`): the groups and leaves around its surface
+    (:mod:`.ball_cover`), which clear pairs its cylinder cannot, and the balls inside it
+    (:mod:`.inner_balls`, (K, 4); none when it is not closed), which prove contacts with
+    obstacles."""
 
     link: str
     shape: Shape
@@ -88,8 +91,7 @@ class _Body:
     half: float
     exact: bool
     to_shape: Array | None
-    cover: BallCover | None = None
-    inner: Array | None = None
+    balls: Cover | None = None
 
 
 def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
@@ -107,12 +109,13 @@ def _bodies(chain: KinematicChain, padding: float) -> list[_Body]:
             fit = bounding_cylinder(grown)
             same = bool(np.array_equal(fit.frame, np.eye(4)))
             to_shape = None if same else invert(fit.frame)
-            balls, inner = None, None
+            balls: Cover | None = None
             if isinstance(grown, Mesh):
-                balls = cover_in(grown.vertices, grown.faces, to_shape)
-                inner = axis_balls_in(grown.vertices, grown.faces, to_shape, fit.half)
+                cover = cover_in(grown.vertices, grown.faces, to_shape)
+                balls = (cover.groups, cover.leaves,
+                         axis_balls_in(grown.vertices, grown.faces, to_shape, fit.half))
             out.append(_Body(lk.name, grown, c.origin.matrix() @ fit.frame, fit.radius,
-                             fit.half, fit.exact, to_shape, balls, inner))
+                             fit.half, fit.exact, to_shape, balls))
     return out
 
 
@@ -151,10 +154,7 @@ class CollisionWorld:
         self._compiled = CompiledVerdicts(chain, self._links, self._radius, self._half,
                                           self._local, scene,
                                           np.array([b.exact for b in bodies], dtype=bool),
-                                          [None if b.cover is None else
-                                           (b.cover.groups, b.cover.leaves,
-                                            np.zeros((0, 4)) if b.inner is None else b.inner)
-                                           for b in bodies],
+                                          [b.balls for b in bodies],
                                           np.array([isinstance(b.shape, CylinderShape)
                                                     for b in bodies], dtype=bool))
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
