@@ -152,18 +152,28 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                     elif whole:
                         whole = False  # each body on its own, from the first (b == i)
                     else:  # a mesh body's balls have a look, else FCL decides
-                        gap = bounds_balls.body_obstacle_gap(b, kind[s], o, axes[s], world,
-                                                             links, groups, leaves, eps, balls)
-                        if gap > eps:
-                            if mv > 0.0:
-                                scene_gap = min(scene_gap, gap / mv)
-                        else:
-                            scene_gap = 0.0
-                            out[pair_of[b, s]] = (CONTACT if _touching(
-                                seg, world, links, leaves, b, kind[s], o, axes[s], margin,
-                                scratch) else UNDECIDED)
+                        scene_gap = _second_look(seg, world, links, groups, leaves, b, kind[s],
+                                                 o, axes[s], eps, margin, mv, scene_gap, out,
+                                                 pair_of[b, s], scratch, balls)
                         b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
+
+
+@inline_kernel
+def _second_look(seg: Array, world: Array, links: Array, groups: Array, leaves: Array, b: int,
+                 kind: int, o: Array, axes: Array, eps: float, margin: float, mv: float,
+                 scene_gap: float, out: np.ndarray, p: int, scratch: Array,
+                 balls: tuple[Array, Array, np.ndarray]) -> float:
+    """A pair body ``b``'s cylinder left undecided: cleared by a mesh body's balls, else proven
+    in contact (:func:`_touching`) or left to FCL (verdict into ``out[p]``). Returns the scene
+    gap per unit of motion (:func:`judge_scene`'s), updated."""
+    gap = bounds_balls.body_obstacle_gap(b, kind, o, axes, world, links, groups, leaves, eps,
+                                         balls)
+    if gap > eps:
+        return min(scene_gap, gap / mv) if mv > 0.0 else scene_gap
+    out[p] = CONTACT if _touching(seg, world, links, leaves, b, kind, o, axes, margin,
+                                  scratch) else UNDECIDED
+    return 0.0
 
 
 @inline_kernel
