@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from usar_arm.core.job_errors import ChunkFailedError
+from usar_arm.core.job_errors import ChunkFailedError, ClusterUnavailableError
 from usar_arm.workspace.engine import Job
 from usar_arm.workspace.ray_dispatch import Run, Slot
 
@@ -69,6 +69,31 @@ class Actor:
 
 
 @dataclass
+class RacingActor(Actor):
+    """Runs every queued call at once when stepped, and a death takes the start's answer with
+    it: Ray under load, where the worker exits before its start's answer has left it."""
+
+    def step(self) -> None:
+        while not self.dead and any(r.outcome is None for r in self.calls):
+            super().step()
+        if self.dead:
+            for r in self.calls:
+                if r.chunk is None:
+                    r.outcome = ("lost", "the actor is dead")
+
+
+@dataclass
+class StartlessActor(Actor):
+    """Dies in its start, every time."""
+
+    def step(self) -> None:
+        if self.calls and self.calls[0].outcome is None:
+            self.dead = True
+            for r in self.calls:
+                r.outcome = ("lost", "the actor is dead")
+
+
+@dataclass
 class _Remote:
     call: Callable[..., Ref]
 
@@ -85,14 +110,15 @@ class Scripted:
     call_timeout = 60.0
     joining = False
 
-    def __init__(self, actors: int, dies: Callable[[int], tuple[bool, bool]]):
-        self.dies = dies
+    def __init__(self, actors: int, dies: Callable[[int], tuple[bool, bool]],
+                 kind: type[Actor] = Actor):
+        self.dies, self.kind = dies, kind
         self.slots = [self._slot(k) for k in range(actors)]
         self.chunks_here = 0
         self.replaced = 0
 
     def _slot(self, k: int) -> Slot:
-        return Slot(Actor(self.dies), f"actor {k}", time.monotonic())
+        return Slot(self.kind(self.dies), f"actor {k}", time.monotonic())
 
     def join(self, wait: float) -> bool:
         return True
@@ -160,3 +186,22 @@ def test_chunks_lost_together_run_alone_until_they_answer() -> None:
                 assert not alone or len(slot.calls) == 1
     assert err.value.chunk == 3 and 2 not in run.failures
     assert backend.replaced == 2  # (three deaths, one uncharged; the third stops the run)
+
+
+def test_a_death_that_takes_the_starts_answer_with_it_is_charged_to_its_chunk() -> None:
+    """Seen in a campaign run: the worker killed by chunk 3 took its start's answer with it, so
+    the dispatch counted two start failures and blamed the cluster. An actor that dies before
+    its start is confirmed, with calls queued, charges nothing; the slot's next actor gets
+    calls only after its start, and the second death of chunk 3 names it."""
+    backend = Scripted(2, lambda i: (i == 3, False), RacingActor)
+    with pytest.raises(ChunkFailedError) as err:
+        _run(backend)
+    assert err.value.chunk == 3 and err.value.attempts == 2
+
+
+def test_an_actor_that_dies_in_its_start_every_time_names_the_cluster() -> None:
+    """The careful slot still ends a run whose actors never start: its next actors, given no
+    calls, die in their start, and that is counted."""
+    backend = Scripted(1, lambda i: (False, False), StartlessActor)
+    with pytest.raises(ClusterUnavailableError, match="failed to start 2 times"):
+        _run(backend)

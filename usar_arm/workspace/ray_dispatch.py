@@ -91,6 +91,7 @@ class Run:
         self.failures: dict[int, list[str]] = {}
         self.start_failures: dict[int, list[str]] = {}
         self.alone: set[int] = set()
+        self.careful: set[int] = set()  # slots fed only once their actor's start is confirmed
         """Chunks lost with another when an actor died: each runs alone on its actor until
         it answers, so that a second death is charged to the chunk that caused it."""
         self.share = len(todo) // (backend.head.num_cpus + 1) if backend.head else 0
@@ -158,8 +159,11 @@ class Run:
 
     # ------------------------------------------------------------------ the actors
     def _feed(self) -> None:
-        """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup)."""
-        for slot in self.backend.slots:
+        """Keep :data:`IN_FLIGHT` calls queued on every actor (behind its setup; after it,
+        once confirmed, for a :attr:`careful` slot)."""
+        for k, slot in enumerate(self.backend.slots):
+            if k in self.careful and slot.ready is not None:
+                continue
             while self.queue and len(slot.calls) < IN_FLIGHT:
                 if slot.calls and (self.queue[0] in self.alone
                                    or slot.calls[-1][1] in self.alone):
@@ -205,7 +209,13 @@ class Run:
         it finished just before dying may have lost its answer with it: so when the actor
         died (not ``hung``, killed for its oldest call's deadline) with more than one call
         unanswered, none is charged and each of them runs alone until it answers. Nothing is
-        charged when the actor never started (its slot's start is)."""
+        charged when the actor never started (its slot's start is).
+
+        An actor that dies before its start's answer arrived, with calls queued behind the
+        start, may have died in one of them: a worker that exits takes the start's answer, on
+        its way, with it (seen under load). Neither is charged then: its calls run alone, and
+        the slot's next actor gets calls only once its start is confirmed, so that its death
+        is either a start failure (no calls) or a chunk's."""
         slot = self.backend.slots[k]
         again: list[int] = []
         for ref, i in slot.calls:  # (a finished chunk's answer may still be on its way)
@@ -222,7 +232,10 @@ class Run:
             else:
                 self.alone.update(again)
         self.queue.extendleft(reversed(again))
-        if slot.ready is not None:  # it never became ready: no chunk of it ran
+        if slot.ready is not None and again:  # it died in its start or in a chunk after it
+            self.alone.update(again)
+            self.careful.add(k)
+        elif slot.ready is not None:  # it never became ready: no chunk of it ran
             self.start_failures.setdefault(k, []).append(reason)
             if len(self.start_failures[k]) >= ATTEMPTS:
                 raise ClusterUnavailableError(
