@@ -300,17 +300,27 @@ def ros_section(doc: dict[str, Any]) -> list[str]:
             f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), "", *out]
 
 
+def _latency(stats: dict[str, Any], label: str = "median") -> str:
+    """A latency distribution (ms) in a cell: median, p99, max; a dash for what was not
+    measured (a window in which nothing arrived)."""
+    def ms(key: str, fmt: str) -> str:
+        return "-" if stats.get(key) is None else f"{stats[key]:{fmt}}"
+    return f"{label} {ms('median', '.2f')} ms, p99 {ms('p99', '.2f')} ms, max {ms('max', '.1f')} ms"
+
+
 def _platform_lines(r: dict[str, Any]) -> list[str]:
     """The ground vehicle's node (``bench/ros_platform.py``)."""
     scan, drive, node = r["scan"], r["cmd_vel_to_drive"], r["node"]
-    lat, cmd = scan["latency_ms"], drive["latency_ms"]
+    command = f"{drive['matched']} of {drive['sent']} matched: " + _latency(drive["latency_ms"])
+    if drive.get("failure"):
+        command = f"not measured: {drive['failure']}"
+    elif drive.get("subscriber_matched_s") is not None:
+        command += (f" (after discovery, {drive['subscriber_matched_s']:.2f} s, and a first "
+                    f"DRIVE, {drive['first_drive_s']:.2f} s)")
     rows = [["/scan", f"{scan['messages']} scans at {scan['rate_hz']:.2f} Hz, "
                       f"{', '.join(map(str, scan['ranges']))} ranges each"],
-            ["SEN arrival -> subscriber", f"median {lat['median']:.2f} ms, p99 "
-                                          f"{lat['p99']:.2f} ms, max {lat['max']:.1f} ms"],
-            ["cmd_vel -> DRIVE on the wire", f"{drive['matched']} of {drive['sent']} matched: "
-                                             f"median {cmd['median']:.2f} ms, p99 "
-                                             f"{cmd['p99']:.2f} ms, max {cmd['max']:.1f} ms"],
+            ["SEN arrival -> subscriber", _latency(scan["latency_ms"])],
+            ["cmd_vel -> DRIVE on the wire", command],
             ["node CPU streaming / driving",
              f"{node['cpu_streaming_fraction_of_a_core']:.1%} / "
              f"{node['cpu_driving_fraction_of_a_core']:.1%} of a core"]]

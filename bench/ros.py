@@ -29,8 +29,10 @@ PLATFORM_SECONDS = {"quick": 10.0, "full": 60.0}
 """Each of the platform probe's two windows (/scan, then cmd_vel) in seconds per mode."""
 WINDOWS = {"quick": (10.0, 20.0), "full": (60.0, 600.0)}
 """(joint_states window, goal period) in seconds per mode."""
-DOMAIN = 78
-"""ROS_DOMAIN_ID of the benchmark's node and probe (the tests lease others)."""
+DOMAINS = {"ros_probe.json": 100, "ros_platform.json": 101}
+"""ROS_DOMAIN_ID of each probe and its node: one each, so that no participant of the first
+probe's processes lingers in the second's graph, and outside the ids the tests lease (5..99,
+tests/ros/helpers.py), so that a test session beside the benchmark never joins it."""
 
 
 def _probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
@@ -51,7 +53,7 @@ def _run(ctx: Context, command: list[str], name: str, budget: float
     out = ctx.work / name
     try:
         done = subprocess.run(
-            [sys.executable, *command, "--domain", str(DOMAIN), "--json", str(out)],
+            [sys.executable, *command, "--domain", str(DOMAINS[name]), "--json", str(out)],
             capture_output=True, text=True, timeout=budget, env={**os.environ})
     except subprocess.TimeoutExpired:
         return None, f"the probe did not finish within {budget:.0f} s"
@@ -131,7 +133,7 @@ def run(ctx: Context) -> dict[str, Any]:
     seconds, goal_seconds = WINDOWS[ctx.mode]
     settings: dict[str, Any] = {
         "joint_states_window_s": seconds, "goal_period_s": goal_seconds,
-        "platform_window_s": PLATFORM_SECONDS[ctx.mode], "ros_domain_id": DOMAIN,
+        "platform_window_s": PLATFORM_SECONDS[ctx.mode], "ros_domain_ids": DOMAINS,
         "probes": ["bench/ros_probe.py", "bench/ros_platform.py"]}
     cases: dict[str, Any] = {}
     targets: list[dict[str, Any]] = []

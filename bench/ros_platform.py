@@ -118,9 +118,46 @@ def _proc_cpu(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICKS
 
 
+def _matched(node: Any, pub: Any, seconds: float) -> float | None:
+    """Spin until ``pub`` has a subscriber (the node's cmd_vel); the seconds it took, or None."""
+    begin = time.monotonic()
+    while time.monotonic() - begin < seconds:
+        if pub.get_subscription_count() > 0:
+            return time.monotonic() - begin
+        rclpy.spin_once(node, timeout_sec=0.05)
+    return None
+
+
+def _first_drive(node: Any, pub: Any, relay: Relay, seconds: float) -> float | None:
+    """Publish until a DRIVE line reaches the wire (the command path works end to end); the
+    seconds it took, or None. Its speeds (0.2 m/s and up) are outside the measured window's."""
+    begin, k = time.monotonic(), 0
+    while time.monotonic() - begin < seconds:
+        k += 1
+        msg = Twist()
+        msg.linear.x = 0.2 + 1e-4 * k
+        pub.publish(msg)
+        rclpy.spin_once(node, timeout_sec=0.05)
+        if relay.drives:
+            return time.monotonic() - begin
+    return None
+
+
 def _cmd_vel(node: Any, relay: Relay, seconds: float) -> dict[str, Any]:
-    """Twists at 20 Hz, each with its own small speed; latency to its DRIVE on the wire."""
+    """Twists at 20 Hz, each with its own small speed; latency to its DRIVE on the wire. The
+    window starts once the publisher is matched and a first DRIVE came through: discovery
+    is not part of the command path, and is reported apart (``subscriber_matched_s``,
+    ``first_drive_s``)."""
     pub = node.create_publisher(Twist, "cmd_vel", 10)
+    out: dict[str, Any] = {"sent": 0, "matched": 0, "latency_ms": common.stats([])}
+    out["subscriber_matched_s"] = _matched(node, pub, 60.0)
+    if out["subscriber_matched_s"] is None:
+        return {**out, "failure": "no subscriber on cmd_vel within 60 s"}
+    out["first_drive_s"] = _first_drive(node, pub, relay, 30.0)
+    if out["first_drive_s"] is None:
+        return {**out, "failure": "cmd_vel matched, but no DRIVE line on the wire within 30 s"}
+    time.sleep(0.2)
+    relay.drives.clear()
     sent: dict[float, float] = {}
     k, end = 0, time.monotonic() + seconds
     while time.monotonic() < end:
@@ -132,12 +169,17 @@ def _cmd_vel(node: Any, relay: Relay, seconds: float) -> dict[str, Any]:
         pub.publish(msg)
         rclpy.spin_once(node, timeout_sec=0.05)
     time.sleep(0.5)
-    latencies = []
-    for at, left in list(relay.drives):
+    latencies, unmatched = [], []
+    drives = list(relay.drives)
+    for at, left in drives:
         begin = sent.pop(round(left, 6), None)
         if begin is not None and at >= begin:
             latencies.append((at - begin) * 1000)
-    return {"sent": k, "matched": len(latencies), "latency_ms": common.stats(latencies)}
+        else:
+            unmatched.append(left)
+    out.update(sent=k, matched=len(latencies), latency_ms=common.stats(latencies),
+               drive_lines=len(drives), unmatched_lefts=unmatched[:5])
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -145,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seconds", type=float, default=20.0, help="each window (s)")
     ap.add_argument("--json", type=Path, default=None, help="write the results here")
-    ap.add_argument("--domain", type=int, default=78, help="ROS_DOMAIN_ID (default 78)")
+    ap.add_argument("--domain", type=int, default=101, help="ROS_DOMAIN_ID (default 101)")
     a = ap.parse_args(argv)
     os.environ["ROS_DOMAIN_ID"] = str(a.domain)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"

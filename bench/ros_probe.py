@@ -215,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path, default=None, help="write the results here")
     ap.add_argument("--goal-seconds", type=float, default=30.0,
                     help="how long goals are sent every 2 s (600: the 10-minute run)")
-    ap.add_argument("--domain", type=int, default=77, help="ROS_DOMAIN_ID (default 77)")
+    ap.add_argument("--domain", type=int, default=100, help="ROS_DOMAIN_ID (default 100)")
     ap.add_argument("--sim-port", type=int, default=0,
                     help="run the simulator as its own process (usar-arm sim on this port) and "
                          "the node as its client, as with a USARSim server; default: the "

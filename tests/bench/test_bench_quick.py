@@ -96,7 +96,8 @@ def test_the_ros_stage_measures_the_live_node_from_another_process(
     assert node["joint_states"]["messages"] > 50 and node["tf"]["messages_checked"] > 0
     assert node["goals"]["goals"] >= 5
     vehicle = doc["cases"]["P3AT"]
-    assert vehicle["scan"]["messages"] > 10 and vehicle["cmd_vel_to_drive"]["matched"] > 10
+    assert vehicle["scan"]["messages"] > 10, vehicle["scan"]
+    assert vehicle["cmd_vel_to_drive"]["matched"] > 10, vehicle["cmd_vel_to_drive"]
     for t in doc["targets"]:
         measured, bound = t["measured"], t["threshold"]
         holds = measured <= bound if t["better"] == "<=" else measured >= bound
