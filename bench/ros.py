@@ -13,10 +13,14 @@ reason the probe gave.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import subprocess
 import sys
+import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +37,37 @@ DOMAINS = {"ros_probe.json": 100, "ros_platform.json": 101}
 """ROS_DOMAIN_ID of each probe and its node: one each, so that no participant of the first
 probe's processes lingers in the second's graph, and outside the ids the tests lease (5..99,
 tests/ros/helpers.py), so that a test session beside the benchmark never joins it."""
+
+
+LOCK = Path(tempfile.gettempdir()) / "usar-arm-bench-ros.lock"
+"""Held while a probe runs: two benchmarks at once on one machine (two test workers running the
+quick benchmark did, under make test-slow) would otherwise share the domains above, each probe
+seeing the other's node."""
+LOCK_WAIT_S = 1800.0
+
+
+@contextlib.contextmanager
+def _stage_lock(wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
+    """Hold :data:`LOCK`, waiting up to ``wait_s`` for another benchmark's probe to end.
+
+    Raises:
+        TimeoutError: the lock was still held after ``wait_s`` seconds.
+    """
+    with open(LOCK, "w") as lock:
+        end = time.monotonic() + wait_s
+        while True:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except OSError:
+                if time.monotonic() > end:
+                    raise TimeoutError(f"{LOCK} still held by another benchmark's ros probe "
+                                       f"after {wait_s:.0f} s") from None
+                time.sleep(1.0)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def _probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
@@ -140,7 +175,8 @@ def run(ctx: Context) -> dict[str, Any]:
     skipped: dict[str, str] = {}
     for name, probe, judge in (("KR60", _probe, _targets),
                                ("P3AT", _platform_probe, _platform_targets)):
-        doc, reason = probe(ctx)
+        with _stage_lock():
+            doc, reason = probe(ctx)
         if doc is None:
             common.log(f"ros stage, {name}: skipped: {reason}")
             skipped[name] = reason

@@ -21,6 +21,11 @@ PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"},
 PNG = b"\x89PNG\r\n\x1a\n"
 VENVS = ROOT / "bench" / ".venvs"
 
+# One worker runs them all, so the quick benchmark runs once: under make test-slow's -n 3 the
+# module's tests were spread over workers, each running the benchmark for its own fixture at the
+# same time (twice the load, and two ros stages on the same ROS domains).
+pytestmark = pytest.mark.xdist_group("bench-quick")
+
 
 def _venv_of(peer: str) -> str:
     """The venv (bench/peers/venvs.py) a peer solver runs in."""

@@ -1,11 +1,14 @@
-"""The report's ROS section says what was not measured instead of failing on it: a CI run
-once crashed the whole benchmark's report on a cmd_vel window in which no DRIVE was matched."""
+"""The ros stage under trouble: its report says what was not measured instead of failing on it
+(a CI run once crashed the whole benchmark's report on a cmd_vel window in which no DRIVE was
+matched), and two benchmarks at once take turns with the probes' ROS domains."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
@@ -48,3 +51,14 @@ def test_a_measured_window_gives_its_figures_and_its_discovery_apart() -> None:
     row = _row(lines, "cmd_vel -> DRIVE on the wire")
     assert "199 of 200 matched: median 0.70 ms, p99 1.09 ms, max 1.1 ms" in row
     assert "discovery, 0.12 s" in row and "first DRIVE, 0.05 s" in row
+
+
+def test_a_second_benchmark_waits_for_the_first_ones_probe_then_says_so() -> None:
+    import ros
+
+    with ros._stage_lock():
+        with pytest.raises(TimeoutError, match="still held by another benchmark's ros probe"):
+            with ros._stage_lock(wait_s=0.2):
+                pass
+    with ros._stage_lock(wait_s=0.2):  # released with the first
+        pass
