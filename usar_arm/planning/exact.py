@@ -83,16 +83,17 @@ class ExactJudge:
                  half: Array, scene: Scene):
         self.radius, self.half = radius, half
         self.shapes, self.to_shape = shapes, to_shape
-        self._robot = [fcl.CollisionObject(shape_geometry(s), fcl.Transform()) for s in shapes]
+        self._geometry = [shape_geometry(s) for s in shapes]  # (shared by in_scene's copies)
+        self._robot = [fcl.CollisionObject(g, fcl.Transform()) for g in self._geometry]
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=1, enable_contact=True)
         self._init_scene(scene)
 
     def in_scene(self, scene: Scene) -> ExactJudge:
-        """The same cylinders (objects of their own) with another scene's obstacles."""
+        """The same bodies with another scene's obstacles: objects of their own (each world
+        places its bodies), on the same geometry (a mesh's BVH is built once)."""
         other = copy.copy(self)
-        other._robot = [fcl.CollisionObject(shape_geometry(s), fcl.Transform())
-                        for s in self.shapes]
+        other._robot = [fcl.CollisionObject(g, fcl.Transform()) for g in self._geometry]
         other._init_scene(scene)
         return other
 

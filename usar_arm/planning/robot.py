@@ -89,7 +89,8 @@ class Robot:
     """How the description was read (group, tip, packages, hulls)."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
-    _never: dict[float, set[Pair]] = field(default_factory=dict)
+    _worlds: dict[tuple[float, frozenset[Pair]], CollisionWorld] = field(
+        default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def kinematics(self) -> KinematicModel:
@@ -107,12 +108,21 @@ class Robot:
         return self._ik[key]
 
     def collision_world(self, scene: Scene = EMPTY, padding: float = 0.0) -> CollisionWorld:
-        """A collision world of this arm in ``scene``."""
+        """A collision world of this arm in ``scene`` (a new one each call).
+
+        What depends on the arm alone (the bodies fitted to its meshes, their FCL geometry,
+        the pairs proven never in contact, the lever arms) is built once, in a world of the
+        empty scene per padding and set of disabled pairs, that every later world is copied
+        from (:meth:`CollisionWorld.in_scene`): a world per scene costs the scene's part only.
+        """
         validate_allow(scene, {lk.name for lk in self.chain.links})
-        world = CollisionWorld(self.chain, self.kinematics, self.disabled, scene, padding,
-                               self._never.get(padding))
-        self._never[padding] = world.never  # (proven once per padding: the scene plays no part)
-        return world
+        key = (float(padding), frozenset(self.disabled))
+        base = self._worlds.get(key)
+        if base is None:
+            base = CollisionWorld(self.chain, self.kinematics, self.disabled, EMPTY, padding)
+            base.lever_arms()  # (computed here, so that the copies carry them)
+            self._worlds[key] = base
+        return base.in_scene(scene)
 
     def home(self) -> list[float]:
         """The ``home`` state, or without one each joint at 0 (the middle of its limits when 0
