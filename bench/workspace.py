@@ -37,6 +37,7 @@ import common
 import numpy as np
 from common import Context
 from judge_reading import JudgedRobot
+from ray_cluster import own_cluster
 from verify import Judge, Kinematics
 
 URDF = common.ROOT / "robots" / "generated" / "as-learnt" / "KR60.urdf"
@@ -191,17 +192,11 @@ def run(ctx: Context) -> dict[str, Any]:
         rounds["1 worker"].append(reach("1 worker", ["--workers", "1"], f"reach-1-{r}"))
         rounds["2 workers"].append(reach("2 workers", ["--workers", "2"], f"reach-2-{r}"))
         rounds["ray local"].append(reach("ray local", ["--ray", "local"], f"reach-ray-{r}"))
-    ray = str(Path(sys.executable).parent / "ray")
-    subprocess.run([ray, "start", "--head", "--num-cpus", "2", "--include-dashboard=false",
-                    "--disable-usage-stats"], capture_output=True, check=True, timeout=300,
-                   env={**os.environ, "RAY_worker_niceness": "0"})
     rounds["ray, cluster running"] = []
-    try:
+    with own_cluster(2):  # (not ray stop: it would stop every Ray instance on the machine)
         for r in range(ROUNDS[ctx.mode]):
             rounds["ray, cluster running"].append(
                 reach("ray (cluster running)", ["--ray", "auto"], f"reach-running-{r}"))
-    finally:
-        subprocess.run([ray, "stop", "--force"], capture_output=True, check=False, timeout=300)
     for label, found in rounds.items():  # the median run by whole-command time, with the rest
         ordered = sorted(found, key=lambda x: x["wall_seconds"])
         runs[label] = {**ordered[len(ordered) // 2],
