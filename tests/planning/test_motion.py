@@ -248,6 +248,9 @@ def test_a_path_never_clips_an_obstacle_between_the_planners_checks(kr60: Robot)
     assert world.in_collision_many(edge_configurations(a, b, 0.01, levers, 0.005)).any()
     plan = plan_motion(kr60, world, a, goal=b)
     assert len(plan.waypoints) > 2, "the straight segment through the pin was kept"
+    # the planner's own path (the straight segment, free at its 0.01 rad checks) had its
+    # segment replanned densely, not the whole path
+    assert (plan.details["repaired"], plan.details["dense_replans"]) == (1, 0)
     for p, q in itertools.pairwise(plan.waypoints):
         assert not world.in_collision_many(edge_configurations(p, q, 0.01, levers, 0.001)).any()
     assert_rechecked(kr60, world, plan, start=a)

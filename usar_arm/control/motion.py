@@ -133,7 +133,7 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
             details.update(planner=plan.ompl.planner, simplify_seconds=plan.ompl.simplify_seconds,
                            states_checked=plan.ompl.states_checked,
                            edges_checked=plan.ompl.edges_checked,
-                           dense_replans=plan.dense_replans)
+                           dense_replans=plan.dense_replans, repaired=plan.repaired)
         else:
             details["planner"] = "direct (the straight joint-space segment is free)"
         planning = time.perf_counter() - begin

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,6 +28,9 @@ from usar_arm.planning.ompl_adapter import (
 
 log = logging.getLogger("usar_arm.planning")
 
+MAX_REPAIRS = 3
+"""Segments of one path replanned densely before the whole path is planned again so."""
+
 
 @dataclass(frozen=True)
 class PtpPlan:
@@ -38,6 +43,9 @@ class PtpPlan:
     goals_tried: int = 1
     dense_replans: int = 0
     """1 when the first path clipped an obstacle between checks and was planned again."""
+    repaired: int = 0
+    """Segments of the planner's path that clipped an obstacle between its checks and were
+    replaced by a path planned between their ends with every edge checked densely."""
 
 
 def check_state(world: CollisionWorld, names: tuple[str, ...], lower: Array, upper: Array,
@@ -58,8 +66,10 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     OMPL explores with edges checked every ``options.resolution`` of joint motion (fast, but a
     point far from the base can move a few centimetres between two checks). The path it returns
     is then checked so that no point of the robot moves more than ``options.max_step`` between
-    checked configurations; a path that clips an obstacle between the planner's checks is
-    planned again with every edge checked that densely.
+    checked configurations; a segment that clips an obstacle between the planner's checks is
+    replaced by a path planned between its ends with every edge checked that densely, and when
+    that fails (at most :data:`MAX_REPAIRS` segments, within ``options.time_limit`` of the
+    call's start), the whole path is planned again so.
 
     Raises:
         OutOfLimitsError, StartInCollisionError, GoalInCollisionError, NoPathError.
@@ -76,12 +86,13 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
         return not world.in_collision(q)
 
     result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options)
-    blocked = _first_blocked(world, result.waypoints, options, levers)
-    if blocked is None:
-        return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin)
-    log.info("the path clips an obstacle between the planner's checks on segment %d of %d; "
-             "planning again with edges checked every %g m", blocked + 1,
-             len(result.waypoints) - 1, options.max_step)
+    path, repaired = _repaired(world, lower, upper, result.waypoints, state_valid, options,
+                               levers, begin + options.time_limit)
+    if path is not None:
+        return PtpPlan(path, goal, result, time.perf_counter() - begin, repaired=repaired)
+    log.info("a segment of the path clips an obstacle between the planner's checks and could "
+             "not be repaired; planning again with every edge checked every %g m",
+             options.max_step)
     result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options,
                        levers)
     blocked = _first_blocked(world, result.waypoints, options, levers)
@@ -89,6 +100,37 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
         raise NoPathError(options.planner, options.time_limit,
                           f"segment {blocked + 1} of the path is in collision")
     return PtpPlan(result.waypoints, goal, result, time.perf_counter() - begin, dense_replans=1)
+
+
+def _repaired(world: CollisionWorld, lower: Array, upper: Array, waypoints: Array,
+              state_valid: Callable[[Array], bool], options: OmplOptions, levers: Array,
+              deadline: float) -> tuple[Array | None, int]:
+    """``waypoints`` checked every ``options.resolution`` of joint motion and
+    ``options.max_step`` m of robot motion, each segment that is not free replaced by a path
+    planned between its ends with every edge checked that densely (so free as checked); and
+    how many were replaced. None when a segment could not be replaced before ``deadline``
+    (``time.perf_counter()`` s) or more than :data:`MAX_REPAIRS` were needed."""
+    path, repaired = [waypoints[0]], 0
+    for a, b in itertools.pairwise(waypoints):
+        if world.segment_free(a, b, edge_steps(a, b, options.resolution, levers,
+                                               options.max_step)):
+            path.append(b)
+            continue
+        left = deadline - time.perf_counter()
+        if repaired == MAX_REPAIRS or left <= 0:
+            return None, repaired
+        try:
+            sub = plan_path(lower, upper, a, b, state_valid, world.segment_free,
+                            replace(options, time_limit=left), levers)
+        except NoPathError:
+            return None, repaired
+        blocked = _first_blocked(world, sub.waypoints, options, levers)
+        if blocked is not None:  # every edge was checked that densely: a planner defect
+            raise NoPathError(options.planner, options.time_limit,
+                              f"segment {blocked + 1} of a repair is in collision")
+        path.extend(sub.waypoints[1:])
+        repaired += 1
+    return np.array(path), repaired
 
 
 def _first_blocked(world: CollisionWorld, waypoints: Array, options: OmplOptions,
@@ -127,7 +169,7 @@ def plan_to_pose(world: CollisionWorld, ik: IKSolver, start: Array, target: Arra
             last = exc
             continue
         return PtpPlan(plan.waypoints, plan.goal, plan.ompl, time.perf_counter() - begin, k + 1,
-                       plan.dense_replans)
+                       plan.dense_replans, plan.repaired)
     assert last is not None
     raise NoPathError(last.planner, last.time_limit_s,
                       f"none of the {len(result.solutions)} IK solution(s) could be reached")
