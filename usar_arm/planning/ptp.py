@@ -112,8 +112,7 @@ def _repaired(world: CollisionWorld, lower: Array, upper: Array, waypoints: Arra
     (``time.perf_counter()`` s) or more than :data:`MAX_REPAIRS` were needed."""
     path, repaired = [waypoints[0]], 0
     for a, b in itertools.pairwise(waypoints):
-        if world.segment_free(a, b, edge_steps(a, b, options.resolution, levers,
-                                               options.max_step)):
+        if _dense_free(world, a, b, options, levers):
             path.append(b)
             continue
         left = deadline - time.perf_counter()
@@ -137,12 +136,18 @@ def _first_blocked(world: CollisionWorld, waypoints: Array, options: OmplOptions
                    levers: Array) -> int | None:
     """Index of the first segment of ``waypoints`` in collision when checked every
     ``options.resolution`` of joint motion and ``options.max_step`` m of robot motion."""
-    for k in range(len(waypoints) - 1):
-        a, b = waypoints[k], waypoints[k + 1]
-        steps = edge_steps(a, b, options.resolution, levers, options.max_step)
-        if not world.segment_free(a, b, steps):
+    for k, (a, b) in enumerate(itertools.pairwise(waypoints)):
+        if not _dense_free(world, a, b, options, levers):
             return k
     return None
+
+
+def _dense_free(world: CollisionWorld, a: Array, b: Array, options: OmplOptions,
+                levers: Array) -> bool:
+    """True when the segment a -> b is free, checked every ``options.resolution`` of joint
+    motion and ``options.max_step`` m of robot motion (the path check of this module)."""
+    return world.segment_free(a, b, edge_steps(a, b, options.resolution, levers,
+                                               options.max_step))
 
 
 def plan_to_pose(world: CollisionWorld, ik: IKSolver, start: Array, target: Array,
