@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from usar_arm.planning import bounds
+from usar_arm.planning import bounds, gaps
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import BUILTIN, load_scene
@@ -42,6 +42,16 @@ def test_segment_distance_matches_a_dense_scan(v: list[float]) -> None:
     scan = _scan_distance(p1, d1, p2, d2)
     step = (np.linalg.norm(d1) + np.linalg.norm(d2)) / 2000
     assert scan - step - 1e-12 <= got <= scan + 1e-12
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=12, max_size=12), st.integers(0, 1))
+def test_rows_distance_is_segment_distance_read_by_index(v: list[float], row: int) -> None:
+    """The kernels' index-reading form gives the same float, to the bit."""
+    p1, d1, p2, d2 = (np.array(v[k:k + 3]) for k in range(0, 12, 3))
+    seg = np.zeros((4, 3, 3))  # rows (start, direction) at ``2 * row``; bodies 2 and 0
+    seg[2 * row, 2], seg[2 * row + 1, 2], seg[2 * row, 0], seg[2 * row + 1, 0] = p1, d1, p2, d2
+    assert gaps.rows_distance(seg, 2 * row, 2, 0) == bounds.segment_distance(p1, d1, p2, d2)
 
 
 @pytest.mark.parametrize(("p1", "d1", "p2", "d2", "expected"), [

@@ -67,7 +67,7 @@ from usar_arm.planning.bounds_arrays import (
     prepare_obstacles,
 )
 from usar_arm.planning.bounds_scene import CLEAR, CONTACT, UNDECIDED, judge_scene
-from usar_arm.planning.gaps import rim_cylinders_contact, segment_distance
+from usar_arm.planning.gaps import rim_cylinders_contact, rows_distance, segment_distance
 from usar_arm.planning.jit import inline_kernel, kernel
 
 __all__ = [
@@ -179,7 +179,7 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
             end += 1
         gi, gj = int(links[i, GROUP]), int(links[j, GROUP])
         if end - p > 1 and gi >= 0 and gj >= 0:
-            gap = (segment_distance(seg[0, gi], seg[1, gi], seg[0, gj], seg[1, gj])
+            gap = (rows_distance(seg, 0, gi, gj)
                    - links[gi, GROUP_RADIUS] - links[gj, GROUP_RADIUS])
             if gap > eps:
                 closing = 0.0
@@ -192,10 +192,10 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                 continue
         for r in range(p, end):
             i, j = pairs[r, 0], pairs[r, 1]
-            gap = (segment_distance(seg[0, i], seg[1, i], seg[0, j], seg[1, j])
+            gap = (rows_distance(seg, 0, i, j)
                    - links[i, RADIUS] - links[j, RADIUS])
             if gap <= eps:  # proven in contact, or the balls of a mesh body have a look
-                inner = segment_distance(seg[2, i], seg[3, i], seg[2, j], seg[3, j])
+                inner = rows_distance(seg, 2, i, j)
                 if inner < links[i, RHO] + links[j, RHO] - margin or (
                         links[i, SOLID] > 0.5 and links[j, SOLID] > 0.5 and rim_cylinders_contact(
                             seg[5, i], seg[4, i], links[i, RADIUS], links[i, HALF], seg[5, j],
@@ -240,12 +240,13 @@ ball_scratch_kernel = kernel(ball_scratch)
 
 @kernel
 def _still(links: Array) -> tuple[Array, Array]:
-    """``move`` and ``cum`` of :func:`_judge` for a single configuration (ones: its scene gaps
-    are in metres, as the sphere tree's pruning wants; zeros: no closing of body pairs)."""
+    """``move`` and ``cum`` of :func:`_judge` for a single configuration: zeros (nothing moves,
+    so only whether a pair is cleared matters, and the sphere tree prunes every subtree its
+    bound clears by ``eps``; the gaps returned are then inf)."""
     depth = 0
     for k in range(links.shape[0]):
         depth = max(depth, int(links[k, MOVED]))
-    return np.ones(links.shape[0]), np.zeros((links.shape[0], depth + 1))
+    return np.zeros(links.shape[0]), np.zeros((links.shape[0], depth + 1))
 
 
 @kernel

@@ -29,7 +29,7 @@ from usar_arm.planning.bounds_arrays import (
     O_START,
     RADIUS,
 )
-from usar_arm.planning.gaps import point_box_distance, point_segment_distance
+from usar_arm.planning.gaps import xyz_box_distance, xyz_segment_distance
 from usar_arm.planning.jit import inline_kernel
 
 
@@ -58,8 +58,18 @@ def place(world: Array, links: Array, groups: Array, leaves: Array, b: int, wg: 
 
 
 @inline_kernel
-def _apart(p: Array, q: Array) -> float:
-    return math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2 + (p[2] - q[2]) ** 2)
+def _apart(p: Array, i: int, q: Array, j: int) -> float:
+    """Distance (m) between the points ``p[i]`` and ``q[j]`` (read by index: no views)."""
+    return math.sqrt((p[i, 0] - q[j, 0]) ** 2 + (p[i, 1] - q[j, 1]) ** 2
+                     + (p[i, 2] - q[j, 2]) ** 2)
+
+
+@inline_kernel
+def _to_axis(w: Array, g: int, seg: Array, j: int) -> float:
+    """Distance (m) from the point ``w[g]`` to body ``j``'s axis segment (``seg`` as
+    :func:`.bounds._segments`)."""
+    return xyz_segment_distance(w[g, 0], w[g, 1], w[g, 2], seg[0, j, 0], seg[0, j, 1],
+                                seg[0, j, 2], seg[1, j, 0], seg[1, j, 1], seg[1, j, 2])
 
 
 @inline_kernel
@@ -100,29 +110,29 @@ def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Ar
     j_balls = has_balls(links, j)
     r_j = links[j, RADIUS]
     for g in range(int(links[i, COVER_FROM]), int(links[i, COVER_TO])):
-        gap = point_segment_distance(wg[g], seg[0, j], seg[1, j]) - groups[g, 3] - r_j
+        gap = _to_axis(wg, g, seg, j) - groups[g, 3] - r_j
         if gap > eps:
             best = min(best, gap)
             continue
         if not j_balls:
             for m in range(int(groups[g, 4]), int(groups[g, 5])):
-                gap = point_segment_distance(wl[m], seg[0, j], seg[1, j]) - leaves[m, 3] - r_j
+                gap = _to_axis(wl, m, seg, j) - leaves[m, 3] - r_j
                 if gap <= eps:
                     return gap
                 best = min(best, gap)
             continue
         for h in range(int(links[j, COVER_FROM]), int(links[j, COVER_TO])):
-            gap = _apart(wg[g], wg[h]) - groups[g, 3] - groups[h, 3]
+            gap = _apart(wg, g, wg, h) - groups[g, 3] - groups[h, 3]
             if gap > eps:
                 best = min(best, gap)
                 continue
             for m in range(int(groups[g, 4]), int(groups[g, 5])):
-                gap = _apart(wl[m], wg[h]) - leaves[m, 3] - groups[h, 3]
+                gap = _apart(wl, m, wg, h) - leaves[m, 3] - groups[h, 3]
                 if gap > eps:
                     best = min(best, gap)
                     continue
                 for n in range(int(groups[h, 4]), int(groups[h, 5])):
-                    gap = _apart(wl[m], wl[n]) - leaves[m, 3] - leaves[n, 3]
+                    gap = _apart(wl, m, wl, n) - leaves[m, 3] - leaves[n, 3]
                     if gap <= eps:
                         return gap
                     best = min(best, gap)
@@ -130,13 +140,16 @@ def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Ar
 
 
 @inline_kernel
-def _to_obstacle(p: Array, kind: int, o: Array, axes: Array) -> float:
-    """Distance (m) from the point ``p`` to the obstacle (row ``o`` of
+def _to_obstacle(w: Array, g: int, kind: int, o: Array, axes: Array) -> float:
+    """Distance (m) from the point ``w[g]`` to the obstacle (row ``o`` of
     :func:`.bounds_arrays.prepare_obstacles`): its solid box (a mesh's: its bounding box), or
     the capsule around it (a sphere's is the sphere)."""
     if kind == BOX or kind == HULL:
-        return point_box_distance(p, o[O_START:O_START + 3], axes, o[O_SIZE:O_SIZE + 3])
-    return point_segment_distance(p, o[O_START:O_START + 3], o[O_DIR:O_DIR + 3]) - o[O_SIZE]
+        return xyz_box_distance(w[g, 0], w[g, 1], w[g, 2], o[O_START], o[O_START + 1],
+                                o[O_START + 2], axes, o[O_SIZE], o[O_SIZE + 1], o[O_SIZE + 2])
+    return xyz_segment_distance(w[g, 0], w[g, 1], w[g, 2], o[O_START], o[O_START + 1],
+                                o[O_START + 2], o[O_DIR], o[O_DIR + 1],
+                                o[O_DIR + 2]) - o[O_SIZE]
 
 
 @inline_kernel
@@ -146,12 +159,12 @@ def obstacle_gap(b: int, kind: int, o: Array, axes: Array, links: Array, groups:
     obstacle (see :func:`_to_obstacle`); at most ``eps`` as soon as a leaf is."""
     best = math.inf
     for g in range(int(links[b, COVER_FROM]), int(links[b, COVER_TO])):
-        gap = _to_obstacle(wg[g], kind, o, axes) - groups[g, 3]
+        gap = _to_obstacle(wg, g, kind, o, axes) - groups[g, 3]
         if gap > eps:
             best = min(best, gap)
             continue
         for m in range(int(groups[g, 4]), int(groups[g, 5])):
-            gap = _to_obstacle(wl[m], kind, o, axes) - leaves[m, 3]
+            gap = _to_obstacle(wl, m, kind, o, axes) - leaves[m, 3]
             if gap <= eps:
                 return gap
             best = min(best, gap)

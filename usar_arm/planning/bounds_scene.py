@@ -8,11 +8,16 @@ box: HULL), a sphere or a capsule, as :func:`.bounds_arrays.prepare_obstacles` l
 :func:`judge_scene` walks the tree (``tree``, ``nodes``, ``order`` of :func:`.scene_tree.build`,
 ``pair_of`` of :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each
 link visits only the subtrees its bounding sphere comes within the current bound (or ``eps``)
-of; the pairs below the others stay CLEAR. A pair is first bounded by its centre against the
+of, a link that does not move (``move`` 0, as every link of a single configuration) only those
+within ``eps``: what matters for it is whether a pair is cleared, not by how much. The pairs
+below the others stay CLEAR. A pair is first bounded by its centre against the
 solid box (or by two spheres); when that is below ``refine`` units of its link's motion (at
 least ``eps`` m), by the exact cylinder against the box (or the capsules' axes) too. The
-per-pair tests are written out in the loop, not called: a kernel call per pair costs more than
-the test itself.
+per-pair tests are written out in the loop, not called through inlined helpers: a kernel call
+per pair costs more than the test itself. They read the obstacle's row, the body's centre and
+the ball centres by index (the :mod:`.gaps` functions that take coordinates): an array view
+(``obstacles[s]``, a slice) costs a reference count to make and one to drop, about as much as
+the test it feeds.
 
 A link whose bodies form a group (``GROUP``, ``NEXT``) walks the tree once, with the cylinder
 around them all (the group body's axis, ``GROUP_RADIUS``); an obstacle that this cylinder clears
@@ -63,6 +68,7 @@ from usar_arm.planning.gaps import (
     rim_box_contact,
     rim_cylinders_contact,
     segment_distance,
+    xyz_box_distance,
 )
 from usar_arm.planning.jit import inline_kernel
 
@@ -105,8 +111,8 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
             bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
                                + (seg[5, i, 1] - tree[nd, 1]) ** 2
                                + (seg[5, i, 2] - tree[nd, 2]) ** 2) - tree[nd, 3] - bound_g)
-            if bound > max(scene_gap * move_g, eps):
-                continue  # every pair below is farther apart than the bound already found
+            if bound > (max(scene_gap * move_g, eps) if move_g > 0.0 else eps):
+                continue  # every pair below is cleared, and farther apart than any bound found
             if nodes[nd, 0] >= 0:
                 stack[top], stack[top + 1] = nodes[nd, 0], nodes[nd, 1]
                 top += 2
@@ -116,7 +122,6 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                 if pair_of[i, s] < 0:
                     continue
                 # First the group's cylinder (when grouped), then each body b from the first.
-                o = obstacles[s]
                 whole = grouped
                 b = i
                 while b >= 0:
@@ -126,25 +131,31 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                         radius, bounding, mv = links[b, RADIUS], links[b, BOUND], move[b]
                     near = max(eps, refine * mv)
                     if kind[s] == BOX or kind[s] == HULL:  # the centre against the solid box
-                        gap = (point_box_distance(seg[5, b], o[O_START:O_START + 3], axes[s],
-                                                  o[O_SIZE:O_SIZE + 3]) - bounding)
+                        gap = xyz_box_distance(
+                            seg[5, b, 0], seg[5, b, 1], seg[5, b, 2], obstacles[s, O_START],
+                            obstacles[s, O_START + 1], obstacles[s, O_START + 2], axes[s],
+                            obstacles[s, O_SIZE], obstacles[s, O_SIZE + 1],
+                            obstacles[s, O_SIZE + 2]) - bounding
                         if gap <= near:
+                            o = obstacles[s]
                             gap = max(gap, cylinder_box_gap(
                                 seg[5, b], seg[4, b], radius, links[b, HALF],
                                 o[O_START:O_START + 3], axes[s], o[O_SIZE:O_SIZE + 3], cand))
                     else:
-                        gap = (math.sqrt((seg[5, b, 0] - o[O_CENTRE]) ** 2
-                                         + (seg[5, b, 1] - o[O_CENTRE + 1]) ** 2
-                                         + (seg[5, b, 2] - o[O_CENTRE + 2]) ** 2)
-                               - bounding - o[O_BOUND])
+                        gap = (math.sqrt((seg[5, b, 0] - obstacles[s, O_CENTRE]) ** 2
+                                         + (seg[5, b, 1] - obstacles[s, O_CENTRE + 1]) ** 2
+                                         + (seg[5, b, 2] - obstacles[s, O_CENTRE + 2]) ** 2)
+                               - bounding - obstacles[s, O_BOUND])
                         if gap <= near:
+                            o = obstacles[s]
                             gap = max(gap, segment_distance(
                                 seg[0, b], seg[1, b], o[O_START:O_START + 3],
                                 o[O_DIR:O_DIR + 3]) - radius - o[O_SIZE])
-                        if gap <= near and kind[s] == CAPSULE:  # the box about the cylinder
-                            gap = max(gap, cylinder_box_gap(
-                                seg[5, b], seg[4, b], radius, links[b, HALF],
-                                o[O_CENTRE:O_CENTRE + 3], axes[s], o[O_BOX:O_BOX + 3], cand))
+                            if gap <= near and kind[s] == CAPSULE:  # the box about the cylinder
+                                gap = max(gap, cylinder_box_gap(
+                                    seg[5, b], seg[4, b], radius, links[b, HALF],
+                                    o[O_CENTRE:O_CENTRE + 3], axes[s], o[O_BOX:O_BOX + 3],
+                                    cand))
                     if gap > eps:
                         if mv > 0.0:
                             scene_gap = min(scene_gap, gap / mv)
@@ -153,8 +164,8 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                         whole = False  # each body on its own, from the first (b == i)
                     else:  # a mesh body's balls have a look, else FCL decides
                         scene_gap = _second_look(seg, world, links, groups, leaves, b, kind[s],
-                                                 o, axes[s], eps, margin, mv, scene_gap, out,
-                                                 pair_of[b, s], scratch, balls)
+                                                 obstacles[s], axes[s], eps, margin, mv,
+                                                 scene_gap, out, pair_of[b, s], scratch, balls)
                         b = int(links[b, NEXT]) if grouped else -1
     return scene_gap
 

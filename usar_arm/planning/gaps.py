@@ -20,10 +20,28 @@ def _dot(a: Array, b: Array) -> float:
 def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
     """Distance (m) between the segments p1 + s d1 and p2 + t d2, s, t in [0, 1]
     (closest points of two segments, Ericson, Real-Time Collision Detection 5.1.9)."""
-    r0, r1, r2 = p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2]
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    f = d2[0] * r0 + d2[1] * r1 + d2[2] * r2
+    return _segments_apart(p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2], d1[0], d1[1], d1[2],
+                           d2[0], d2[1], d2[2])
+
+
+@kernel
+def rows_distance(seg: Array, row: int, i: int, j: int) -> float:
+    """:func:`segment_distance` between the segments of bodies ``i`` and ``j`` in ``seg``
+    (R, L, 3): starts in row ``row``, directions in row ``row + 1``. Read by index, so that a
+    kernel's inner loop makes no array views (each costs a reference count)."""
+    return _segments_apart(seg[row, i, 0] - seg[row, j, 0], seg[row, i, 1] - seg[row, j, 1],
+                           seg[row, i, 2] - seg[row, j, 2], seg[row + 1, i, 0],
+                           seg[row + 1, i, 1], seg[row + 1, i, 2], seg[row + 1, j, 0],
+                           seg[row + 1, j, 1], seg[row + 1, j, 2])
+
+
+@kernel
+def _segments_apart(r0: float, r1: float, r2: float, u0: float, u1: float, u2: float,
+                    v0: float, v1: float, v2: float) -> float:
+    """:func:`segment_distance` from p1 - p2 = (r0, r1, r2), d1 = u and d2 = v."""
+    a = u0 * u0 + u1 * u1 + u2 * u2
+    e = v0 * v0 + v1 * v1 + v2 * v2
+    f = v0 * r0 + v1 * r1 + v2 * r2
     tiny = 1e-300  # only a true zero length is a point: a 1e-9 m segment still counts
     if a <= tiny and e <= tiny:
         return math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
@@ -31,12 +49,12 @@ def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
         s = 0.0
         t = min(max(f / e, 0.0), 1.0)
     else:
-        c = d1[0] * r0 + d1[1] * r1 + d1[2] * r2
+        c = u0 * r0 + u1 * r1 + u2 * r2
         if e <= tiny:
             t = 0.0
             s = min(max(-c / a, 0.0), 1.0)
         else:
-            b = _dot(d1, d2)
+            b = u0 * v0 + u1 * v1 + u2 * v2
             denom = a * e - b * b
             s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > tiny else 0.0
             t = (b * s + f) / e
@@ -46,9 +64,9 @@ def segment_distance(p1: Array, d1: Array, p2: Array, d2: Array) -> float:
             elif t > 1.0:
                 t = 1.0
                 s = min(max((b - c) / a, 0.0), 1.0)
-    x = r0 + d1[0] * s - d2[0] * t
-    y = r1 + d1[1] * s - d2[1] * t
-    z = r2 + d1[2] * s - d2[2] * t
+    x = r0 + u0 * s - v0 * t
+    y = r1 + u1 * s - v1 * t
+    z = r2 + u2 * s - v2 * t
     return math.sqrt(x * x + y * y + z * z)
 
 
@@ -93,23 +111,39 @@ def cylinder_box_gap(c: Array, z: Array, r: float, h: float, b_centre: Array,
 @kernel
 def point_segment_distance(p: Array, start: Array, d: Array) -> float:
     """Distance (m) from the point ``p`` to the segment start + t d, t in [0, 1]."""
-    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-    x, y, z = p[0] - start[0], p[1] - start[1], p[2] - start[2]
+    return xyz_segment_distance(p[0], p[1], p[2], start[0], start[1], start[2], d[0], d[1], d[2])
+
+
+@kernel
+def xyz_segment_distance(p0: float, p1: float, p2: float, s0: float, s1: float, s2: float,
+                         d0: float, d1: float, d2: float) -> float:
+    """:func:`point_segment_distance` from coordinates: kernels call it in their inner loops
+    with values read by index, making no array views (each costs a reference count)."""
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    x, y, z = p0 - s0, p1 - s1, p2 - s2
     t = 0.0
     if dd > 0.0:
-        t = min(max((x * d[0] + y * d[1] + z * d[2]) / dd, 0.0), 1.0)
-    x, y, z = x - t * d[0], y - t * d[1], z - t * d[2]
+        t = min(max((x * d0 + y * d1 + z * d2) / dd, 0.0), 1.0)
+    x, y, z = x - t * d0, y - t * d1, z - t * d2
     return math.sqrt(x * x + y * y + z * z)
 
 
 @kernel
 def point_box_distance(x: Array, centre: Array, axes: Array, half: Array) -> float:
     """Distance (m) from the point ``x`` to the solid box (0 inside)."""
+    return xyz_box_distance(x[0], x[1], x[2], centre[0], centre[1], centre[2], axes, half[0],
+                            half[1], half[2])
+
+
+@kernel
+def xyz_box_distance(x0: float, x1: float, x2: float, c0: float, c1: float, c2: float,
+                     axes: Array, h0: float, h1: float, h2: float) -> float:
+    """:func:`point_box_distance` from coordinates (as :func:`xyz_segment_distance`): the
+    point, the box's centre, its axes as rows (3, 3) and its half extents."""
     total = 0.0
     for a in range(3):
-        u = axes[a]
-        t = abs((x[0] - centre[0]) * u[0] + (x[1] - centre[1]) * u[1]
-                + (x[2] - centre[2]) * u[2]) - half[a]
+        t = abs((x0 - c0) * axes[a, 0] + (x1 - c1) * axes[a, 1] + (x2 - c2) * axes[a, 2])
+        t -= h0 if a == 0 else (h1 if a == 1 else h2)
         if t > 0.0:
             total += t * t
     return math.sqrt(total)
