@@ -8,8 +8,11 @@ from __future__ import annotations
 import functools
 import json
 import logging
+import os
+import socket
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -43,6 +46,12 @@ def local_ray() -> Iterator[None]:
              object_store_memory=256 * 2**20)
     yield
     ray.shutdown()
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
 
 
 def _squares_job(work: object, key: str, folder: Path, chunks: int = 6) -> Job:
@@ -209,5 +218,55 @@ def test_an_address_that_accepts_tcp_but_is_no_ray_head_fails_within_the_timeout
     took = time.perf_counter() - begin
     assert done.returncode == EXIT_UNAVAILABLE, done.stderr[-2000:]
     assert "10.255.255.1:6379" in done.stderr and "waited 1 s" in done.stderr
+    assert "RAY_AUTH_MODE=token" in done.stderr  # (the port answered: it may be a token head)
     assert took < 12.0  # measured 4.6 s with start-up; Ray left unbounded waits 20 s
     assert not (tmp_path / "reach.npz").exists()
+
+
+@pytest.mark.slow
+def test_a_head_with_token_authentication_is_joined_in_token_mode_and_named_without(
+        tmp_path: Path) -> None:
+    """A head started by ``ray start`` with token authentication (a token of its own, a
+    temporary folder of its own, so no other test's ``auto`` finds it): a command not in token
+    mode is refused with the setting it lacks named, one in token mode joins it."""
+    bin_dir = Path(sys.executable).parent
+    token = tmp_path / "token"
+    token.write_text("usar-arm-test-" + "0123456789abcdef" * 2)
+    env = {**os.environ, "RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN_PATH": str(token)}
+    env.pop("RAY_ADDRESS", None)
+    port = _free_port()
+    with tempfile.TemporaryDirectory(prefix="ray", dir="/tmp") as temp:  # (short: sockets)
+        head = subprocess.Popen(
+            [str(bin_dir / "ray"), "start", "--head", "--block", f"--port={port}",
+             "--num-cpus=1", "--include-dashboard=false", f"--temp-dir={temp}"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            _wait_for_port(port, head, 180.0)
+            command = [str(bin_dir / "usar-arm"), "reach", "--urdf", URDF, *SMALL, "-q",
+                       "--ray", f"127.0.0.1:{port}", "--ray-timeout", "3"]
+            plain = {k: v for k, v in env.items() if not k.startswith("RAY_AUTH")}
+            refused = subprocess.run([*command, "--out", str(tmp_path / "refused")], env=plain,
+                                     capture_output=True, text=True, timeout=180, check=False)
+            assert refused.returncode == EXIT_UNAVAILABLE, refused.stderr[-2000:]
+            assert "RAY_AUTH_MODE=token" in refused.stderr.strip().splitlines()[-1]
+            assert not (tmp_path / "refused" / "reach.npz").exists()
+            joined = subprocess.run([*command, "--out", str(tmp_path / "joined")], env=env,
+                                    capture_output=True, text=True, timeout=300, check=False)
+            assert joined.returncode == 0, joined.stderr[-2000:]
+            assert (tmp_path / "joined" / "reach.npz").exists()
+        finally:
+            head.terminate()  # (--block: the head stops its cluster's processes on SIGTERM)
+            head.wait(timeout=120)
+
+
+def _wait_for_port(port: int, process: subprocess.Popen[bytes], limit: float) -> None:
+    """Until something listens on ``port`` of this host (at most ``limit`` s)."""
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline:
+        assert process.poll() is None, f"ray start exited with {process.returncode}"
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1.0).close()
+            return
+        except OSError:
+            time.sleep(0.5)
+    raise AssertionError(f"nothing listened on port {port} within {limit:g} s")

@@ -123,6 +123,18 @@ def _send_the_token() -> None:
     _enable_token_auth()
 
 
+def _token_hint(answered: bool) -> str:
+    """What to try when an address whose port answers did not take this process: Ray's own
+    message says only that it failed to connect, and a head started with token authentication
+    refuses every process that does not send the token (Ray's log lines then say
+    "InvalidAuthToken")."""
+    if not answered or os.environ.get(AUTH_VARIABLE, "").lower() == "token":
+        return ""
+    return (f"; if it is a Ray head with token authentication, this process must send the "
+            f"token: set {AUTH_VARIABLE}=token, with the cluster's token in RAY_AUTH_TOKEN, "
+            f"RAY_AUTH_TOKEN_PATH or ~/.ray/auth_token")
+
+
 def _stop(disconnect: bool, head: LocalHead | None) -> None:
     """Leave the instance (and, for ``local``, tell its process to stop it: it does so by
     itself, and the next start waits for it, not the end of this process)."""
@@ -310,7 +322,7 @@ class RayBackend:
         except (ConnectionError, RuntimeError, ValueError) as exc:
             raise ClusterUnavailableError(
                 self.address, f"{str(exc).splitlines()[0]} (waited {self.timeout:g} s)"
-            ) from None
+                              f"{_token_hint(answered=target is not None)}") from None
         finally:
             if wait:
                 del os.environ[WAIT_VARIABLE]
