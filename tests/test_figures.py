@@ -38,6 +38,9 @@ def results(tmp_path: Path) -> Path:
     ("execution.json#/cases/udk wire, no correction/runs | max", "3"),
     ("execution.json#/cases/udk wire, no correction/runs/1", "1"),
     ("execution.json#/cases/* | len", "2"),
+    ("execution.json#/cases/calibrated/max_m | /#/cases/udk wire, no correction/max_m | .4f",
+     "0.0369"),
+    ("execution.json#/cases/calibrated/max_m | inv | .0f", "12376"),
 ])
 def test_a_spec_reads_a_pointer_and_applies_its_steps(results: Path, spec: str,
                                                        text: str) -> None:

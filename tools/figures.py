@@ -7,7 +7,8 @@ it comes from:
 
 ``FILE#/a/b/c`` is a JSON pointer into ``bench/results/FILE`` (``*`` expands every item of a list
 or every value of an object); then each ``|`` step: ``max``, ``min``, ``mean``, ``first``, ``len``,
-``*K`` (multiply), ``/K`` (divide), and last a format (``.2f``, ``.3g``, ``,.0f``, ``.1%``). The
+``*K`` (multiply), ``/K`` (divide), ``/#/d/e`` (divide by the value at another pointer of the
+same file), ``inv`` (1/x), and last a format (``.2f``, ``.3g``, ``,.0f``, ``.1%``). The
 markers are HTML comments: invisible on GitHub and in the docs site.
 
 ``python tools/figures.py`` lists the figures that differ from the results (exit 1 when any
@@ -63,10 +64,11 @@ def evaluate(spec: str, results: Path = RESULTS) -> str:
     """The text of a figure from its spec (see the module's docstring)."""
     source, *steps = [s.strip() for s in spec.split("|")]
     name, _, pointer = source.partition("#")
-    values: Any = _pointer(json.loads((results / name).read_text()), pointer)
+    doc = json.loads((results / name).read_text())
+    values: Any = _pointer(doc, pointer)
     value: Any = values[0] if len(values) == 1 else values
     fmt = steps.pop() if steps and not steps[-1].startswith(("*", "/")) and steps[-1] not in (
-        "max", "min", "mean", "first", "len") else ""
+        "max", "min", "mean", "first", "len", "inv") else ""
     for step in steps:
         if step in ("max", "min"):
             value = (max if step == "max" else min)(value)
@@ -76,6 +78,10 @@ def evaluate(spec: str, results: Path = RESULTS) -> str:
             value = value[0]
         elif step == "len":
             value = len(value)
+        elif step == "inv":
+            value = 1.0 / value
+        elif step.startswith("/#"):
+            value = value / _pointer(doc, step[2:])[0]
         elif step.startswith("*"):
             value = value * float(step[1:])
         elif step.startswith("/"):
