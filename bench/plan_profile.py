@@ -4,11 +4,12 @@ with the collision world's entry points wrapped in timers.
     python bench/plan_profile.py PROBLEMS.json RESULTS.json
 
 Stages (seconds per plan, mean over the problems): state checks (``in_collision``, OMPL's state
-validity), edge checks in the compiled walk (``bounds.walk``: forward kinematics, bounding-volume
-verdicts, clearance skipping), edge checks in python-fcl (``ExactJudge.undecided`` on the
-configurations the walk left undecided), and the rest (OMPL's own search and simplification,
-the Python glue between them). The wrappers cost a little themselves, so the total is a bit
-above the timed stage's; the shares are what this table is for.
+validity), edge checks in the compiled walk (``bounds_walk.walk``: forward kinematics,
+bounding-volume verdicts, clearance skipping), edge checks in python-fcl
+(``ExactJudge.undecided`` on the configurations the walk left undecided), and the rest (OMPL's
+own search and simplification, the Python glue between them). The wrappers cost a little
+themselves, so the total is a bit above the timed stage's; the shares are what this table is
+for.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 from scenes import from_json as scene_from_json
 
 from usar_arm.core.errors import UsarArmError
-from usar_arm.planning import bounds, collision, exact
+from usar_arm.planning import bounds_walk, collision, exact
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import plan_to_joints
 from usar_arm.planning.robot import robot_from_files
@@ -49,7 +50,7 @@ def profile(spec: dict[str, Any]) -> dict[str, Any]:
     options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
     worlds = {n: robot.collision_world(scene_from_json(n, s)) for n, s in spec["scenes"].items()}
     spent = dict.fromkeys(STAGES, 0.0)
-    originals = (collision.CollisionWorld.in_collision, bounds.walk,
+    originals = (collision.CollisionWorld.in_collision, bounds_walk.walk,
                  exact.ExactJudge.undecided)
 
     def solve_all() -> float:
@@ -72,12 +73,12 @@ def profile(spec: dict[str, Any]) -> dict[str, Any]:
 
     solve_all()  # warm: lazy models, compiled kernels loaded
     collision.CollisionWorld.in_collision = state_check  # type: ignore[method-assign]
-    bounds.walk = _timed(spent, STAGES[1], originals[1])
+    bounds_walk.walk = _timed(spent, STAGES[1], originals[1])
     exact.ExactJudge.undecided = _timed(spent, STAGES[2], originals[2])  # type: ignore
     try:
         total = solve_all()
     finally:
-        (collision.CollisionWorld.in_collision, bounds.walk,
+        (collision.CollisionWorld.in_collision, bounds_walk.walk,
          exact.ExactJudge.undecided) = originals  # type: ignore[method-assign]
     n = len(spec["problems"])
     rows = {name: seconds / n for name, seconds in spent.items()}

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from usar_arm.planning import bounds, gaps
+from usar_arm.planning import bounds, bounds_walk, gaps
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
 from usar_arm.planning.scene_file import BUILTIN, load_scene
@@ -272,12 +272,18 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
     assert (grouped_verdicts == alone_verdicts).all()
     assert (grouped_verdicts != CLEAR).any()
     levers = np.ascontiguousarray(world._compiled.link_levers())
+
+    def decide(poses: np.ndarray, row: np.ndarray) -> bool:
+        return bool(world._decide(poses, row, stop_at_first=True))
+
     hits = 0
     for a, b in zip(qs[:150], qs[150:300], strict=True):
-        grouped = bounds.walk(a, b, 200, levers, *packed, bounds.EPS, bounds.MARGIN)
-        single = bounds.walk(a, b, 200, levers, *alone, bounds.EPS, bounds.MARGIN)
+        grouped = bounds_walk.segment_free(a, b, 200, levers, packed, bounds.EPS, bounds.MARGIN,
+                                           decide)
+        single = bounds_walk.segment_free(a, b, 200, levers, tuple(alone), bounds.EPS,
+                                          bounds.MARGIN, decide)
         assert grouped[0] == single[0], (a.tolist(), b.tolist())
-        hits += grouped[0] >= 0
+        hits += not grouped[0]
     assert hits > 0
 
 

@@ -18,7 +18,6 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from usar_arm.core.shapes import Box, Capsule, Mesh, Sphere
-from usar_arm.planning.collision import PROBE_STRIDE, probe_order
 from usar_arm.planning.element_fit import bounding_cylinder
 from usar_arm.planning.robot import robot_from_files
 from usar_arm.planning.scene import Scene, SceneObject
@@ -204,8 +203,8 @@ def test_a_segment_walk_of_a_mesh_arm_answers_as_checking_every_configuration(
 
 def test_a_segment_among_obstacles_answers_as_checking_every_configuration(
         tmp_path: Path) -> None:
-    """Long segments among obstacles, where the coarse-to-fine probes run before the walk
-    (:data:`~usar_arm.planning.collision.PROBE_STRIDE`): the same answer as checking all."""
+    """Long segments among obstacles, which the walk checks coarse to fine: the same answer as
+    checking all."""
     urdf, srdf = write_robot(tmp_path)
     robot = robot_from_files(urdf, srdf)
     scene = Scene("test", (SceneObject("table", Box((1.0, 1.0, 0.04)), _pose(0.0, 0.0, -0.02),
@@ -214,7 +213,7 @@ def test_a_segment_among_obstacles_answers_as_checking_every_configuration(
     world = robot.collision_world(scene)
     rng = np.random.default_rng(5)
     lo, hi = robot.chain.lower(), robot.chain.upper()
-    steps = 12 * PROBE_STRIDE + 5
+    steps = 101
     blocked = 0
     for _ in range(150):
         a = rng.uniform(lo, hi)
@@ -223,13 +222,6 @@ def test_a_segment_among_obstacles_answers_as_checking_every_configuration(
         blocked += bool(every.any())
         assert world.segment_free(a, b, steps) == (not every.any())
     assert 15 < blocked < 135
-
-
-@given(st.integers(1, 300))
-def test_the_probes_visit_every_inner_index_once_the_middle_first(m: int) -> None:
-    order = probe_order(m)
-    assert sorted(order) == list(range(1, m))
-    assert not order or order[0] == m // 2
 
 
 def test_threads_querying_one_world_get_the_answers_of_one_thread(tmp_path: Path) -> None:

@@ -24,8 +24,9 @@ shapes, with a margin of ``EPS`` metres against rounding:
 * a mesh body's pair that its cylinder leaves undecided: the balls around its surface, all
   apart from the other body (:mod:`.bounds_balls`).
 
-In a walk, a body-obstacle pair closes by how far the body's points move per step, a body-body
-pair only by the joints between the two bodies (:func:`_closing`).
+In a segment's walk (:mod:`.bounds_walk`), a body-obstacle pair closes by how far the body's
+points move per step, a body-body pair only by the joints between the two bodies
+(:func:`_closing`).
 
 Forward kinematics is the product of exponentials of the chain's joints (space frame), the same
 representation as :mod:`.poe`; Pinocchio stays the reference it is tested against.
@@ -93,7 +94,6 @@ __all__ = [
     "pack",
     "segment_distance",
     "summary",
-    "walk",
     "warm_up",
 ]
 
@@ -101,8 +101,8 @@ VerdictArray = np.ndarray[Any, np.dtype[np.int8]]
 """Per-pair verdicts (CLEAR, CONTACT, UNDECIDED)."""
 
 REFINE = 8.0
-"""In a walk, a pair whose quick clearance bound would skip fewer than this many steps gets the
-tighter (and costlier) bound too."""
+"""In a segment's walk, a pair whose quick clearance bound would skip fewer than this many
+steps gets the tighter (and costlier) bound too."""
 EPS = 1e-9
 """Safety margin (m): a pair is cleared only when separated by more than this."""
 MARGIN = 1e-4
@@ -350,83 +350,8 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
     return _row_verdict(row)
 
 
-@kernel
-def walk(a: Array, b: Array, steps: int, levers: Array, joints: Array, zero: Array,
-         links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
-         axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-         groups: Array, leaves: Array, eps: float, margin: float
-         ) -> tuple[int, int, IndexArray, Array, VerdictArray]:
-    """Walk the joint-space segment a -> b (n,) through its ``steps + 1`` evenly spaced
-    configurations, skipping those that the clearance already proves free.
-
-    At a configuration whose pairs are all cleared, each pair's clearance bound divided by how
-    far the pair can close per step (its link's motion, or both links' for a link-link pair;
-    ``levers`` (n, L): m per unit of joint j for the points of link cylinder k, see
-    ``CollisionWorld.link_levers``) says how many next configurations cannot bring it into
-    contact; the smallest over the pairs is skipped. Configurations with a pair left undecided
-    are not skipped past.
-
-    Returns:
-        The index of the first configuration with a proven contact (-1: none), how many
-        configurations were evaluated, and the undecided ones in order: their indices (U,),
-        link poses (U, L, 3, 4) and verdicts (U, P + Q), for the exact judge.
-    """
-    n, n_link, n_pairs = a.shape[0], zero.shape[0], pairs.shape[0]
-    move = np.zeros(n_link)  # per link, how far its points move per step (m)
-    cum = np.zeros((n_link, n + 1))  # ... by the first j joints
-    for k in range(n_link):
-        for j in range(n):
-            cum[k, j + 1] = cum[k, j] + levers[j, k] * abs(b[j] - a[j]) / steps
-        move[k] = cum[k, n]
-    motion = 0.0
-    for k in range(n_link):
-        motion = max(motion, move[k])
-    q = np.empty(n)
-    frames = np.empty((n + 1, 3, 4))
-    world = np.empty((n_link, 3, 4))
-    seg = np.empty((6, n_link, 3))
-    cand = np.empty((8, 3))
-    scratch = np.empty(3)
-    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
-    balls = ball_scratch_kernel(links, groups, leaves)
-    row = np.zeros(n_pairs, dtype=np.int8)
-    where = np.empty(steps + 1, dtype=np.int64)
-    poses = np.empty((steps + 1, n_link, 3, 4))
-    verdicts = np.empty((steps + 1, n_pairs), dtype=np.int8)
-    count = evaluated = 0
-    k = 0
-    while k <= steps:
-        f = k / steps
-        for j in range(n):
-            q[j] = a[j] + (b[j] - a[j]) * f
-        poses_into(q, joints, zero, links, frames, world)
-        _segments(world, links, seg)
-        self_gap, scene_gap = _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes,
-                                     tree, nodes, order, pair_of, groups, leaves, eps, margin,
-                                     move, cum, REFINE, row, cand, scratch, stack, balls)
-        evaluated += 1
-        undecided = False
-        for p in range(n_pairs):
-            if row[p] == CONTACT:
-                return k, evaluated, where[:count], poses[:count], verdicts[:count]
-            if row[p] == UNDECIDED:
-                undecided = True
-        if undecided:
-            where[count] = k
-            poses[count] = world
-            verdicts[count] = row
-            count += 1
-            k += 1
-            continue
-        if motion <= 0.0:
-            break  # a == b: every configuration is this one
-        free = min(scene_gap, self_gap)  # steps that cannot bring any pair into contact
-        k += 1 + int(min(free * (1.0 - 1e-9), steps + 1.0))
-    return -1, evaluated, where[:count], poses[:count], verdicts[:count]
-
-
 def warm_up() -> None:
-    """Compile :func:`check`, :func:`summary` and :func:`walk` for the argument types the
+    """Compile :func:`check` and :func:`summary` for the argument types the
     collision world passes (numba caches the machine code on disk, so later processes load it
     instead of compiling for ~20 s).
     Run once after installing (``make demo`` and ``make test`` do):
@@ -438,6 +363,3 @@ def warm_up() -> None:
                   np.array([[0.5, 0.5, 0.5]]))
     check(np.zeros((1, 1)), *packed, EPS, MARGIN)
     summary(np.zeros(1), np.empty((1, 3, 4)), np.empty(1, np.int8), *packed, EPS, MARGIN)
-    levers = np.ones((1, 1))
-    levers.setflags(write=False)  # the collision world hands its cached levers over read-only
-    walk(np.zeros(1), np.ones(1), 4, levers, *packed, EPS, MARGIN)

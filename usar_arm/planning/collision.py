@@ -12,8 +12,6 @@ reference the compiled path is tested against.
 from __future__ import annotations
 
 import copy
-import functools
-from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -35,29 +33,6 @@ from usar_arm.planning.scene import EMPTY, Scene
 from usar_arm.planning.verdicts import CompiledVerdicts
 
 Pair = tuple[str, str]
-
-PROBE_STRIDE = 8
-"""Least steps between the configurations :meth:`CollisionWorld.segment_free` checks first,
-coarse to fine, on an arm whose bounding volumes cannot prove a contact (meshes, boxes)."""
-PROBES = 16
-"""At most this many probes on a segment (the stride grows on long ones): on a free segment,
-the walk that follows skips most configurations, so probing them all would cost more than it."""
-
-
-@functools.lru_cache(maxsize=256)
-def probe_order(m: int) -> tuple[int, ...]:
-    """1 .. m - 1 coarse to fine: the middle of 0 .. m first, then the middles of its halves,
-    breadth first."""
-    out: list[int] = []
-    spans = deque([(0, m)])
-    while spans:
-        lo, hi = spans.popleft()
-        mid = (lo + hi) // 2
-        if lo < mid < hi:
-            out.append(mid)
-            spans.extend(((lo, mid), (mid, hi)))
-    return tuple(out)
-
 
 def pair(a: str, b: str) -> Pair:
     """A link/object pair in canonical (sorted) order."""
@@ -160,7 +135,6 @@ class CollisionWorld:
         self._exact = ExactJudge([b.shape for b in bodies], [b.to_shape for b in bodies],
                                  self._radius, self._half, scene)
         self._levers: Array | None = None
-        self._probes = not all(b.exact for b in bodies)
         disabled = {pair(a, b) for a, b in disabled}
         self.never = set(never) if never is not None else self._prove_never(disabled)
         self.set_disabled(disabled)
@@ -346,40 +320,15 @@ class CollisionWorld:
         """True when none of the ``steps + 1`` evenly spaced configurations from ``a`` to ``b``
         (both included) is in collision: the answer of checking every one of them.
 
-        The compiled walk (:func:`.bounds.walk`) skips configurations that the clearance at
-        an earlier one proves free (a continuous guarantee between them), stops at a proven
-        contact, and leaves the undecided ones to FCL, in order. Where the bounding volumes
-        cannot prove a contact (meshes, boxes), the walk would cross a blocked segment to its
-        end before FCL finds the contact: every :data:`PROBE_STRIDE`-th configuration (at most
-        :data:`PROBES` of them) is checked first, coarse to fine, so a blocked segment ends at
-        its first probe in contact.
+        The compiled walk (:mod:`.bounds_walk`) checks them coarse to fine (the ends, the
+        middle, the quarters...), each evaluated configuration proving free those within its
+        clearance on both sides, so a blocked segment ends at one of its first evaluations and
+        a free one needs few; a configuration it leaves undecided goes to FCL at once.
         """
         if steps < 1:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
-        if self._probes and steps >= 2 * PROBE_STRIDE and self._probe_hits(a, b, steps):
-            return False
-        hit, poses, verdicts = self._compiled.walk(a, b, steps)
-        if hit >= 0:
-            return False
-        return not any(self._decide(p, v, stop_at_first=True)
-                       for p, v in zip(poses, verdicts, strict=True))
-
-    def _probe_hits(self, a: Array, b: Array, steps: int) -> bool:
-        """True when one of the segment's probes (every :data:`PROBE_STRIDE`-th configuration,
-        or sparser so that there are at most :data:`PROBES`) is in collision (checked coarse
-        to fine, stopping at the first). The compiled verdicts run on batches of 1, 2, 4...
-        probes: most blocked segments end at the first probes."""
-        stride = max(PROBE_STRIDE, -(-steps // PROBES))
-        ks = np.array(probe_order(steps // stride)) * stride
-        start, size = 0, 1
-        while start < len(ks):
-            chunk = ks[start:start + size]
-            world, verdicts = self.bounded_poses(a + (b - a) * (chunk / steps)[:, None])
-            if any(row.any() and self._decide(poses, row, stop_at_first=True)
-                   for poses, row in zip(world, verdicts, strict=True)):
-                return True
-            start, size = start + size, 2 * size
-        return False
+        return self._compiled.segment_free(
+            a, b, steps, lambda poses, row: bool(self._decide(poses, row, stop_at_first=True)))[0]
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""

@@ -10,13 +10,14 @@ from __future__ import annotations
 import copy
 import itertools
 import threading
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
-from usar_arm.planning import bounds
+from usar_arm.planning import bounds, bounds_walk
 from usar_arm.planning.bounds import IndexArray
 from usar_arm.planning.bounds_arrays import Cover
 from usar_arm.planning.poe import PoeModel
@@ -200,14 +201,14 @@ class CompiledVerdicts:
         verdict = bounds.summary(_plain(q), world, row, *self._packed, bounds.EPS, bounds.MARGIN)
         return int(verdict), world, row
 
-    def walk(self, a: Array, b: Array, steps: int
-             ) -> tuple[int, Array, NDArray[np.int8]]:
-        """:func:`.bounds.walk` from ``a`` to ``b``: the first configuration in proven contact
-        (-1 if none) and the poses and verdicts of those left undecided, in order."""
-        hit, _, _, poses, verdicts = bounds.walk(
-            _plain(a), _plain(b),
-            int(steps), self.link_levers(), *self._packed, bounds.EPS, bounds.MARGIN)
-        return int(hit), poses, verdicts
+    def segment_free(self, a: Array, b: Array, steps: int,
+                     in_contact: Callable[[Array, NDArray[np.int8]], bool]) -> tuple[bool, int]:
+        """:func:`.bounds_walk.segment_free` from ``a`` to ``b``: whether every one of the
+        ``steps + 1`` configurations is free, ``in_contact(poses, verdicts)`` deciding those
+        the bounding volumes leave undecided as they come (coarse to fine); and how many
+        configurations the compiled walk evaluated."""
+        return bounds_walk.segment_free(_plain(a), _plain(b), int(steps), self.link_levers(),
+                                        self._packed, bounds.EPS, bounds.MARGIN, in_contact)
 
     def link_levers(self) -> Array:
         """Per actuated joint and link cylinder (n, L), how far any point of cylinder k moves

@@ -1,0 +1,182 @@
+"""The compiled segment walk (usar_arm.planning.bounds_walk): the motion it bounds a body by at a
+configuration holds over its horizon (judged by Pinocchio's poses, not the kernel's), it checks
+coarse to fine, and it hands each undecided configuration to the exact judge as it comes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from usar_arm.planning import bounds, bounds_walk
+from usar_arm.planning.bounds_arrays import MOVED, poses_into
+from usar_arm.planning.robot import Robot, robot_from_files
+from usar_arm.planning.scene import Box, Scene, SceneObject, Sphere
+
+from ..urdf.mesh_robot import write_robot
+
+RIM = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
+
+
+def _pose(x: float, y: float, z: float) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def _rims(world: object) -> np.ndarray:
+    """(L, 32, 4) homogeneous points on each body cylinder's two rims, in its own frame."""
+    radius, half = world._radius, world._half  # type: ignore[attr-defined]
+    points = np.ones((len(radius), 2 * len(RIM), 4))
+    for k, (r, h) in enumerate(zip(radius, half, strict=True)):
+        for s, z in enumerate((-h, h)):
+            rows = slice(s * len(RIM), (s + 1) * len(RIM))
+            points[k, rows, 0], points[k, rows, 1], points[k, rows, 2] = (
+                r * np.cos(RIM), r * np.sin(RIM), z)
+    return points
+
+
+def _bodies_at(world: object, q: np.ndarray) -> np.ndarray:
+    """The body cylinders' poses (L, 4, 4) by Pinocchio (the collision world's own FK)."""
+    world.set_configuration(q)  # type: ignore[attr-defined]
+    return np.array(world._world)  # type: ignore[attr-defined]
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), horizon=st.integers(1, 48))
+def test_within_the_horizon_no_kr60_body_moves_more_than_its_bound_here(
+        kr60: Robot, seed: int, horizon: int) -> None:
+    _bound_holds(kr60, seed, horizon)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), horizon=st.integers(1, 48))
+def test_within_the_horizon_no_fanuc_body_moves_more_than_its_bound_here(
+        fanuc: Robot, seed: int, horizon: int) -> None:
+    _bound_holds(fanuc, seed, horizon)
+
+
+def _bound_holds(robot: Robot, seed: int, horizon: int) -> None:
+    """Every rim point of every body, at every step up to the horizon (both ways), stays within
+    step x the bound on the body's motion here, and each body's points move relative to an
+    earlier body within step x what the joints between them allow."""
+    world = robot.collision_world()
+    compiled = world._compiled
+    joints, zero, links = compiled._packed[:3]
+    rng = np.random.default_rng(seed)
+    n, steps = len(robot.chain.lower()), 200
+    a = rng.uniform(robot.chain.lower(), robot.chain.upper())
+    per_step = rng.uniform(-0.01, 0.01, n) * (rng.random(n) < 0.8)
+    b = a + per_step * steps
+    levers = np.ascontiguousarray(compiled.link_levers())
+    step, global_cum, growth, _ = bounds_walk.segment_levers(a, b, steps, levers, links)
+    frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
+    poses_into(a, joints, zero, links, frames, poses)
+    seg = np.empty((6, zero.shape[0], 3))
+    bounds._segments(poses, links, seg)
+    cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
+    bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
+                            cum, move)
+    assert (cum <= global_cum + 1e-15).all() and (move <= global_cum[:, n] + 1e-15).all()
+    here = _bodies_at(world, a)
+    np.testing.assert_allclose(here[:, :3], poses, atol=1e-9)  # (the same bodies, in order)
+    rims = _rims(world)
+    start = np.einsum("kij,kpj->kpi", here, rims)
+    moved = links[:, MOVED].astype(int)
+    for t in range(1, horizon + 1):
+        for sign in (1.0, -1.0):
+            there = _bodies_at(world, a + sign * t * per_step)
+            points = np.einsum("kij,kpj->kpi", there, rims)
+            travel = np.linalg.norm(points - start, axis=2).max(axis=1)
+            assert (travel <= t * move * (1 + 1e-9) + 1e-12).all(), (t, travel, t * move)
+            for i in range(len(moved)):
+                for j in range(len(moved)):
+                    if moved[i] >= moved[j]:
+                        continue
+                    ref_0, ref_t = np.linalg.inv(here[i]), np.linalg.inv(there[i])
+                    rel = np.linalg.norm(
+                        (ref_t @ there[j] @ rims[j].T - ref_0 @ here[j] @ rims[j].T)[:3], axis=0)
+                    closing = cum[j, moved[j]] - cum[j, moved[i]]
+                    assert rel.max() <= t * closing * (1 + 1e-9) + 1e-12, (t, i, j)
+
+
+def _sweep(kr60: Robot) -> tuple[object, np.ndarray, np.ndarray, int]:
+    """The KR60 turning on axis 1 past a pillar: free at both ends, in contact over the middle
+    third of the segment (asserted on every configuration)."""
+    world = kr60.collision_world(Scene("pillar", (
+        SceneObject("pillar", Box((0.6, 1.2, 2.4)), _pose(1.7, 0.0, 1.2)),)))
+    a = np.array([-0.8, -1.2, 1.9, 0.0, 0.6, 0.0])
+    b = a.copy()
+    b[0] = 0.8
+    steps = 240
+    every = world.in_collision_many(np.linspace(a, b, steps + 1))
+    assert not every[0] and not every[-1]
+    assert every[steps // 3: 2 * steps // 3 + 1].all()
+    return world, a, b, steps
+
+
+def test_a_segment_blocked_in_its_middle_ends_at_the_third_configuration(kr60: Robot) -> None:
+    """The ends first, then the middle of what they leave unproven: the third evaluation lies in
+    the middle third, in contact, whatever the ends prove."""
+    world, a, b, steps = _sweep(kr60)
+    decided: list[int] = []
+
+    def in_contact(poses: np.ndarray, row: np.ndarray) -> bool:
+        decided.append(1)
+        return bool(world._decide(poses, row, stop_at_first=True))  # type: ignore[attr-defined]
+
+    free, evaluated = world._compiled.segment_free(a, b, steps, in_contact)  # type: ignore
+    assert not free and evaluated == 3
+    assert world.segment_free(a, b, steps) is False  # type: ignore[attr-defined]
+
+
+def test_a_free_segment_needs_few_evaluations_where_its_clearance_is_large(kr60: Robot) -> None:
+    """Turning away from the pillar: every configuration free, proven by a few of them."""
+    world, a, b, steps = _sweep(kr60)
+    b = a.copy()
+    b[0] = -1.6
+    assert not world.in_collision_many(np.linspace(a, b, steps + 1)).any()
+    free, evaluated = world._compiled.segment_free(  # type: ignore[attr-defined]
+        a, b, steps, lambda poses, row: True)
+    assert free and evaluated <= 10  # measured: 5 of the 241
+
+
+def test_each_undecided_configuration_goes_to_the_exact_judge_as_it_comes(
+        tmp_path: Path) -> None:
+    """A mesh arm near obstacles: its bounding volumes leave configurations undecided, and the
+    walk stops at the first one the judge finds in contact; a judge that finds none lets it
+    run to the end, asked once per undecided configuration."""
+    urdf, srdf = write_robot(tmp_path)
+    robot = robot_from_files(urdf, srdf)
+    world = robot.collision_world(Scene("test", (
+        SceneObject("table", Box((1.0, 1.0, 0.04)), _pose(0.0, 0.0, -0.02), ("base_link",)),
+        SceneObject("ball", Sphere(0.08), _pose(0.25, 0.1, 0.45)))))
+    rng = np.random.default_rng(7)
+    lo, hi = robot.chain.lower(), robot.chain.upper()
+    asked_most = 0
+    for _ in range(200):
+        a = rng.uniform(lo, hi)
+        b = np.clip(a + rng.normal(0.0, 0.4, len(lo)), lo, hi)
+        never, first = _Judge(False), _Judge(True)
+        free, evaluated = world._compiled.segment_free(a, b, 60, never)
+        blocked, _ = world._compiled.segment_free(a, b, 60, first)
+        if never.asked:
+            assert first.asked == 1 and not blocked
+        else:
+            assert first.asked == 0 and blocked == free
+        assert never.asked <= evaluated
+        asked_most = max(asked_most, never.asked)
+    assert asked_most >= 2
+
+
+class _Judge:
+    """An exact judge that gives one answer and counts how often it was asked."""
+
+    def __init__(self, answer: bool) -> None:
+        self.answer, self.asked = answer, 0
+
+    def __call__(self, poses: np.ndarray, row: np.ndarray) -> bool:
+        self.asked += 1
+        return self.answer
