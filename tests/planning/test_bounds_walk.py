@@ -48,27 +48,33 @@ def _bodies_at(world: object, q: np.ndarray) -> np.ndarray:
 @given(seed=st.integers(0, 2**32 - 1), horizon=st.integers(1, 48))
 def test_within_the_horizon_no_kr60_body_moves_more_than_its_bound_here(
         kr60: Robot, seed: int, horizon: int) -> None:
-    _bound_holds(kr60, seed, horizon)
+    _bound_holds(kr60, seed, horizon, 0.01)
 
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), horizon=st.integers(1, 48))
 def test_within_the_horizon_no_fanuc_body_moves_more_than_its_bound_here(
         fanuc: Robot, seed: int, horizon: int) -> None:
-    _bound_holds(fanuc, seed, horizon)
+    _bound_holds(fanuc, seed, horizon, 0.01)
 
 
-def _bound_holds(robot: Robot, seed: int, horizon: int) -> None:
+def _bound_holds(robot: Robot, seed: int, horizon: int, largest_step: float) -> None:
+    rng = np.random.default_rng(seed)
+    n = len(robot.chain.lower())
+    a = rng.uniform(robot.chain.lower(), robot.chain.upper())
+    per_step = rng.uniform(-largest_step, largest_step, n) * (rng.random(n) < 0.8)
+    _bound_holds_from(robot, a, per_step, horizon)
+
+
+def _bound_holds_from(robot: Robot, a: np.ndarray, per_step: np.ndarray, horizon: int) -> None:
     """Every rim point of every body, at every step up to the horizon (both ways), stays within
-    step x the bound on the body's motion here, and each body's points move relative to an
-    earlier body within step x what the joints between them allow."""
+    step x the bound on the body's motion at ``a`` (joints changing by ``per_step`` each step),
+    and each body's points move relative to an earlier body within step x what the joints
+    between them allow."""
     world = robot.collision_world()
     compiled = world._compiled
     joints, zero, links = compiled._packed[:3]
-    rng = np.random.default_rng(seed)
-    n, steps = len(robot.chain.lower()), 200
-    a = rng.uniform(robot.chain.lower(), robot.chain.upper())
-    per_step = rng.uniform(-0.01, 0.01, n) * (rng.random(n) < 0.8)
+    n, steps = len(a), 200
     b = a + per_step * steps
     levers = np.ascontiguousarray(compiled.link_levers())
     step, global_cum, growth, _ = bounds_walk.segment_levers(a, b, steps, levers, links)
@@ -100,6 +106,55 @@ def _bound_holds(robot: Robot, seed: int, horizon: int) -> None:
                         (ref_t @ there[j] @ rims[j].T - ref_0 @ here[j] @ rims[j].T)[:3], axis=0)
                     closing = cum[j, moved[j]] - cum[j, moved[i]]
                     assert rel.max() <= t * closing * (1 + 1e-9) + 1e-12, (t, i, j)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), horizon=st.integers(1, 40))
+def test_each_joints_lever_arm_here_holds_over_the_horizon(kr60: Robot, seed: int,
+                                                          horizon: int) -> None:
+    """Joint by joint, the bound's share (how far joint j moves body k per step) covers the
+    average over the first t steps of the farthest rim point's distance from j's axis, times
+    j's change per step, for every t up to the horizon (both ways): the distance from the axis
+    by Pinocchio's Jacobian (a point's speed per unit of a revolute joint), at a quarter step's
+    resolution. The joints after j move the body away from its axis as the steps go on, which
+    the bound must include: without that term it fails here."""
+    world = kr60.collision_world()
+    compiled = world._compiled
+    joints, zero, links = compiled._packed[:3]
+    rng = np.random.default_rng(seed)
+    n = len(kr60.chain.lower())
+    a = rng.uniform(kr60.chain.lower(), kr60.chain.upper())
+    per_step = rng.uniform(-0.03, 0.03, n) * (rng.random(n) < 0.8)
+    levers = np.ascontiguousarray(compiled.link_levers())
+    step, global_cum, growth, _ = bounds_walk.segment_levers(a, a + per_step * 200, 200, levers,
+                                                             links)
+    frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
+    poses_into(a, joints, zero, links, frames, poses)
+    seg = np.empty((6, zero.shape[0], 3))
+    bounds._segments(poses, links, seg)
+    cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
+    bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
+                            cum, move)
+    rims = _rims(world)
+    for sign in (1.0, -1.0):
+        fractions = np.arange(4 * horizon + 1) / 4.0
+        reach = np.zeros((len(fractions), len(rims), n))  # farthest rim point from each axis
+        for f, s in enumerate(fractions):
+            q = a + sign * s * per_step
+            for k, (link, local) in enumerate(zip(world._links, world._local, strict=True)):
+                placed, jac = world.kinematics.pose_and_jacobian(q, link)
+                centre = placed @ local @ rims[k].T  # (4, 32): the rim points
+                offset = centre[:3] - placed[:3, 3:4]
+                speed = jac[:3, :, None] + np.cross(jac[3:].T[:, :, None], offset[None], axis=1
+                                                    ).transpose(1, 0, 2)
+                reach[f, k] = np.linalg.norm(speed, axis=0).max(axis=1)
+        for t in range(1, horizon + 1):
+            mean = (reach[: 4 * t + 1].sum(axis=0) - (reach[0] + reach[4 * t]) / 2) / (4 * t)
+            for k in range(len(rims)):
+                for j in range(int(links[k, MOVED])):
+                    share = cum[k, j + 1] - cum[k, j]
+                    assert abs(per_step[j]) * mean[k, j] <= share * (1 + 1e-6) + 1e-9, (
+                        sign, t, k, j, abs(per_step[j]) * mean[k, j], share)
 
 
 def _sweep(kr60: Robot) -> tuple[object, np.ndarray, np.ndarray, int]:
