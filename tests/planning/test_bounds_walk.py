@@ -58,6 +58,27 @@ def test_within_the_horizon_no_fanuc_body_moves_more_than_its_bound_here(
     _bound_holds(fanuc, seed, horizon, 0.01)
 
 
+def _bound_here(world: object, a: np.ndarray, per_step: np.ndarray, horizon: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The kernel's motion bound at ``a`` (joints changing by ``per_step`` each step, on a
+    segment of 200 steps) for ``horizon`` steps: the global cumulative bound (L, n + 1), the
+    bound here (L, n + 1), each body's motion per step (L,), and the bodies' poses (L, 3, 4)."""
+    compiled = world._compiled  # type: ignore[attr-defined]
+    joints, zero, links = compiled._packed[:3]
+    n = len(a)
+    levers = np.ascontiguousarray(compiled.link_levers())
+    step, global_cum, growth, _ = bounds_walk.segment_levers(a, a + per_step * 200, 200, levers,
+                                                             links)
+    frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
+    poses_into(a, joints, zero, links, frames, poses)
+    seg = np.empty((6, zero.shape[0], 3))
+    bounds._segments(poses, links, seg)
+    cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
+    bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
+                            cum, move)
+    return global_cum, cum, move, poses
+
+
 def _bound_holds(robot: Robot, seed: int, horizon: int, largest_step: float) -> None:
     rng = np.random.default_rng(seed)
     n = len(robot.chain.lower())
@@ -72,19 +93,8 @@ def _bound_holds_from(robot: Robot, a: np.ndarray, per_step: np.ndarray, horizon
     and each body's points move relative to an earlier body within step x what the joints
     between them allow."""
     world = robot.collision_world()
-    compiled = world._compiled
-    joints, zero, links = compiled._packed[:3]
-    n, steps = len(a), 200
-    b = a + per_step * steps
-    levers = np.ascontiguousarray(compiled.link_levers())
-    step, global_cum, growth, _ = bounds_walk.segment_levers(a, b, steps, levers, links)
-    frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
-    poses_into(a, joints, zero, links, frames, poses)
-    seg = np.empty((6, zero.shape[0], 3))
-    bounds._segments(poses, links, seg)
-    cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
-    bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
-                            cum, move)
+    n, links = len(a), world._compiled._packed[2]
+    global_cum, cum, move, poses = _bound_here(world, a, per_step, horizon)
     assert (cum <= global_cum + 1e-15).all() and (move <= global_cum[:, n] + 1e-15).all()
     here = _bodies_at(world, a)
     np.testing.assert_allclose(here[:, :3], poses, atol=1e-9)  # (the same bodies, in order)
@@ -119,22 +129,12 @@ def test_each_joints_lever_arm_here_holds_over_the_horizon(kr60: Robot, seed: in
     resolution. The joints after j move the body away from its axis as the steps go on, which
     the bound must include: without that term it fails here."""
     world = kr60.collision_world()
-    compiled = world._compiled
-    joints, zero, links = compiled._packed[:3]
+    links = world._compiled._packed[2]
     rng = np.random.default_rng(seed)
     n = len(kr60.chain.lower())
     a = rng.uniform(kr60.chain.lower(), kr60.chain.upper())
     per_step = rng.uniform(-0.03, 0.03, n) * (rng.random(n) < 0.8)
-    levers = np.ascontiguousarray(compiled.link_levers())
-    step, global_cum, growth, _ = bounds_walk.segment_levers(a, a + per_step * 200, 200, levers,
-                                                             links)
-    frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
-    poses_into(a, joints, zero, links, frames, poses)
-    seg = np.empty((6, zero.shape[0], 3))
-    bounds._segments(poses, links, seg)
-    cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
-    bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
-                            cum, move)
+    cum = _bound_here(world, a, per_step, horizon)[1]
     rims = _rims(world)
     for sign in (1.0, -1.0):
         fractions = np.arange(4 * horizon + 1) / 4.0
