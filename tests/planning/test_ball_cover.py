@@ -107,15 +107,16 @@ def test_a_ball_gap_is_never_more_than_fcls_distance(toy: Robot) -> None:
             if i not in meshes and j not in meshes:
                 continue
             a, b = (i, j) if i in meshes else (j, i)
-            gap = bounds_balls.pair_gap(a, b, seg, links, groups, leaves, wg, wl, bounds.EPS)
+            gap = bounds_balls.pair_gap(a, b, seg, poses, links, groups, leaves, wg, wl, placed,
+                                        bounds.EPS)
             truth = world._exact.distance(poses, rr[p:p + 1], rs[:0])
             assert gap <= max(truth, bounds.EPS) + 1e-12, (q.tolist(), p)
             compared += 1
         for p, (i, s) in enumerate(rs):
             if i not in meshes:
                 continue
-            gap = bounds_balls.obstacle_gap(i, int(kind[s]), obstacles[s], axes[s], links,
-                                            groups, leaves, wg, wl, bounds.EPS)
+            gap = bounds_balls.obstacle_gap(i, int(kind[s]), obstacles[s], axes[s], poses,
+                                            links, groups, leaves, wg, wl, placed, bounds.EPS)
             truth = world._exact.distance(poses, rr[:0], rs[p:p + 1])
             assert gap <= max(truth, bounds.EPS) + 1e-12, (q.tolist(), p)
             compared += 1

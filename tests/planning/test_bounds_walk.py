@@ -235,3 +235,56 @@ class _Judge:
     def __call__(self, poses: np.ndarray, row: np.ndarray) -> bool:
         self.asked += 1
         return self.answer
+
+
+def test_a_capped_judge_gives_the_same_verdicts_and_the_smaller_of_cap_and_gap(
+        tmp_path: Path) -> None:
+    """The walk never proves more than its horizon, so it caps the judge there: subtrees,
+    refinements and pairs whose bounds lie above the cap are skipped. That changes nothing below
+    the cap: over random configurations and motions of a mesh arm among obstacles, the verdicts
+    are those of the uncapped judge and each gap (self, scene) is the smaller of the cap and the
+    uncapped gap, to the bit."""
+    urdf, srdf = write_robot(tmp_path)
+    robot = robot_from_files(urdf, srdf)
+    objects = []
+    rng = np.random.default_rng(11)
+    for k in range(8):  # (around the arm: some configurations clear them all, some do not)
+        angle, reach, z = rng.uniform((0.0, 0.4, 0.0), (2.0 * np.pi, 0.7, 0.6))
+        shape = Box(tuple(rng.uniform(0.03, 0.2, 3))) if k % 2 else Sphere(rng.uniform(0.03, 0.08))
+        objects.append(SceneObject(f"o{k}", shape,
+                                   _pose(reach * np.cos(angle), reach * np.sin(angle), z)))
+    world = robot.collision_world(Scene("test", tuple(objects)))
+    packed = world._compiled._packed  # type: ignore[attr-defined]
+    links = packed[2]
+    n_link = len(links)
+    seg = np.empty((6, n_link, 3))
+    lo, hi = robot.chain.lower(), robot.chain.upper()
+    below = above = self_below = self_above = 0
+    for q in rng.uniform(lo, hi, (300, len(lo))):
+        poses = bounds.check(q[None], *packed, bounds.EPS, bounds.MARGIN)[0][0]
+        bounds._segments(poses, links, seg)
+        move = rng.uniform(1e-4, 4e-3, n_link)
+        cum = np.cumsum(rng.uniform(0.0, 0.02, (n_link, len(lo) + 1)), axis=1)
+        row, (self_gap, scene_gap) = _judged(packed, poses, seg, move, cum, np.inf)
+        for cap in (1.0, 4.0, 16.0, 64.0):
+            capped_row, (capped_self, capped_scene) = _judged(packed, poses, seg, move, cum, cap)
+            assert np.array_equal(capped_row, row)
+            assert capped_scene == min(cap, scene_gap), (q.tolist(), cap)
+            assert capped_self == min(cap, self_gap), (q.tolist(), cap)
+            below += scene_gap < cap
+            above += scene_gap > cap
+            self_below += self_gap < cap
+            self_above += self_gap > cap
+    assert below > 100 and above > 100, (below, above)
+    assert self_below > 100 and self_above > 100, (self_below, self_above)
+
+
+def _judged(packed: tuple, poses: np.ndarray, seg: np.ndarray, move: np.ndarray,
+            cum: np.ndarray, cap: float) -> tuple[np.ndarray, tuple[float, float]]:
+    """The compiled judge's verdicts and gaps (self, scene) at one configuration, capped."""
+    row = np.zeros(len(packed[3]), dtype=np.int8)
+    stack = np.empty(max(1, len(packed[9])), dtype=np.int64)
+    gaps = bounds._judge(seg, poses, *packed[2:14], bounds.EPS, bounds.MARGIN, move, cum,
+                         bounds.REFINE, cap, row, np.empty((8, 3)), np.empty(3), stack,
+                         bounds.ball_scratch(packed[2], packed[12], packed[13]))
+    return row, gaps

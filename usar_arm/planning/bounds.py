@@ -42,6 +42,7 @@ import numpy as np
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds_balls, scene_tree
 from usar_arm.planning.bounds_arrays import (
+    BOUND,
     BOX,
     CAPSULE,
     COVER_FROM,
@@ -131,9 +132,9 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
            kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
            order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
-           margin: float, move: Array, cum: Array, refine: float, out: VerdictArray, cand: Array,
-           scratch: Array, stack: IndexArray, balls: tuple[Array, Array, np.ndarray]
-           ) -> tuple[float, float]:
+           margin: float, move: Array, cum: Array, refine: float, cap: float, out: VerdictArray,
+           cand: Array, scratch: Array, stack: IndexArray,
+           balls: tuple[Array, Array, np.ndarray]) -> tuple[float, float]:
     """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and, over the
     cleared link-link and link-obstacle pairs, the smallest lower bound of a pair's clearance
     divided by how far the pair can close per unit of motion: how many units of motion cannot
@@ -141,6 +142,8 @@ def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
     ``move`` (L,): per body, how far its points can move (a body-obstacle pair closes by that);
     ``cum`` (L, n + 1): per body, how far joints 0 .. J - 1 can move its points, summed over
     the joints (a body-body pair closes only by the joints between them, :func:`_closing`).
+    ``cap``: the scene's value is at most this (inf: none), and nothing that could only show
+    it above the cap is computed (a walk never proves more than its horizon).
 
     Two kernels, each called once per configuration (a call per pair costs more than the
     test itself): :func:`_judge_links` and :func:`.bounds_scene.judge_scene`; both give a pair
@@ -149,25 +152,28 @@ def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
     of the caller's, reset here). ``world`` (L, 3, 4): the bodies' poses."""
     balls[2][:] = 0
     self_gap = _judge_links(seg, world, links, pairs, n_rr, groups, leaves, eps, margin, cum,
-                            out, scratch, balls)
+                            cap, out, scratch, balls)
     for p in range(n_rr, pairs.shape[0]):
         out[p] = CLEAR
     if nodes.shape[0] == 0:
         return self_gap, math.inf
     return self_gap, judge_scene(seg, world, links, kind, obstacles, axes, tree, nodes, order,
-                                  pair_of, groups, leaves, eps, margin, move, refine, out, cand,
-                                  scratch, stack, balls)
+                                  pair_of, groups, leaves, eps, margin, move, refine, cap, out,
+                                  cand, scratch, stack, balls)
 
 
 @inline_kernel
 def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
                  groups: Array, leaves: Array, eps: float, margin: float, cum: Array,
-                 out: VerdictArray, scratch: Array, balls: tuple[Array, Array, np.ndarray]
-                 ) -> float:
+                 cap: float, out: VerdictArray, scratch: Array,
+                 balls: tuple[Array, Array, np.ndarray]) -> float:
     """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
-    smallest cleared gap per unit of closing motion (0 when a pair is not cleared).
+    smallest cleared gap per unit of closing motion (0 when a pair is not cleared; at most
+    ``cap``). A pair's gap is the larger of two lower bounds, the spheres about the two bodies
+    and the capsules about their cylinders; the spheres alone clear a pair they show apart by
+    no less than the smallest gap found so far (they cannot lower it).
     ``scratch`` (3,): a point, for the rim proofs."""
-    self_gap = math.inf
+    self_gap = cap
     p = 0
     while p < n_rr:
         # The block of rows of one link pair (rows sorted by the links' indices): when both
@@ -192,8 +198,15 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                 continue
         for r in range(p, end):
             i, j = pairs[r, 0], pairs[r, 1]
-            gap = (rows_distance(seg, 0, i, j)
-                   - links[i, RADIUS] - links[j, RADIUS])
+            closing = _closing(cum, links, i, j)
+            apart = (math.sqrt((seg[5, i, 0] - seg[5, j, 0]) ** 2
+                               + (seg[5, i, 1] - seg[5, j, 1]) ** 2
+                               + (seg[5, i, 2] - seg[5, j, 2]) ** 2)
+                     - links[i, BOUND] - links[j, BOUND])
+            if apart > eps and (closing == 0.0 or apart >= self_gap * closing):
+                out[r] = CLEAR  # (the spheres about them: apart, and by no less than found)
+                continue
+            gap = max(apart, rows_distance(seg, 0, i, j) - links[i, RADIUS] - links[j, RADIUS])
             if gap <= eps:  # proven in contact, or the balls of a mesh body have a look
                 inner = rows_distance(seg, 2, i, j)
                 if inner < links[i, RHO] + links[j, RHO] - margin or (
@@ -207,7 +220,6 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                                               balls)
             if gap > eps:
                 out[r] = CLEAR
-                closing = _closing(cum, links, i, j)
                 if closing > 0.0:
                     self_gap = min(self_gap, gap / closing)
                 continue
@@ -232,7 +244,7 @@ def ball_scratch(links: Array, groups: Array, leaves: Array
                  ) -> tuple[Array, Array, np.ndarray]:
     """The scratch of :func:`_judge`'s balls: their world centres and the placed bodies."""
     return (np.empty((groups.shape[0], 3)), np.empty((leaves.shape[0], 3)),
-            np.zeros(links.shape[0], dtype=np.int8))
+            np.zeros(links.shape[0] + groups.shape[0], dtype=np.int8))
 
 
 ball_scratch_kernel = kernel(ball_scratch)
@@ -270,8 +282,8 @@ def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: In
     for c in range(n_cfg):
         _segments(world[c], links, seg)
         _judge(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
-               pair_of, groups, leaves, eps, margin, move, cum, 0.0, out[c], cand, scratch, stack,
-               balls)
+               pair_of, groups, leaves, eps, margin, move, cum, 0.0, math.inf, out[c], cand,
+               scratch, stack, balls)
         overall[c] = _row_verdict(out[c])
     return out, overall
 
@@ -345,7 +357,7 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
     _segments(world, links, seg)
     move, cum = _still(links)
     _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
-           groups, leaves, eps, margin, move, cum, 0.0, row, np.empty((8, 3)),
+           groups, leaves, eps, margin, move, cum, 0.0, math.inf, row, np.empty((8, 3)),
            np.empty(3), stack, ball_scratch_kernel(links, groups, leaves))
     return _row_verdict(row)
 

@@ -8,8 +8,10 @@ Each gap is a lower bound of the distance between the mesh's surface and the oth
 point of the surface is in a leaf, and every leaf in its group), so a walk skips by it as by a
 cylinder's. ``links`` carries each body's range of groups (``COVER_FROM``, ``COVER_TO``; equal
 when it has none); ``groups`` (G, 6) and ``leaves`` (M, 4) are in the body's cylinder frame and
-are placed in the world (``wg`` (G, 3), ``wl`` (M, 3)) once per body and configuration
-(``placed`` (L,), zeroed per configuration by the caller).
+are placed in the world (``wg`` (G, 3), ``wl`` (M, 3)) once per configuration: a body's group
+balls when it is first looked at, a group's leaves only when the group does not clear the pair
+on its own (``placed`` (L + G,): flags per body, then per group; zeroed per configuration by the
+caller).
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ def has_balls(links: Array, b: int) -> bool:
 @inline_kernel
 def place(world: Array, links: Array, groups: Array, leaves: Array, b: int, wg: Array,
           wl: Array, placed: np.ndarray) -> None:
-    """Body ``b``'s balls at its pose ``world[b]`` (3, 4), once per configuration."""
+    """Body ``b``'s group balls at its pose ``world[b]`` (3, 4), once per configuration (its
+    leaves wait for :func:`place_leaves`: most groups clear the pair on their own)."""
     if placed[b]:
         return
     placed[b] = 1
@@ -51,10 +54,22 @@ def place(world: Array, links: Array, groups: Array, leaves: Array, b: int, wg: 
         for a in range(3):
             wg[g, a] = t[a, 0] * groups[g, 0] + t[a, 1] * groups[g, 1] + t[a, 2] * groups[g, 2] \
                 + t[a, 3]
-        for m in range(int(groups[g, 4]), int(groups[g, 5])):
-            for a in range(3):
-                wl[m, a] = (t[a, 0] * leaves[m, 0] + t[a, 1] * leaves[m, 1]
-                            + t[a, 2] * leaves[m, 2] + t[a, 3])
+
+
+@inline_kernel
+def place_leaves(world: Array, links: Array, groups: Array, leaves: Array, b: int, g: int,
+                 wl: Array, placed: np.ndarray) -> None:
+    """The leaves of body ``b``'s group ``g`` at its pose, once per configuration (their flag:
+    ``placed[L + g]``)."""
+    flag = links.shape[0] + g
+    if placed[flag]:
+        return
+    placed[flag] = 1
+    t = world[b]
+    for m in range(int(groups[g, 4]), int(groups[g, 5])):
+        for a in range(3):
+            wl[m, a] = (t[a, 0] * leaves[m, 0] + t[a, 1] * leaves[m, 1]
+                        + t[a, 2] * leaves[m, 2] + t[a, 3])
 
 
 @inline_kernel
@@ -85,7 +100,7 @@ def bodies_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: A
     place(world, links, groups, leaves, i, wg, wl, placed)
     if has_balls(links, j):
         place(world, links, groups, leaves, j, wg, wl, placed)
-    return pair_gap(i, j, seg, links, groups, leaves, wg, wl, eps)
+    return pair_gap(i, j, seg, world, links, groups, leaves, wg, wl, placed, eps)
 
 
 @inline_kernel
@@ -97,12 +112,12 @@ def body_obstacle_gap(b: int, kind: int, o: Array, axes: Array, world: Array, li
         return -math.inf
     wg, wl, placed = balls
     place(world, links, groups, leaves, b, wg, wl, placed)
-    return obstacle_gap(b, kind, o, axes, links, groups, leaves, wg, wl, eps)
+    return obstacle_gap(b, kind, o, axes, world, links, groups, leaves, wg, wl, placed, eps)
 
 
 @inline_kernel
-def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Array,
-             wg: Array, wl: Array, eps: float) -> float:
+def pair_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: Array,
+             leaves: Array, wg: Array, wl: Array, placed: np.ndarray, eps: float) -> float:
     """A lower bound (m) of the distance between body ``i``'s covered surface and body ``j``
     (its balls when it has some, else the capsule around its cylinder; ``seg`` as
     :func:`.bounds._segments`), both placed; at most ``eps`` as soon as a pair of balls is."""
@@ -114,6 +129,7 @@ def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Ar
         if gap > eps:
             best = min(best, gap)
             continue
+        place_leaves(world, links, groups, leaves, i, g, wl, placed)
         if not j_balls:
             for m in range(int(groups[g, 4]), int(groups[g, 5])):
                 gap = _to_axis(wl, m, seg, j) - leaves[m, 3] - r_j
@@ -126,6 +142,7 @@ def pair_gap(i: int, j: int, seg: Array, links: Array, groups: Array, leaves: Ar
             if gap > eps:
                 best = min(best, gap)
                 continue
+            place_leaves(world, links, groups, leaves, j, h, wl, placed)
             for m in range(int(groups[g, 4]), int(groups[g, 5])):
                 gap = _apart(wl, m, wg, h) - leaves[m, 3] - groups[h, 3]
                 if gap > eps:
@@ -153,8 +170,9 @@ def _to_obstacle(w: Array, g: int, kind: int, o: Array, axes: Array) -> float:
 
 
 @inline_kernel
-def obstacle_gap(b: int, kind: int, o: Array, axes: Array, links: Array, groups: Array,
-                 leaves: Array, wg: Array, wl: Array, eps: float) -> float:
+def obstacle_gap(b: int, kind: int, o: Array, axes: Array, world: Array, links: Array,
+                 groups: Array, leaves: Array, wg: Array, wl: Array, placed: np.ndarray,
+                 eps: float) -> float:
     """A lower bound (m) of the distance between body ``b``'s covered surface (placed) and an
     obstacle (see :func:`_to_obstacle`); at most ``eps`` as soon as a leaf is."""
     best = math.inf
@@ -163,6 +181,7 @@ def obstacle_gap(b: int, kind: int, o: Array, axes: Array, links: Array, groups:
         if gap > eps:
             best = min(best, gap)
             continue
+        place_leaves(world, links, groups, leaves, b, g, wl, placed)
         for m in range(int(groups[g, 4]), int(groups[g, 5])):
             gap = _to_obstacle(wl, m, kind, o, axes) - leaves[m, 3]
             if gap <= eps:

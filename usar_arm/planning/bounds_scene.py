@@ -9,10 +9,12 @@ box: HULL), a sphere or a capsule, as :func:`.bounds_arrays.prepare_obstacles` l
 ``pair_of`` of :func:`.scene_tree.pair_table`; ``stack`` scratch of at least M entries): each
 link visits only the subtrees its bounding sphere comes within the current bound (or ``eps``)
 of, a link that does not move (``move`` 0, as every link of a single configuration) only those
-within ``eps``: what matters for it is whether a pair is cleared, not by how much. The pairs
-below the others stay CLEAR. A pair is first bounded by its centre against the
-solid box (or by two spheres); when that is below ``refine`` units of its link's motion (at
-least ``eps`` m), by the exact cylinder against the box (or the capsules' axes) too. The
+within ``eps``: what matters for it is whether a pair is cleared, not by how much. The bound
+starts at ``cap`` units of motion (a walk's horizon: it proves no more), so the subtrees
+beyond it are skipped too. The pairs below the others stay CLEAR. A pair is first bounded by
+its centre against the solid box (or by two spheres); when that is below ``refine`` units of
+its link's motion (at least ``eps`` m) and below the bound found so far (else it cannot
+lower it), by the exact cylinder against the box (or the capsules' axes) too. The
 per-pair tests are written out in the loop, not called through inlined helpers: a kernel call
 per pair costs more than the test itself. They read the obstacle's row, the body's centre and
 the ball centres by index (the :mod:`.gaps` functions that take coordinates): an array view
@@ -89,14 +91,30 @@ def _group_motion(links: Array, move: Array, i: int) -> float:
 
 
 @inline_kernel
+def _beyond(seg: Array, i: int, radius: float, spheres: Array, s: int, centre: int, bound: int,
+            scene_gap: float, move: float, eps: float) -> bool:
+    """The sphere of ``radius`` (m) about body ``i``'s centre and the sphere of row ``s`` of
+    ``spheres`` (centre in columns ``centre`` .. + 2, radius in column ``bound``: a subtree's
+    or an obstacle's) are apart by more than ``eps`` and than ``scene_gap`` units of the body's
+    ``move`` (a moving body): nothing inside them can lower the gap found so far."""
+    gap = (math.sqrt((seg[5, i, 0] - spheres[s, centre]) ** 2
+                     + (seg[5, i, 1] - spheres[s, centre + 1]) ** 2
+                     + (seg[5, i, 2] - spheres[s, centre + 2]) ** 2)
+           - spheres[s, bound] - radius)
+    return gap > (max(scene_gap * move, eps) if move > 0.0 else eps)
+
+
+@inline_kernel
 def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstacles: Array,
                 axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
                 pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float,
-                move: Array, refine: float, out: np.ndarray, cand: Array, scratch: Array,
-                stack: IndexArray, balls: tuple[Array, Array, np.ndarray]) -> float:
+                move: Array, refine: float, cap: float, out: np.ndarray, cand: Array,
+                scratch: Array, stack: IndexArray, balls: tuple[Array, Array, np.ndarray]
+                ) -> float:
     """Verdicts on the link-obstacle pairs into ``out``, and the smallest cleared gap per unit
-    of the link's motion ``move`` (0 when a pair is not cleared). See the module's notes."""
-    scene_gap = math.inf
+    of the link's motion ``move`` (0 when a pair is not cleared; at most ``cap``). See the
+    module's notes."""
+    scene_gap = cap
     for i in range(pair_of.shape[0]):
         if links[i, GROUP] >= 0 and links[i, GROUP] != i:
             continue  # tested with its group's first body
@@ -108,10 +126,7 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
         while top > 0:
             top -= 1
             nd = stack[top]
-            bound = (math.sqrt((seg[5, i, 0] - tree[nd, 0]) ** 2
-                               + (seg[5, i, 1] - tree[nd, 1]) ** 2
-                               + (seg[5, i, 2] - tree[nd, 2]) ** 2) - tree[nd, 3] - bound_g)
-            if bound > (max(scene_gap * move_g, eps) if move_g > 0.0 else eps):
+            if _beyond(seg, i, bound_g, tree, nd, 0, 3, scene_gap, move_g, eps):
                 continue  # every pair below is cleared, and farther apart than any bound found
             if nodes[nd, 0] >= 0:
                 stack[top], stack[top + 1] = nodes[nd, 0], nodes[nd, 1]
@@ -119,8 +134,9 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                 continue
             for k in range(nodes[nd, 2], nodes[nd, 3]):
                 s = order[k]
-                if pair_of[i, s] < 0:
-                    continue
+                if pair_of[i, s] < 0 or _beyond(seg, i, bound_g, obstacles, s, O_CENTRE,
+                                                O_BOUND, scene_gap, move_g, eps):
+                    continue  # (not checked; or apart as a subtree is)
                 # First the group's cylinder (when grouped), then each body b from the first.
                 whole = grouped
                 b = i
@@ -129,7 +145,7 @@ def judge_scene(seg: Array, world: Array, links: Array, kind: IndexArray, obstac
                         radius, bounding, mv = radius_g, bound_g, move_g
                     else:
                         radius, bounding, mv = links[b, RADIUS], links[b, BOUND], move[b]
-                    near = max(eps, refine * mv)
+                    near = max(eps, min(refine, scene_gap) * mv) if mv > 0.0 else eps
                     if kind[s] == BOX or kind[s] == HULL:  # the centre against the solid box
                         gap = xyz_box_distance(
                             seg[5, b, 0], seg[5, b, 1], seg[5, b, 2], obstacles[s, O_START],

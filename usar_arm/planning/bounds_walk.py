@@ -17,7 +17,8 @@ lever arms at this configuration, which hold for ``H`` steps from it: the body's
 each joint's axis here, plus the body's own extent, plus how far the joints after that one can
 move the body towards or away from the axis in ``H`` steps (their global lever arms); over the
 ``H`` steps that adds half of it on average. ``H`` is the distance to the far end of the run
-being filled, and a proven run is never longer than ``H``.
+being filled, and a proven run is never longer than ``H``; so the scene judge is capped there
+(it skips the obstacles and refinements that could only prove more).
 
 An undecided configuration (a pair the bounding volumes can neither clear nor prove in contact)
 proves nothing around it; :func:`walk` hands it over with its poses and verdicts for the exact
@@ -88,28 +89,29 @@ def motion_here(seg: Array, frames: Array, joints: Array, links: Array, per_step
     (``seg[5]``, ``frames`` (n + 1, 3, 4) of :func:`.bounds_arrays.poses_into`) plus the body's
     extent (``BOUND``) plus ``growth[j, k]`` (m per step) times half the horizon, times the
     joint's change per step ``per_step[j]`` (rad). A prismatic joint keeps its global bound."""
-    n = per_step.shape[0]
-    for k in range(links.shape[0]):
-        moved = int(links[k, MOVED])
-        c0, c1, c2 = seg[5, k, 0], seg[5, k, 1], seg[5, k, 2]
-        for j in range(n):
+    n, n_link = per_step.shape[0], links.shape[0]
+    for j in range(n):  # (joint by joint: its axis is placed once for every body)
+        revolute = joints[j, 6] > 0.5
+        f = frames[j]
+        w0, w1, w2 = joints[j, 0], joints[j, 1], joints[j, 2]
+        p0, p1, p2 = joints[j, 3], joints[j, 4], joints[j, 5]
+        u0 = f[0, 0] * w0 + f[0, 1] * w1 + f[0, 2] * w2
+        u1 = f[1, 0] * w0 + f[1, 1] * w1 + f[1, 2] * w2
+        u2 = f[2, 0] * w0 + f[2, 1] * w1 + f[2, 2] * w2
+        x0 = f[0, 0] * p0 + f[0, 1] * p1 + f[0, 2] * p2 + f[0, 3]
+        x1 = f[1, 0] * p0 + f[1, 1] * p1 + f[1, 2] * p2 + f[1, 3]
+        x2 = f[2, 0] * p0 + f[2, 1] * p1 + f[2, 2] * p2 + f[2, 3]
+        for k in range(n_link):
             bound = global_cum[k, j + 1] - global_cum[k, j]
-            if j < moved and joints[j, 6] > 0.5 and bound > 0.0:
-                f = frames[j]
-                w0, w1, w2 = joints[j, 0], joints[j, 1], joints[j, 2]
-                p0, p1, p2 = joints[j, 3], joints[j, 4], joints[j, 5]
-                u0 = f[0, 0] * w0 + f[0, 1] * w1 + f[0, 2] * w2
-                u1 = f[1, 0] * w0 + f[1, 1] * w1 + f[1, 2] * w2
-                u2 = f[2, 0] * w0 + f[2, 1] * w1 + f[2, 2] * w2
-                v0 = c0 - (f[0, 0] * p0 + f[0, 1] * p1 + f[0, 2] * p2 + f[0, 3])
-                v1 = c1 - (f[1, 0] * p0 + f[1, 1] * p1 + f[1, 2] * p2 + f[1, 3])
-                v2 = c2 - (f[2, 0] * p0 + f[2, 1] * p1 + f[2, 2] * p2 + f[2, 3])
+            if revolute and j < int(links[k, MOVED]) and bound > 0.0:
+                v0, v1, v2 = seg[5, k, 0] - x0, seg[5, k, 1] - x1, seg[5, k, 2] - x2
                 along = v0 * u0 + v1 * u1 + v2 * u2
                 off_axis = math.sqrt(max(0.0, v0 * v0 + v1 * v1 + v2 * v2 - along * along))
                 here = per_step[j] * (off_axis * (1.0 + 1e-12) + links[k, BOUND] + 1e-12
                                       + growth[j, k] * horizon * 0.5)
                 bound = min(bound, here)
             cum[k, j + 1] = cum[k, j] + bound
+    for k in range(n_link):
         move[k] = cum[k, n]
 
 
@@ -166,7 +168,8 @@ def walk(a: Array, b: Array, steps: int, levers: Array, proven: IndexArray, queu
                     global_cum, cum, move)
         self_gap, scene_gap = _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes,
                                      tree, nodes, order, pair_of, groups, leaves, eps, margin,
-                                     move, cum, REFINE, row, cand, scratch, stack, balls)
+                                     move, cum, REFINE, horizon + 1.0, row, cand, scratch,
+                                     stack, balls)
         control[EVALUATED] += 1
         undecided = False
         for p in range(row.shape[0]):
