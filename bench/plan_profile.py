@@ -6,7 +6,7 @@ with the collision world's entry points wrapped in timers.
 Stages (seconds per plan, mean over the problems): state checks (``in_collision``, OMPL's state
 validity), edge checks in the compiled walk (``bounds_walk.walk``: forward kinematics,
 bounding-volume verdicts, clearance skipping), edge checks in python-fcl
-(``ExactJudge.undecided`` on the configurations the walk left undecided), and the rest (OMPL's
+(``ExactJudge.any_contact`` on the configurations the walk left undecided), and the rest (OMPL's
 own search and simplification, the Python glue between them). The wrappers cost a little
 themselves, so the total is a bit above the timed stage's; the shares are what this table is
 for.
@@ -51,7 +51,7 @@ def profile(spec: dict[str, Any]) -> dict[str, Any]:
     worlds = {n: robot.collision_world(scene_from_json(n, s)) for n, s in spec["scenes"].items()}
     spent = dict.fromkeys(STAGES, 0.0)
     originals = (collision.CollisionWorld.in_collision, bounds_walk.walk,
-                 exact.ExactJudge.undecided)
+                 exact.ExactJudge.any_contact)
 
     def solve_all() -> float:
         begin = time.perf_counter()
@@ -74,12 +74,12 @@ def profile(spec: dict[str, Any]) -> dict[str, Any]:
     solve_all()  # warm: lazy models, compiled kernels loaded
     collision.CollisionWorld.in_collision = state_check  # type: ignore[method-assign]
     bounds_walk.walk = _timed(spent, STAGES[1], originals[1])
-    exact.ExactJudge.undecided = _timed(spent, STAGES[2], originals[2])  # type: ignore
+    exact.ExactJudge.any_contact = _timed(spent, STAGES[2], originals[2])  # type: ignore
     try:
         total = solve_all()
     finally:
         (collision.CollisionWorld.in_collision, bounds_walk.walk,
-         exact.ExactJudge.undecided) = originals  # type: ignore[method-assign]
+         exact.ExactJudge.any_contact) = originals  # type: ignore[method-assign]
     n = len(spec["problems"])
     rows = {name: seconds / n for name, seconds in spent.items()}
     rows["OMPL search, simplification and glue"] = max(0.0, total / n - sum(rows.values()))

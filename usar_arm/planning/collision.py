@@ -241,7 +241,7 @@ class CollisionWorld:
         quick, world, verdicts = self._compiled.summary(q)
         if quick != bounds.UNDECIDED:
             return bool(quick == bounds.CONTACT)
-        return bool(self._decide(world, verdicts, stop_at_first=True))
+        return self._exact.any_contact(world, verdicts, self._rr, self._rs)
 
     def contacts(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, sorted."""
@@ -313,7 +313,7 @@ class CollisionWorld:
         world, verdicts, overall = self._compiled.check(qs)
         hit = overall == bounds.CONTACT
         for n in np.flatnonzero(overall == bounds.UNDECIDED):
-            hit[n] = bool(self._decide(world[n], verdicts[n], stop_at_first=True))
+            hit[n] = self._exact.any_contact(world[n], verdicts[n], self._rr, self._rs)
         return hit
 
     def segment_free(self, a: Array, b: Array, steps: int) -> bool:
@@ -328,7 +328,8 @@ class CollisionWorld:
         if steps < 1:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
         return self._compiled.segment_free(
-            a, b, steps, lambda poses, row: bool(self._decide(poses, row, stop_at_first=True)))[0]
+            a, b, steps, lambda poses, row: self._exact.any_contact(poses, row, self._rr,
+                                                                    self._rs))[0]
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""

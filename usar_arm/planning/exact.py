@@ -109,12 +109,15 @@ class ExactJudge:
         o = placed.get(i)
         if o is None:
             o = self._robot[i]
-            t = self.to_shape[i]
+            pose, t = poses[i], self.to_shape[i]
             if t is None:
-                o.setTransform(_fcl_transform(poses[i]))
-            else:  # (matmul's results are contiguous already)
-                rot = poses[i][:3, :3]
-                o.setTransform(fcl.Transform(rot @ t[:3, :3], rot @ t[:3, 3] + poses[i][:3, 3]))
+                o.setRotation(pose[:3, :3])
+                o.setTranslation(pose[:3, 3])
+            else:  # (one 3 x 4 product; the setters copy the views they are given)
+                m = pose[:3, :3] @ t[:3]
+                m[:, 3] += pose[:3, 3]
+                o.setRotation(m[:, :3])
+                o.setTranslation(m[:, 3])
             placed[i] = o
         return o
 
@@ -131,19 +134,36 @@ class ExactJudge:
             return proven[:1]
         found = proven
         placed: dict[int, fcl.CollisionObject] = {}
-        n_rr = len(rr)
-        for p in np.flatnonzero(verdicts == bounds.UNDECIDED):
-            if p < n_rr:
-                i, j = rr[p]
-                other = self._placed(j, poses, placed)
-            else:
-                i, k = rs[p - n_rr]
-                other = self._static[k]
-            if self._collide(self._placed(i, poses, placed), other):
-                found.append(int(p))
+        for p in np.flatnonzero(verdicts == bounds.UNDECIDED).tolist():
+            if self._pair_collides(p, poses, rr, rs, placed):
+                found.append(p)
                 if stop_at_first:
                     return found
         return found
+
+    def any_contact(self, poses: Array, verdicts: NDArray[np.int8], rr: IndexArray,
+                    rs: IndexArray) -> bool:
+        """Whether a checked pair is in contact, given the compiled verdicts: a proven contact,
+        else FCL's answer on the undecided pairs, stopping at the first in contact (as
+        :meth:`undecided` with ``stop_at_first``, without naming the pair: the path of every
+        collision query of a plan)."""
+        placed: dict[int, fcl.CollisionObject] = {}
+        for p in np.flatnonzero(verdicts).tolist():  # (CLEAR is 0)
+            if verdicts[p] == bounds.CONTACT or self._pair_collides(p, poses, rr, rs, placed):
+                return True
+        return False
+
+    def _pair_collides(self, p: int, poses: Array, rr: IndexArray, rs: IndexArray,
+                       placed: dict[int, fcl.CollisionObject]) -> bool:
+        """FCL's answer on checked pair ``p`` (robot-robot pairs first, then robot-scene)."""
+        n_rr = len(rr)
+        if p < n_rr:
+            i, j = rr[p]
+            other = self._placed(j, poses, placed)
+        else:
+            i, k = rs[p - n_rr]
+            other = self._static[k]
+        return self._collide(self._placed(i, poses, placed), other)
 
     def every_pair(self, world: Array, checked: list[tuple[bool, int, int]]) -> list[int]:
         """Indices into ``checked`` ((scene?, link, link or obstacle) triples) of the pairs FCL

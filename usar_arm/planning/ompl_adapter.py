@@ -101,7 +101,7 @@ def edge_steps(a: Array, b: Array, resolution: float, levers: Array | None = Non
                max_step: float = math.inf) -> int:
     """How many steps the segment a -> b is checked in (see :func:`edge_configurations`)."""
     delta = np.abs(np.asarray(b, float) - np.asarray(a, float))
-    steps = max(1, math.ceil(float(np.max(delta)) / resolution))
+    steps = max(1, math.ceil(float(delta.max()) / resolution))  # (the method: half the cost)
     if levers is not None and math.isfinite(max_step):
         steps = max(steps, math.ceil(float(levers @ delta) / max_step))
     return steps
