@@ -180,7 +180,7 @@ def test_a_segment_blocked_in_its_middle_ends_at_the_third_configuration(kr60: R
 
     def in_contact(poses: np.ndarray, row: np.ndarray) -> bool:
         decided.append(1)
-        return bool(world._decide(poses, row, stop_at_first=True))  # type: ignore[attr-defined]
+        return world._any_contact(poses, row)  # type: ignore[attr-defined]
 
     free, evaluated = world._compiled.segment_free(a, b, steps, in_contact)  # type: ignore
     assert not free and evaluated == 3

@@ -242,7 +242,8 @@ def _closing(cum: Array, links: Array, i: int, j: int) -> float:
 
 def ball_scratch(links: Array, groups: Array, leaves: Array
                  ) -> tuple[Array, Array, np.ndarray]:
-    """The scratch of :func:`_judge`'s balls: their world centres and the placed bodies."""
+    """The scratch of :func:`_judge`'s balls: their world centres (groups, leaves) and the
+    flags of what is placed (bodies' groups, then groups' leaves: see :mod:`.bounds_balls`)."""
     return (np.empty((groups.shape[0], 3)), np.empty((leaves.shape[0], 3)),
             np.zeros(links.shape[0] + groups.shape[0], dtype=np.int8))
 

@@ -241,18 +241,22 @@ class CollisionWorld:
         quick, world, verdicts = self._compiled.summary(q)
         if quick != bounds.UNDECIDED:
             return bool(quick == bounds.CONTACT)
-        return self._exact.any_contact(world, verdicts, self._rr, self._rs)
+        return self._any_contact(world, verdicts)
 
     def contacts(self, q: Array) -> list[Pair]:
         """Every checked pair in contact at ``q``, sorted."""
         world, verdicts = self.bounded_poses(q)
-        return sorted(set(self._decide(world[0], verdicts[0], stop_at_first=False)))
+        return sorted(set(self._decide(world[0], verdicts[0])))
 
-    def _decide(self, poses: Array, verdicts: NDArray[np.int8], stop_at_first: bool
-                ) -> list[Pair]:
+    def _decide(self, poses: Array, verdicts: NDArray[np.int8]) -> list[Pair]:
         """The pairs in contact, given the compiled verdicts (link poses (L, 3, 4))."""
         return [self._pair_name(p) for p in
-                self._exact.undecided(poses, verdicts, self._rr, self._rs, stop_at_first)]
+                self._exact.undecided(poses, verdicts, self._rr, self._rs)]
+
+    def _any_contact(self, poses: Array, verdicts: NDArray[np.int8]) -> bool:
+        """Whether a pair is in contact, given the compiled verdicts (FCL on the undecided
+        ones, stopping at the first contact)."""
+        return self._exact.any_contact(poses, verdicts, self._rr, self._rs)
 
     def _pair_name(self, p: int) -> Pair:
         """The names of checked pair ``p`` (robot-robot pairs first, then robot-scene)."""
@@ -313,7 +317,7 @@ class CollisionWorld:
         world, verdicts, overall = self._compiled.check(qs)
         hit = overall == bounds.CONTACT
         for n in np.flatnonzero(overall == bounds.UNDECIDED):
-            hit[n] = self._exact.any_contact(world[n], verdicts[n], self._rr, self._rs)
+            hit[n] = self._any_contact(world[n], verdicts[n])
         return hit
 
     def segment_free(self, a: Array, b: Array, steps: int) -> bool:
@@ -327,14 +331,12 @@ class CollisionWorld:
         """
         if steps < 1:
             raise ValueError(f"a segment needs at least 1 step, got {steps}")
-        return self._compiled.segment_free(
-            a, b, steps, lambda poses, row: self._exact.any_contact(poses, row, self._rr,
-                                                                    self._rs))[0]
+        return self._compiled.segment_free(a, b, steps, self._any_contact)[0]
 
     def contacts_many(self, qs: Array) -> list[list[Pair]]:
         """:meth:`contacts` for N configurations at once."""
         world, verdicts = self.bounded_poses(qs)
         found: list[list[Pair]] = [[] for _ in range(len(world))]
         for n in np.flatnonzero(verdicts.any(axis=1)):
-            found[n] = sorted(set(self._decide(world[n], verdicts[n], stop_at_first=False)))
+            found[n] = sorted(set(self._decide(world[n], verdicts[n])))
         return found

@@ -125,28 +125,23 @@ class ExactJudge:
         return bool(fcl.collide(a, b, self._request, fcl.CollisionResult()) > 0)
 
     def undecided(self, poses: Array, verdicts: NDArray[np.int8], rr: IndexArray,
-                  rs: IndexArray, stop_at_first: bool) -> list[int]:
+                  rs: IndexArray) -> list[int]:
         """The checked pairs (indices: robot-robot ``rr`` first, then robot-scene ``rs``) in
         contact, given the compiled verdicts: proven contacts as they are, FCL's answer on the
         undecided ones (link poses (L, 3, 4))."""
-        proven = [int(p) for p in np.flatnonzero(verdicts == bounds.CONTACT)]
-        if stop_at_first and proven:
-            return proven[:1]
-        found = proven
+        found = [int(p) for p in np.flatnonzero(verdicts == bounds.CONTACT)]
         placed: dict[int, fcl.CollisionObject] = {}
         for p in np.flatnonzero(verdicts == bounds.UNDECIDED).tolist():
             if self._pair_collides(p, poses, rr, rs, placed):
                 found.append(p)
-                if stop_at_first:
-                    return found
         return found
 
     def any_contact(self, poses: Array, verdicts: NDArray[np.int8], rr: IndexArray,
                     rs: IndexArray) -> bool:
         """Whether a checked pair is in contact, given the compiled verdicts: a proven contact,
-        else FCL's answer on the undecided pairs, stopping at the first in contact (as
-        :meth:`undecided` with ``stop_at_first``, without naming the pair: the path of every
-        collision query of a plan)."""
+        else FCL's answer on the undecided pairs, stopping at the first in contact (what
+        :meth:`undecided` would find, without naming the pairs: the path of every collision
+        query of a plan)."""
         placed: dict[int, fcl.CollisionObject] = {}
         for p in np.flatnonzero(verdicts).tolist():  # (CLEAR is 0)
             if verdicts[p] == bounds.CONTACT or self._pair_collides(p, poses, rr, rs, placed):
