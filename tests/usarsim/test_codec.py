@@ -201,3 +201,12 @@ def test_malformed_lines_raise_protocol_error_quoting_line_and_column(
     assert info.value.position == column
     assert words in str(info.value)
     assert line[:30] in str(info.value)
+
+
+def test_asta_joints_reads_an_arms_links_in_configuration_order_or_none_when_one_is_missing(
+        ) -> None:
+    asta = parse_line("ASTA {Time 1.0} {Name KR60Arm} {Link 2} {Value -0.5} {Link 1} {Value 0.25}")
+    assert isinstance(asta, m.Asta)
+    assert asta.joints((1, 2)) == (0.25, -0.5)
+    assert asta.joints((2,)) == (-0.5,)
+    assert asta.joints((1, 3)) is None

@@ -248,6 +248,15 @@ class Asta:
         """The joint values ordered by link index."""
         return tuple(v for _, v in sorted(self.values))
 
+    def joints(self, links: tuple[int, ...]) -> tuple[float, ...] | None:
+        """The values (rad or m) of ``links`` (1-based), in that order: one arm's joint vector
+        in its configuration order; None when the line lacks any of them (a partial line, or
+        another actuator's)."""
+        values = dict(self.values)
+        if not all(k in values for k in links):
+            return None
+        return tuple(values[k] for k in links)
+
 
 @dataclass(frozen=True)
 class Sta:
