@@ -76,6 +76,7 @@ TOOLS_NEED: tuple[tuple[str, str], ...] = (
     ("/usr/bin/xvfb-run", "xvfb"),
     ("/usr/bin/xauth", "xauth"),
     ("/usr/bin/convert", "imagemagick"),
+    ("/usr/bin/tesseract", "tesseract-ocr"),
 )
 """What the real tools that judge the node need (the tests, the RViz pictures)."""
 
