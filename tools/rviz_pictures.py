@@ -120,7 +120,7 @@ def render(robot: str, out: Path, work: Path | None = None) -> Picture:
                                       stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT))
         time.sleep(1.5)
         procs.append(subprocess.Popen(
-            [sys.executable, "-m", "usar_arm", "ros", "--ros1", "--robot", robot, "-q"],
+            [sys.executable, "-m", "usar_arm", "ros", "--ros1", "--robot", robot, "-v"],
             env={**os.environ, **{k: env[k] for k in ("ROS_MASTER_URI", "ROS_HOSTNAME",
                                                       "ROS_HOME")}},
             stdout=open(work / "node.log", "w"), stderr=subprocess.STDOUT, cwd=ROOT))

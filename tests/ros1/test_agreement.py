@@ -19,14 +19,19 @@ import pytest
 pytest.importorskip("rclpy", reason="the ros extra is not installed: pip install "
                                     "'usar-arm[ros]'")
 
-from nav_msgs.msg import Odometry
-from sensor_msgs.msg import JointState, LaserScan
-from tf2_msgs.msg import TFMessage
+from usar_arm.ros import build
 
-from tests.ros.helpers import Client, NodeProcess, domain_id
-from tests.ros1.helpers import Master, Node, client
-from tests.ros1.replay import Recorder, Recording, Replayer
-from usar_arm.ros import ros1_setup
+build.setup()  # the ROS 2 message build (tf2_msgs), as tests/ros's conftest makes it
+build.ensure_importable()
+
+from nav_msgs.msg import Odometry  # noqa: E402
+from sensor_msgs.msg import JointState, LaserScan  # noqa: E402
+from tf2_msgs.msg import TFMessage  # noqa: E402
+
+from tests.ros.helpers import Client, NodeProcess, domain_id  # noqa: E402
+from tests.ros1.helpers import Master, Node, client  # noqa: E402
+from tests.ros1.replay import Recorder, Recording, Replayer  # noqa: E402
+from usar_arm.ros import ros1_setup  # noqa: E402
 
 STREAM_S = 8.0
 """How long the recorded node streams after it has served its description (s)."""
@@ -37,12 +42,12 @@ ROS2_TYPES = {"sensor_msgs/JointState": JointState, "tf2_msgs/TFMessage": TFMess
               "sensor_msgs/LaserScan": LaserScan, "nav_msgs/Odometry": Odometry}
 
 
-def _simulator(folder: Path) -> tuple[subprocess.Popen[bytes], int]:
+def _simulator(folder: Path, world: str) -> tuple[subprocess.Popen[bytes], int]:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = int(s.getsockname()[1])
     proc = subprocess.Popen([sys.executable, "-m", "usar_arm", "sim", "--port", str(port),
-                             "--world", "rooms"], stdout=open(folder / "sim.log", "w"),
+                             "--world", world], stdout=open(folder / "sim.log", "w"),
                             stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
@@ -74,7 +79,7 @@ def _ros2(robot: str, port: int, folder: Path, name: str, seconds: float
 
 
 def _record(robot: str, folder: Path) -> Recording:
-    sim, port = _simulator(folder)
+    sim, port = _simulator(folder, "rooms" if robot == "P3AT" else "default")
     recorder = Recorder("127.0.0.1", port)
     try:
         _ros2(robot, recorder.port, folder, "recorded", STREAM_S)
@@ -127,6 +132,21 @@ def _ros1_fields(topic: str, msg: dict[str, Any]) -> Any:
                    [t["transform"]["rotation"][k] for k in "xyzw"]] for t in msg["transforms"])
 
 
+def _close(a: Any, b: Any, tolerance: float) -> bool:
+    """Equal, numbers within ``tolerance`` (0: exactly)."""
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y, tolerance) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float) or isinstance(b, float):
+        return abs(a - b) <= tolerance
+    return bool(a == b)
+
+
+TOLERANCE = {"odom": 1e-12, "tf": 1e-12}
+"""The odom frame is where base_footprint stood at the first INS reading each node saw, which
+depends on how long each took to start (a standing robot's readings differ by the INS's
+rounding, 1e-19 here); every other field is compared exactly."""
+
+
 def _by_stamp(messages: list[Any], fields: Any, stamp: Any) -> dict[Any, Any]:
     return {stamp(m): fields(m) for m in messages}
 
@@ -168,13 +188,19 @@ def test_one_session_replayed_into_both_nodes_gives_the_same_messages(
             shared = sorted(set(two) & set(one))
             assert len(shared) >= 10, f"tf: only {len(shared)} messages in both windows"
             for key in shared:
-                assert json.loads(json.dumps(two[key])) == one[key], key
+                assert _close(json.loads(json.dumps(two[key])), one[key],
+                              TOLERANCE["tf"] if robot == "P3AT" else 0.0), key
             continue
         two = _by_stamp(ros2[topic], lambda m, t=topic: _ros2_fields(t, m), _stamp)
         one = _by_stamp([m for _, m in ros1[f"/{topic}"]],
                         lambda m, t=topic: _ros1_fields(t, m),
                         lambda m: tuple(m["header"]["stamp"]))
-        shared = sorted(set(two) & set(one))
+        # a node's first scan has no period yet (scan_time 0) and its first odometry no twist:
+        # what each node saw first depends on how long it took to start, so those are left out
+        first = set(list(two)[:2]) | {tuple(m["header"]["stamp"]) for _, m in
+                                      ros1[f"/{topic}"][:2]}
+        shared = sorted((set(two) & set(one)) - first)
         assert len(shared) >= 10, f"{topic}: only {len(shared)} messages in both windows"
         for stamp in shared:
-            assert json.loads(json.dumps(two[stamp])) == one[stamp], (topic, stamp)
+            assert _close(json.loads(json.dumps(two[stamp])), one[stamp],
+                          TOLERANCE.get(topic, 0.0)), (topic, stamp, two[stamp], one[stamp])

@@ -27,7 +27,8 @@ RSP = "/usr/lib/robot_state_publisher/robot_state_publisher"
 def kr60(ros1_env: ros1_setup.Ros1Environment, tmp_path_factory: pytest.TempPathFactory
          ) -> Iterator[tuple[Master, Node, Path]]:
     folder = tmp_path_factory.mktemp("ros1-kr60")
-    with session(ros1_env, folder, ["-v"]) as (master, node):
+    # full-precision numbers on the wire, as the demo runs (UDK prints the truth in cm)
+    with session(ros1_env, folder, ["--wire-precision", "full", "-v"]) as (master, node):
         yield master, node, folder
 
 

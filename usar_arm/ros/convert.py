@@ -17,6 +17,7 @@ from typing import Any
 from usar_arm.ros.frames import quaternion
 from usar_arm.ros.goals import TrajectoryGoal
 from usar_arm.ros.transport import (
+    ActionKind,
     ClockRecord,
     FeedbackRecord,
     JointStateRecord,
@@ -29,6 +30,16 @@ from usar_arm.ros.transport import (
 
 
 @dataclass(frozen=True)
+class ActionTypes:
+    """One action's classes in one middleware: its ``result`` and ``feedback`` messages and
+    what its server is made with (``action``)."""
+
+    action: Any
+    result: Any
+    feedback: Any
+
+
+@dataclass(frozen=True)
 class MessageTypes:
     """One middleware's message classes and time conversions.
 
@@ -36,8 +47,8 @@ class MessageTypes:
         time: seconds -> the middleware's Time. seconds: a Time or Duration -> seconds.
         ranges: a scan's ranges -> what its LaserScan takes (float32 values).
         by_kind: the message class of each :class:`~usar_arm.ros.transport.Kind`.
-        transform, point, feedback: TransformStamped, JointTrajectoryPoint and the
-            FollowJointTrajectory feedback classes.
+        transform, point: TransformStamped and JointTrajectoryPoint.
+        actions: each action's classes.
     """
 
     time: Callable[[float], Any]
@@ -46,7 +57,7 @@ class MessageTypes:
     by_kind: dict[Kind, Any]
     transform: Any
     point: Any
-    feedback: Any
+    actions: dict[ActionKind, ActionTypes]
 
 
 def to_message(record: Any, types: MessageTypes) -> Any:
@@ -101,9 +112,27 @@ def _odometry(record: OdometryRecord, types: MessageTypes) -> Any:
     return msg
 
 
-def feedback_message(record: FeedbackRecord, types: MessageTypes) -> Any:
-    """A FollowJointTrajectory feedback message."""
-    msg = types.feedback(joint_names=list(record.names))
+def goal_record(kind: ActionKind, request: Any, types: MessageTypes) -> Any:
+    """The goal record of an action's request (a :class:`TrajectoryGoal`)."""
+    if kind is ActionKind.FOLLOW_JOINT_TRAJECTORY:
+        return goal_from_message(request.trajectory, types, list(request.path_tolerance),
+                                 list(request.goal_tolerance),
+                                 types.seconds(request.goal_time_tolerance))
+    raise TypeError(f"no goal record for {kind.value}")
+
+
+def result_message(kind: ActionKind, code: int, message: str, types: MessageTypes) -> Any:
+    """An action's result: the error code and its message (FollowJointTrajectory)."""
+    if kind is ActionKind.FOLLOW_JOINT_TRAJECTORY:
+        return types.actions[kind].result(error_code=code, error_string=message)
+    raise TypeError(f"no result for {kind.value}")
+
+
+def feedback_message(kind: ActionKind, record: FeedbackRecord, types: MessageTypes) -> Any:
+    """An action's feedback message (FollowJointTrajectory: desired, actual, error)."""
+    if kind is not ActionKind.FOLLOW_JOINT_TRAJECTORY:
+        raise TypeError(f"no feedback for {kind.value}")
+    msg = types.actions[kind].feedback(joint_names=list(record.names))
     msg.header.stamp = types.time(record.stamp)
     msg.desired = types.point(positions=list(record.desired), velocities=list(record.velocity))
     msg.actual = types.point(positions=list(record.actual))

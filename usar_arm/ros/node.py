@@ -34,6 +34,7 @@ from usar_arm.ros.frames import Edge, TransformTree, world_from_platform
 from usar_arm.ros.goals import INVALID_GOAL, CheckedGoal, GoalRejected, TrajectoryGoal, check_goal
 from usar_arm.ros.runner import Feedback, GoalRunner, Job, Outcome
 from usar_arm.ros.transport import (
+    ActionKind,
     ClockRecord,
     Counted,
     FeedbackRecord,
@@ -180,8 +181,8 @@ class TrajectoryInterfaces:
         self.runner = runner
         self.rate_hz = rate_hz
         self.names = tuple(arm.joint_names)
-        transport.trajectory_action(f"{controller}/follow_joint_trajectory", self.arrived,
-                                    self.serve)
+        transport.action(f"{controller}/follow_joint_trajectory",
+                         ActionKind.FOLLOW_JOINT_TRAJECTORY, self.arrived, self.serve)
         transport.subscribe(f"{controller}/{transport.trajectory_topic}", Kind.TRAJECTORY,
                             self._on_topic, long_running=True)
 

@@ -48,14 +48,17 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from usar_arm.core.errors import InvalidInputError
 from usar_arm.ros.convert import (
+    ActionTypes,
     MessageTypes,
     feedback_message,
-    goal_from_message,
+    goal_record,
+    result_message,
     to_message,
     to_record,
 )
 from usar_arm.ros.ros1_setup import Ros1SetupError
 from usar_arm.ros.transport import (
+    ActionKind,
     FeedbackRecord,
     GoalHandle,
     Kind,
@@ -91,7 +94,9 @@ TYPES = MessageTypes(
              Kind.CLOCK: Clock, Kind.SCAN: LaserScan, Kind.ODOMETRY: Odometry,
              Kind.TWIST: Twist, Kind.TRAJECTORY: JointTrajectory},
     transform=TransformStamped, point=JointTrajectoryPoint,
-    feedback=FollowJointTrajectoryFeedback)
+    actions={ActionKind.FOLLOW_JOINT_TRAJECTORY: ActionTypes(
+        FollowJointTrajectoryAction, FollowJointTrajectoryResult,
+        FollowJointTrajectoryFeedback)})
 """ROS 1's message classes for :mod:`usar_arm.ros.convert`."""
 
 _ENDING = (GoalStatus.PREEMPTING, GoalStatus.RECALLING)
@@ -102,12 +107,10 @@ class Ros1Goal:
     """An actionlib server goal handle as the logic's
     :class:`~usar_arm.ros.transport.GoalHandle`."""
 
-    def __init__(self, handle: Any):
+    def __init__(self, handle: Any, kind: ActionKind):
         self.handle = handle
-        request = handle.get_goal()
-        self.goal = goal_from_message(request.trajectory, TYPES, list(request.path_tolerance),
-                                      list(request.goal_tolerance),
-                                      ros_seconds(request.goal_time_tolerance))
+        self.kind = kind
+        self.goal = goal_record(kind, handle.get_goal(), TYPES)
         self.ticket = 0
 
     def cancel_requested(self) -> bool:
@@ -120,17 +123,15 @@ class Ros1Goal:
 
     def refuse(self, code: int, message: str) -> None:
         """REJECTED, the error code in the result (ROS 1's joint_trajectory_controller)."""
-        self.handle.set_rejected(FollowJointTrajectoryResult(error_code=code,
-                                                             error_string=message), message)
+        self.handle.set_rejected(result_message(self.kind, code, message, TYPES), message)
 
     def feedback(self, record: FeedbackRecord) -> None:
         """Publish one feedback message."""
-        self.handle.publish_feedback(feedback_message(record, TYPES))
+        self.handle.publish_feedback(feedback_message(self.kind, record, TYPES))
 
     def finish(self, outcome: Any) -> None:
         """SUCCEEDED, PREEMPTED (cancelled, or pre-empted by a newer goal) or ABORTED."""
-        result = FollowJointTrajectoryResult(error_code=outcome.code,
-                                             error_string=outcome.message)
+        result = result_message(self.kind, outcome.code, outcome.message, TYPES)
         if outcome.succeeded:
             self.handle.set_succeeded(result, outcome.message)
         elif outcome.cancelled or outcome.preempted:
@@ -226,16 +227,16 @@ class Ros1Transport:
         self._kept.append(rospy.Subscriber(topic, TYPES.by_kind[kind], deliver,
                                            queue_size=10))
 
-    def trajectory_action(self, name: str, arrived: Callable[[GoalHandle], None],
-                          serve: Callable[[GoalHandle], None]) -> None:
+    def action(self, name: str, kind: ActionKind, arrived: Callable[[GoalHandle], None],
+               serve: Callable[[GoalHandle], None]) -> None:
         """An actionlib ActionServer: each goal numbered on arrival, then checked and run on a
         thread of its own (accepted or rejected there)."""
         def on_goal(handle: Any) -> None:
-            goal = Ros1Goal(handle)
+            goal = Ros1Goal(handle, kind)
             arrived(goal)
             threading.Thread(target=serve, args=(goal,), daemon=True, name="goal").start()
 
-        server = actionlib.ActionServer(name, FollowJointTrajectoryAction, on_goal,
+        server = actionlib.ActionServer(name, TYPES.actions[kind].action, on_goal,
                                         lambda _handle: None, auto_start=False)
         server.start()
         self._kept.append(server)
@@ -308,9 +309,9 @@ def run(options: Options, ros_args: list[str] | None, stop: threading.Event | No
                     disable_signals=True)
     # rospy's logging configuration replaced the root's handlers with its log file: keep
     # that, give back the command line's (stderr), and send the node's own log to /rosout.
-    for handler in handlers:
-        if handler not in root.handlers:
-            root.addHandler(handler)
+    for kept in handlers:
+        if kept not in root.handlers:
+            root.addHandler(kept)
     root.setLevel(level)
     rosout = RosOutHandler(level=logging.INFO)
     logging.getLogger("usar_arm").addHandler(rosout)
@@ -320,5 +321,5 @@ def run(options: Options, ros_args: list[str] | None, stop: threading.Event | No
     finally:
         transport.close()
         logging.getLogger("usar_arm").removeHandler(rosout)
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+        for sig, before in previous.items():
+            signal.signal(sig, before)

@@ -19,13 +19,16 @@ from typing import Any
 
 from usar_arm.ros.build import ensure_importable
 from usar_arm.ros.convert import (
+    ActionTypes,
     MessageTypes,
     feedback_message,
-    goal_from_message,
+    goal_record,
+    result_message,
     to_message,
     to_record,
 )
 from usar_arm.ros.transport import (
+    ActionKind,
     FeedbackRecord,
     GoalHandle,
     Kind,
@@ -85,24 +88,22 @@ TYPES = MessageTypes(
              Kind.CLOCK: Clock, Kind.SCAN: LaserScan, Kind.ODOMETRY: Odometry,
              Kind.TWIST: Twist, Kind.TRAJECTORY: JointTrajectory},
     transform=TransformStamped, point=JointTrajectoryPoint,
-    feedback=FollowJointTrajectory.Feedback)
+    actions={ActionKind.FOLLOW_JOINT_TRAJECTORY: ActionTypes(
+        FollowJointTrajectory, FollowJointTrajectory.Result, FollowJointTrajectory.Feedback)})
 """ROS 2's message classes for :mod:`usar_arm.ros.convert`."""
 
 
 class Ros2Goal:
-    """A FollowJointTrajectory goal handle of rclpy as the logic's
+    """A goal handle of rclpy (an action of ``kind``) as the logic's
     :class:`~usar_arm.ros.transport.GoalHandle`; :attr:`result` is what the execute callback
     returns."""
 
-    def __init__(self, handle: Any, node: Node):
+    def __init__(self, handle: Any, kind: ActionKind):
         self.handle = handle
-        self.node = node
-        request = handle.request
-        self.goal = goal_from_message(request.trajectory, TYPES, list(request.path_tolerance),
-                                      list(request.goal_tolerance),
-                                      ros_seconds(request.goal_time_tolerance))
+        self.kind = kind
+        self.goal = goal_record(kind, handle.request, TYPES)
         self.ticket = 0
-        self.result = FollowJointTrajectory.Result()
+        self.result = TYPES.actions[kind].result()
 
     def cancel_requested(self) -> bool:
         """Whether the client asked to cancel."""
@@ -113,16 +114,16 @@ class Ros2Goal:
 
     def refuse(self, code: int, message: str) -> None:
         """Abort the (accepted) goal with the controller's error code."""
-        self.result.error_code, self.result.error_string = code, message
+        self.result = result_message(self.kind, code, message, TYPES)
         self.handle.abort()
 
     def feedback(self, record: FeedbackRecord) -> None:
         """Publish one feedback message."""
-        self.handle.publish_feedback(feedback_message(record, TYPES))
+        self.handle.publish_feedback(feedback_message(self.kind, record, TYPES))
 
     def finish(self, outcome: Any) -> None:
         """Succeed, cancel or abort (a pre-empted goal too: ROS 2 has no PREEMPTED)."""
-        self.result.error_code, self.result.error_string = outcome.code, outcome.message
+        self.result = result_message(self.kind, outcome.code, outcome.message, TYPES)
         if outcome.succeeded:
             self.handle.succeed()
         elif outcome.cancelled:
@@ -188,13 +189,13 @@ class Ros2Transport:
             TYPES.by_kind[kind], topic, lambda msg: callback(to_record(kind, msg, TYPES)), 10,
             callback_group=self._group if long_running else None))
 
-    def trajectory_action(self, name: str, arrived: Callable[[GoalHandle], None],
-                          serve: Callable[[GoalHandle], None]) -> None:
+    def action(self, name: str, kind: ActionKind, arrived: Callable[[GoalHandle], None],
+               serve: Callable[[GoalHandle], None]) -> None:
         """An rclpy action server: every goal accepted at once, then served."""
         self._concurrent = True
 
         def accepted(handle: Any) -> None:
-            goal = Ros2Goal(handle, self.node)
+            goal = Ros2Goal(handle, kind)
             arrived(goal)
             self._goals[bytes(handle.goal_id.uuid)] = goal
             handle.execute()
@@ -202,13 +203,13 @@ class Ros2Transport:
         def execute(handle: Any) -> Any:
             goal = self._goals.pop(bytes(handle.goal_id.uuid), None)
             if goal is None:  # executed without passing through accepted (not seen)
-                goal = Ros2Goal(handle, self.node)
+                goal = Ros2Goal(handle, kind)
                 arrived(goal)
             serve(goal)
             return goal.result
 
         self._kept.append(ActionServer(
-            self.node, FollowJointTrajectory, name, execute_callback=execute,
+            self.node, TYPES.actions[kind].action, name, execute_callback=execute,
             goal_callback=lambda _goal: GoalResponse.ACCEPT, handle_accepted_callback=accepted,
             cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=self._group,
             result_timeout=RESULT_KEPT_S))

@@ -25,6 +25,14 @@ from usar_arm.ros.platform_state import PoseSample, ScanFields
 from usar_arm.ros.runner import Outcome
 
 
+class ActionKind(enum.Enum):
+    """An action a node serves, by its ROS name (control_msgs on both middlewares). Adding one
+    (the effectors' GripperCommand) is a member here, its conversions in
+    :mod:`usar_arm.ros.convert` and its classes in each transport's message table."""
+
+    FOLLOW_JOINT_TRAJECTORY = "control_msgs/FollowJointTrajectory"
+
+
 class Kind(enum.Enum):
     """The message type of a topic, by its ROS name (the same on both middlewares)."""
 
@@ -117,8 +125,9 @@ class TwistRecord:
 
 
 class GoalHandle(Protocol):
-    """One FollowJointTrajectory goal as the logic serves it; each transport wraps its
-    middleware's goal handle in one."""
+    """One goal of an action as the logic serves it (its :class:`ActionKind`'s goal record,
+    e.g. a :class:`TrajectoryGoal`); each transport wraps its middleware's goal handle in
+    one."""
 
     goal: TrajectoryGoal
     ticket: int
@@ -194,11 +203,11 @@ class Transport(Protocol):
         :class:`TrajectoryGoal` for :attr:`Kind.TRAJECTORY`); ``long_running``: the callback
         may block for a goal's duration while later messages still arrive."""
 
-    def trajectory_action(self, name: str, arrived: Callable[[GoalHandle], None],
-                          serve: Callable[[GoalHandle], None]) -> None:
-        """Serve the FollowJointTrajectory action ``name``: ``arrived`` is called at once on
-        each goal's arrival (it must return quickly), ``serve`` on a thread of its own that
-        may block until the goal ends."""
+    def action(self, name: str, kind: ActionKind, arrived: Callable[[GoalHandle], None],
+               serve: Callable[[GoalHandle], None]) -> None:
+        """Serve the action ``name`` of ``kind``: ``arrived`` is called at once on each
+        goal's arrival (it must return quickly), ``serve`` on a thread of its own that may
+        block until the goal ends."""
 
     def timer(self, period: float, callback: Callable[[], None]) -> None:
         """Call ``callback`` every ``period`` s."""
