@@ -33,8 +33,11 @@ from tests.ros1.helpers import Master, Node, client  # noqa: E402
 from tests.ros1.replay import Recorder, Recording, Replayer  # noqa: E402
 from usar_arm.ros import ros1_setup  # noqa: E402
 
-STREAM_S = 8.0
-"""How long the recorded node streams after it has served its description (s)."""
+STREAM_S = 20.0
+"""How long the recorded node streams after it has served its description (s): longer than
+the replayed nodes' windows (8 s), so that a replayed node that starts slower than the
+recorded one still has the stream under its window."""
+WINDOW_S = 8.0
 TOPICS = {"KR60": {"joint_states": "sensor_msgs/JointState", "tf": "tf2_msgs/TFMessage"},
           "P3AT": {"scan": "sensor_msgs/LaserScan", "odom": "nav_msgs/Odometry",
                    "tf": "tf2_msgs/TFMessage"}}
@@ -161,7 +164,7 @@ def test_one_session_replayed_into_both_nodes_gives_the_same_messages(
     recording = _record(robot, tmp_path)
     replay2 = Replayer(recording)
     try:
-        ros2 = _ros2(robot, replay2.port, tmp_path, "ros2", STREAM_S - 2)
+        ros2 = _ros2(robot, replay2.port, tmp_path, "ros2", WINDOW_S)
     finally:
         replay2.close()
     replay1 = Replayer(recording)
@@ -171,7 +174,7 @@ def test_one_session_replayed_into_both_nodes_gives_the_same_messages(
                 USAR_ARM_CACHE=str(tmp_path / "ros1-cache"))
     try:
         client(master, "description", "--timeout", "240", timeout=300)
-        client(master, "record", "--seconds", str(STREAM_S - 2), "--out",
+        client(master, "record", "--seconds", str(WINDOW_S), "--out",
                str(tmp_path / "ros1.json"), *(f"/{t}:{k}" for t, k in TOPICS[robot].items()))
     finally:
         code = node.stop()

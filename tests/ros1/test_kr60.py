@@ -127,3 +127,75 @@ def test_a_newer_goal_preempts_the_running_one(kr60: tuple[Master, Node, Path]) 
     assert got["first"]["status"] == "PREEMPTED", got
     assert "pre-empted" in got["first"]["error_string"], got
     assert np.max(np.abs(_joints(master, folder) - q0)) < 0.002
+
+
+_BAG = """import json, sys, rosbag
+out = {}
+with rosbag.Bag(sys.argv[1]) as bag:
+    for topic, msg, _ in bag.read_messages():
+        entry = out.setdefault(topic, {"n": 0, "seq": [], "stamps": []})
+        entry["n"] += 1
+        if topic == "/joint_states":
+            entry["seq"].append(msg.header.seq)
+            entry["stamps"].append([msg.header.stamp.secs, msg.header.stamp.nsecs])
+        elif topic == "/tf":
+            entry["stamps"].append([msg.transforms[0].header.stamp.secs,
+                                    msg.transforms[0].header.stamp.nsecs])
+print(json.dumps(out))
+"""
+
+
+def test_rosbag_records_every_message_the_node_published(
+        ros1_env: ros1_setup.Ros1Environment, tmp_path: Path) -> None:
+    """rosbag record (Debian's) from before the node starts to after it stops: the bag holds
+    every joint state the node sent (header.seq 1..n without a gap; the node's count less the
+    first few it published before rosbag had connected), the tf of each, tf_static once;
+    Debian's rosbag and the rosbags package read the same messages."""
+    import re
+    import signal
+    import time
+
+    master = Master(ros1_env, tmp_path)
+    bag = tmp_path / "node.bag"
+    record = subprocess.Popen(["rosbag", "record", "-O", str(bag), "/joint_states", "/tf",
+                               "/tf_static", "__name:=recorder"], env=master.env(),
+                              stdout=open(tmp_path / "rosbag.log", "w"),
+                              stderr=subprocess.STDOUT)
+    try:
+        time.sleep(3.0)
+        node = Node(master, ["-v"], tmp_path / "node.log")
+        client(master, "description", "--timeout", "240", timeout=300)
+        time.sleep(10.0)
+        assert node.stop() == 0, node.text()[-3000:]
+        time.sleep(1.0)
+    finally:
+        stop(record, signal.SIGINT)
+        master.close()
+    published = dict((k, int(v)) for k, v in re.findall(
+        r"(\w+) (\d+)", re.search(r"published: (.*)", node.text()).group(1)))  # type: ignore
+    done = subprocess.run([str(ros1_env.python), "-c", _BAG, str(bag)], capture_output=True,
+                          text=True, timeout=120, env=ros1_env.environ(), check=True)
+    got = json.loads(done.stdout)
+    seqs = got["/joint_states"]["seq"]
+    assert got["/joint_states"]["n"] >= 90, "10 s of joint states at 10 Hz"
+    # rospy numbers (header.seq) only what it sends to a connection, from 1: with rosbag the
+    # only subscriber, 1..n without a gap is every message sent; the node's own count exceeds
+    # n by what it published before rosbag's connection to it was made (its first few)
+    assert seqs == list(range(1, len(seqs) + 1)), "every message sent is in the bag"
+    assert 0 <= published["joint_states"] - len(seqs) <= 5, (len(seqs), published)
+    tf_stamps = {tuple(s) for s in got["/tf"]["stamps"]}
+    assert all(tuple(s) in tf_stamps for s in got["/joint_states"]["stamps"]), \
+        "each joint state's transforms are in the bag"
+    assert got["/tf_static"]["n"] == published["tf_static"] == 1
+    from rosbags.rosbag1 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    typestore = get_typestore(Stores.ROS1_NOETIC)
+    counts: dict[str, int] = {}
+    with Reader(bag) as reader:
+        for connection, _, raw in reader.messages():
+            msg = typestore.deserialize_ros1(raw, connection.msgtype)
+            counts[connection.topic] = counts.get(connection.topic, 0) + 1
+            if connection.topic == "/joint_states":
+                assert msg.header.seq in set(seqs)
+    assert counts == {t: v["n"] for t, v in got.items()}

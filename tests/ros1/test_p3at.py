@@ -71,7 +71,9 @@ def test_a_teleop_publisher_drives_the_robot_the_way_it_is_told(
     heading = (math.cos(before["yaw"]), math.sin(before["yaw"]))
     forward = (after["x"] - before["x"]) * heading[0] + (after["y"] - before["y"]) * heading[1]
     sideways = -(after["x"] - before["x"]) * heading[1] + (after["y"] - before["y"]) * heading[0]
-    assert forward > 0.2, (before, after)
+    # 0.1 m/s for 6 s, less rostopic's start and a loaded simulator's slower time: at least
+    # a fifth of it, straight
+    assert forward > 0.12, (before, after)
     assert abs(sideways) < 0.1 * forward, (before, after)
     still = _truth(master, folder)
     assert math.hypot(still["x"] - after["x"], still["y"] - after["y"]) < 0.01, "it stopped"
@@ -134,9 +136,10 @@ def test_robot_state_publisher_publishes_the_nodes_fixed_frames(
     got = json.loads((folder / "static.json").read_text())
     mine = edges_by_stamp(got["/tf_static"], any_stamp=True)[(0, 0)]
     theirs = edges_by_stamp(got["/rsp/tf_static"], any_stamp=True)[(0, 0)]
-    sensors = {k: v for k, v in mine.items()}
-    # robot_state_publisher also publishes the URDF's other fixed links; the node's frames
-    # (base_footprint -> base_link, the sensor mounts) must be among them and equal.
-    assert set(sensors) <= set(theirs), set(sensors) - set(theirs)
-    assert compare_trees([(theirs, sensors)]) == (pytest.approx(0, abs=1e-9),
-                                                  pytest.approx(0, abs=1e-9))
+    wheels = {k for k in mine if k[1].endswith("_wheel")}
+    assert len(wheels) == 4, "the node draws the four wheels at rest (UDK sends no wheel state)"
+    # robot_state_publisher publishes the URDF's fixed joints (base_footprint -> base_link, the
+    # sensor mounts); the node publishes each of them, equal, and the wheels besides.
+    assert set(mine) - wheels == set(theirs), set(mine) ^ set(theirs)
+    assert compare_trees([(mine, theirs)]) == (pytest.approx(0, abs=1e-9),
+                                               pytest.approx(0, abs=1e-9))

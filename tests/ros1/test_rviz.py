@@ -93,6 +93,18 @@ def test_rviz_says_global_status_ok(pictures: dict[str, rviz_pictures.Picture], 
     text = _status_text(pictures[robot].png, tmp_path)
     assert "Global Status: Ok" in text, text
     assert "RobotModel" in text, text
+    with Image.open(pictures[robot].png) as image:
+        names = np.array(image.convert("RGB"))[85:200, 44:200].astype(int)
+    # a display in error has its name in red, in warning in orange (blue when Ok); rows of
+    # 19 pixels from Global Options: Global Status, Grid, RobotModel, TF, LaserScan
+    red = (names[..., 0] > 180) & (names[..., 1] < 90) & (names[..., 2] < 90)
+    orange = (names[..., 0] > 200) & (names[..., 1] > 100) & (names[..., 1] < 170) & \
+        (names[..., 2] < 60)
+    assert red.sum() < 5, "no display in error (the P3AT's wheels have their transforms)"
+    warned = {int(r) // 19 for r in np.where(orange)[0]}
+    # the P3AT's TF display warns of the truth/ frames: a tree of its own, with no transform
+    # to the fixed frame odom by design (docs/ros.md section 8); nothing else warns
+    assert warned <= ({4} if robot == "P3AT" else set()), warned
 
 
 def test_the_kr60_is_drawn_where_its_links_are(pictures: dict[str, rviz_pictures.Picture]

@@ -55,6 +55,7 @@ from usar_arm.ros.transport import (
     TwistRecord,
     summary,
 )
+from usar_arm.urdf.description_reader import read_urdf
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.inbox import Received
@@ -280,6 +281,15 @@ def static_edges(desc: PlatformDescription, frames: PlatformFrames) -> list[Edge
     return edges
 
 
+def resting_joints(urdf: str) -> list[Edge]:
+    """Each moving joint of the vehicle's URDF (the wheels, an Ackermann's steering) at rest,
+    its parent -> child transform at 0: UDK sends no wheel or steer state, so they are drawn
+    where they are mounted, not turning (without them RViz's RobotModel has no transform for
+    the wheel links and reports an error)."""
+    return [Edge(j.parent, j.child, j.origin.matrix()) for j in read_urdf(urdf).chain.joints
+            if j.actuated]
+
+
 def serve(transport: Transport, live: LivePlatform, options: PlatformNodeOptions,
           frames: PlatformFrames, stop: threading.Event) -> int:
     """Publish and serve until ``stop`` is set or the middleware shuts down; the robot stops."""
@@ -290,7 +300,8 @@ def serve(transport: Transport, live: LivePlatform, options: PlatformNodeOptions
     unsubscribe = live.client.subscribe(streams.on_line)
     static = Counted(transport.publisher("tf_static", Kind.TF, latched=True), "tf_static",
                      counts)
-    static.publish(TfRecord(transport.now(), tuple(static_edges(desc, frames))))
+    static.publish(TfRecord(transport.now(), (*static_edges(desc, frames),
+                                              *resting_joints(live.result.urdf))))
     transport.describe("robot_description", live.result.urdf)
     log.info("the server sends no wheel state (UDK's %s has no wheel encoder line): "
              "joint_states is not published", desc.name)

@@ -25,6 +25,7 @@ import logging
 import signal
 import socket
 import threading
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -203,8 +204,13 @@ class Ros1Transport:
 
     def publisher(self, topic: str, kind: Kind, depth: int = 10,
                   latched: bool = False) -> _Publisher:
-        """A rospy publisher (``latch`` for ``latched``)."""
-        pub = rospy.Publisher(topic, TYPES.by_kind[kind], queue_size=depth, latch=latched)
+        """A rospy publisher (``latch`` for ``latched``), synchronous and with TCP_NODELAY:
+        each message is on its subscribers' sockets when publish returns (no queue thread to
+        wait for, none left unsent when the node stops; ``depth`` is not needed)."""
+        with warnings.catch_warnings():  # rospy asks for a queue: synchronous is the point
+            warnings.simplefilter("ignore", SyntaxWarning)
+            pub = rospy.Publisher(topic, TYPES.by_kind[kind], queue_size=None, latch=latched,
+                                  tcp_nodelay=True)
         self._kept.append(pub)
         return _Publisher(pub)
 
