@@ -18,7 +18,6 @@ Measures what bench/ros_probe.py measures on ROS 2 (the figures by bench/ros_fig
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import socket
@@ -180,10 +179,7 @@ def main(argv: list[str] | None = None) -> int:
         end_proc = ros_figures.proc(node.pid)
         doc = {"stage": "ros", "middleware": "ROS 1 (Debian's rospy, actionlib)",
                "joint_states": streams, "tf": tf, "goals": moving, "refused_goals": refused,
-               "node": {"cpu_idle_fraction_of_a_core": idle_cpu,
-                        "cpu_executing_fraction_of_a_core": busy_cpu,
-                        "rss_mb_start": start["rss_mb"], "rss_mb_end": end_proc["rss_mb"],
-                        "threads_start": start["threads"], "threads_end": end_proc["threads"]},
+               "node": ros_figures.node_figures(idle_cpu, busy_cpu, start, end_proc),
                "load_average_1min_at_end": os.getloadavg()[0], "cpus": os.cpu_count(),
                "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     finally:
@@ -194,11 +190,7 @@ def main(argv: list[str] | None = None) -> int:
         master.wait(30)
     doc["node"]["exit_code"] = code
     doc["simulator"] = "embedded, in the node's process"
-    text = json.dumps(doc, indent=1)
-    print(text)
-    if a.json:
-        a.json.parent.mkdir(parents=True, exist_ok=True)
-        a.json.write_text(text + "\n")
+    ros_figures.emit(doc, a.json)
     return 0
 
 

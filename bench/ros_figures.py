@@ -11,6 +11,7 @@ stages' figures mean the same thing.
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Callable
@@ -109,3 +110,21 @@ def goal_period(send: Callable[[float], dict[str, Any]], pid: int, seconds: floa
             "errors": [e for c in chunks for e in c["errors"]][:5],
             "node_over_time": [{k: round(v, 3) for k, v in x.items() if k != "cpu_s"}
                                for x in samples]}, busy
+
+
+def node_figures(idle: float, busy: float, start: dict[str, float], end: dict[str, float]
+                 ) -> dict[str, float]:
+    """The node's CPU (fractions of a core, idle and executing) and its memory and threads
+    at the start and the end."""
+    return {"cpu_idle_fraction_of_a_core": idle, "cpu_executing_fraction_of_a_core": busy,
+            "rss_mb_start": start["rss_mb"], "rss_mb_end": end["rss_mb"],
+            "threads_start": start["threads"], "threads_end": end["threads"]}
+
+
+def emit(doc: dict[str, Any], path: Path | None) -> None:
+    """Print the probe's document and write it to ``path`` (when given)."""
+    text = json.dumps(doc, indent=1)
+    print(text)
+    if path:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text + "\n")

@@ -26,7 +26,6 @@ Needs the ros extra and its message build (usar-arm ros --setup).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import subprocess
@@ -213,10 +212,7 @@ def main(argv: list[str] | None = None) -> int:
         end = ros_figures.proc(node.pid)
         doc = {"stage": "ros", "joint_states": streams, "tf": tf, "goals": moving,
                "refused_goals": refused,
-               "node": {"cpu_idle_fraction_of_a_core": idle_cpu,
-                        "cpu_executing_fraction_of_a_core": busy_cpu,
-                        "rss_mb_start": start["rss_mb"], "rss_mb_end": end["rss_mb"],
-                        "threads_start": start["threads"], "threads_end": end["threads"]},
+               "node": ros_figures.node_figures(idle_cpu, busy_cpu, start, end),
                "targets": {"joint_states_latency_p99_ms<=2": streams["latency_ms"]["p99"] <= 2,
                            "joint_states_none_dropped": streams["dropped"] == 0,
                            "tf_equals_fk_1e-9": tf["tool0_max_error_m"] <= 1e-9
@@ -237,11 +233,7 @@ def main(argv: list[str] | None = None) -> int:
     doc["node"]["exit_code"] = code
     doc["simulator"] = (f"usar-arm sim in its own process (port {a.sim_port})" if a.sim_port
                         else "embedded, in the node's process")
-    text = json.dumps(doc, indent=1)
-    print(text)
-    if a.json:
-        a.json.parent.mkdir(parents=True, exist_ok=True)
-        a.json.write_text(text + "\n")
+    ros_figures.emit(doc, a.json)
     return 0
 
 

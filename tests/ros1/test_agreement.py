@@ -33,7 +33,7 @@ from tests.ros1.helpers import Master, Node, client  # noqa: E402
 from tests.ros1.replay import Recorder, Recording, Replayer  # noqa: E402
 from usar_arm.ros import ros1_setup  # noqa: E402
 
-STREAM_S = 20.0
+STREAM_S = 40.0
 """How long the recorded node streams after it has served its description (s): longer than
 the replayed nodes' windows (8 s), so that a replayed node that starts slower than the
 recorded one still has the stream under its window."""
