@@ -262,20 +262,37 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
             *table(["move", "plan ms", "motion s", "true mm", "true mrad"], cycle), ""]
 
 def ros_section(doc: dict[str, Any]) -> list[str]:
-    """The live ROS 2 node as its own rclpy client in another process saw it."""
+    """The live nodes as their own clients in other processes saw them: the arm on ROS 2
+    (rclpy) and on ROS 1 (rospy, actionlib), the ground vehicle on ROS 2."""
     out = ([f"Skipped: {doc['settings']['skipped']}.", ""] if doc["settings"].get("skipped")
            else [])
     if "P3AT" in doc["cases"]:
         out = [*_platform_lines(doc["cases"]["P3AT"]), *out]
+    if "KR60-ROS1" in doc["cases"]:
+        r = doc["cases"]["KR60-ROS1"]
+        out = ["`usar-arm ros --ros1` (embedded KR60) measured by `bench/ros1_probe.py`, a "
+               "rospy and actionlib client in the ROS 1 interpreter, on a roscore of its own; "
+               f"load average at its end {r['load_average_1min_at_end']:.1f} on "
+               f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], _arm_rows(r)), "", *out]
     if "KR60" not in doc["cases"]:
         return out
     r = doc["cases"]["KR60"]
+    return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
+            "in another process with its own Pinocchio FK, on a private domain on localhost; "
+            f"load average at its end {r['load_average_1min_at_end']:.1f} on "
+            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], _arm_rows(r)), "", *out]
+
+
+def _arm_rows(r: dict[str, Any]) -> list[list[str]]:
+    """An arm node's figures (either middleware's probe) as table rows."""
     js, goals, refused, node = r["joint_states"], r["goals"], r["refused_goals"], r["node"]
     lat, acc = js["latency_ms"], goals["accept_ms"]
     over = goals["node_over_time"]
-    rows = [
+    seq = f", {js['seq_gaps']} header.seq gaps" if "seq_gaps" in js else ""
+    return [
         ["/joint_states rate", f"{js['rate_hz']:.2f} Hz over {js['seconds']:.0f} s, "
-                               f"{js['dropped']} missing, longest gap {js['max_gap_s']:.3f} s"],
+                               f"{js['dropped']} missing, longest gap {js['max_gap_s']:.3f} s"
+                               + seq],
         ["ASTA arrival -> subscriber", f"p50 {lat['p50']:.2f} ms, p99 {lat['p99']:.2f} ms, "
                                        f"max {lat['max']:.1f} ms"],
         ["tool0 from /tf vs FK", f"{r['tf']['tool0_max_error_m']:.1e} m, "
@@ -294,10 +311,6 @@ def ros_section(doc: dict[str, Any]) -> list[str]:
          + f" (start, after {over[min(1, len(over) - 1)]['t_s']:.0f} s, "
            f"after {over[-1]['t_s']:.0f} s of goals)"],
     ]
-    return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
-            "in another process with its own Pinocchio FK, on a private domain on localhost; "
-            f"load average at its end {r['load_average_1min_at_end']:.1f} on "
-            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), "", *out]
 
 
 def _latency(stats: dict[str, Any], label: str = "median") -> str:
