@@ -1,7 +1,9 @@
 """Robots stage: two mesh arms that no one here wrote, example-robot-data's UR5 and Panda (their
 STL collision meshes and SRDFs; ``robots_data.py``), on MotionBenchMaker's problems as VAMP's
 repository carries them (table_pick, table_under_pick, box, bookshelf_small/tall/thin, cage:
-boxes and cylinders, start and goal configurations), used as they are.
+boxes and cylinders, start and goal configurations), posed as MBM poses them: the UR5 stands
+0.9144 m up, turned 1.57 rad, in the scene's frame, table_pick's objects at their own pose, the
+Panda's fingers 0.065 m open each (``robots_data.py``).
 
 Three tasks per robot, every solver (ours, each peer in its venv) on the same files, in
 alternating rounds (``common.run_alternating``), every answer checked by a brute-force judge
