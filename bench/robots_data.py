@@ -222,8 +222,7 @@ def _quat_mul(a: list[float], b: list[float]) -> list[float]:
 
 def _rotate(q: list[float], v: list[float]) -> list[float]:
     """``v`` rotated by the unit quaternion ``q`` (w, x, y, z)."""
-    w, x, y, z = _quat_mul(_quat_mul(q, [0.0, *v]), [q[0], -q[1], -q[2], -q[3]])
-    return [x, y, z]
+    return _quat_mul(_quat_mul(q, [0.0, *v]), [q[0], -q[1], -q[2], -q[3]])[1:]
 
 
 def _object_pose(obj: dict[str, Any]) -> tuple[list[float], list[float]]:

@@ -152,7 +152,7 @@ def test_an_object_pose_carries_its_primitives() -> None:
     item = data.scene_json(POSED)[0]
     assert item["xyz"] == pytest.approx([1.0, 2.3, 0.6])
     assert np.abs(item["quat_wxyz"]) == pytest.approx([0, 0, 0, 1], abs=1e-12)
-    geom, t = mj.obstacles_from_scene_yaml(POSED)[0]  # the judge's own reading agrees
+    _, t = mj.obstacles_from_scene_yaml(POSED)[0]  # the judge's own reading agrees
     assert t[:3, 3] == pytest.approx([1.0, 2.3, 0.6])
     assert t[:3, :3] == pytest.approx(np.diag([-1.0, -1.0, 1.0]), abs=1e-12)
 
