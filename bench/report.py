@@ -55,10 +55,12 @@ def ik_section(doc: dict[str, Any]) -> list[str]:
     out = []
     for name, case in doc["cases"].items():
         tol = case["tolerance"]
+        drawn = (doc["settings"].get("edges", "") + ". " if case.get("set") == "edges"
+                 else "")
         out += [f"### {name} ({case['dof']} joints), {case['problems']['count']} poses", "",
-                f"Tolerance {tol['position_m']:g} m, {tol['orientation_rad']:g} rad; seed = "
-                "mid-range of the limits; success = Pinocchio FK of the answer within the "
-                "tolerance and the limits.", "",
+                f"{drawn}Tolerance {tol['position_m']:g} m, {tol['orientation_rad']:g} rad; "
+                "seed = mid-range of the limits; success = Pinocchio FK of the answer within "
+                "the tolerance and the limits.", "",
                 *table([*HEAD, NOTES], solver_rows("ik", case))]
     out += ["![IK time per pose](ik.png)", ""]
     return out
