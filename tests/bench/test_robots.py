@@ -167,16 +167,19 @@ def test_the_ur5_is_mounted_by_an_existing_fixed_joint() -> None:
         data._mounted(urdf, "offset_joint", (0.0, 0.0, 1.0), (0.0, 0.0, 0.0))
 
 
+NEEDS_ROBOT_DATA = pytest.mark.skipif(
+    not all((data.CACHE / "share" / "example-robot-data" / k).is_dir() for k in data.KEEP),
+    reason="example-robot-data is not in bench/.cache (the robots stage downloads it once, "
+           "~540 MB)")
+
+
 def test_vamp_archives_are_the_published_bytes() -> None:
     for robot in ("panda", "ur5"):
         assert data.vamp_archive(robot).is_file()
     assert len(data.mbm_texts("panda", ("cage",), per_set=2)) == 2
 
 
-@pytest.mark.skipif(not all((data.CACHE / "share" / "example-robot-data" / k).is_dir()
-                            for k in data.KEEP),
-                    reason="example-robot-data is not in bench/.cache (the robots stage "
-                           "downloads it once, ~540 MB)")
+@NEEDS_ROBOT_DATA
 def test_example_robot_data_robots_load_in_the_judge() -> None:
     for key in ("ur5", "panda"):
         rf = data.robot_files(key)
@@ -209,10 +212,7 @@ def _goal_clearance(key: str, sets: tuple[str, ...], per_set: int) -> list[float
     return out
 
 
-@pytest.mark.skipif(not all((data.CACHE / "share" / "example-robot-data" / k).is_dir()
-                            for k in data.KEEP),
-                    reason="example-robot-data is not in bench/.cache (the robots stage "
-                           "downloads it once, ~540 MB)")
+@NEEDS_ROBOT_DATA
 def test_mbm_goals_grasp_their_objects_as_posed() -> None:
     # MBM's goals reach for an object: posed as MBM poses them (the UR5 0.9144 m up, turned
     # 1.57 rad; table_pick's objects at their own pose), every goal ends within 14 cm of an
