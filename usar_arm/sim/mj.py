@@ -10,17 +10,18 @@ Specs, bodies, models and data are MuJoCo's own objects (``MjSpec``, ``MjsBody``
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeAlias
 
 import mujoco
 import numpy as np
+from numpy.typing import NDArray
 
 from usar_arm.core.spatial import Array
 
-Spec = mujoco.MjSpec
-Body = mujoco.MjsBody
-Model = mujoco.MjModel
-Data = mujoco.MjData
+Spec: TypeAlias = mujoco.MjSpec
+Body: TypeAlias = mujoco.MjsBody
+Model: TypeAlias = mujoco.MjModel
+Data: TypeAlias = mujoco.MjData
 
 BOX = mujoco.mjtGeom.mjGEOM_BOX
 SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
@@ -33,6 +34,11 @@ SLIDE = mujoco.mjtJoint.mjJNT_SLIDE
 FREE = mujoco.mjtJoint.mjJNT_FREE
 TRN_JOINT = mujoco.mjtTrn.mjTRN_JOINT
 WELD = mujoco.mjtEq.mjEQ_WELD
+
+MASS_GROUP = 3
+"""The geom group of the geoms that only carry mass (they touch nothing, and rays that stand for
+UDK's traces pass through them)."""
+_RAY_GROUPS = np.array([1, 1, 1, 0, 1, 1], dtype=np.uint8)
 
 _KINDS = {"body": mujoco.mjtObj.mjOBJ_BODY, "joint": mujoco.mjtObj.mjOBJ_JOINT,
           "actuator": mujoco.mjtObj.mjOBJ_ACTUATOR, "site": mujoco.mjtObj.mjOBJ_SITE,
@@ -87,7 +93,7 @@ def forward(model: Model, data: Data) -> None:
 
 
 def multi_ray(model: Model, data: Data, origin: Array, directions: Array, exclude_body: int,
-              max_range: float) -> tuple[Array, Array]:
+              max_range: float) -> tuple[Array, NDArray[np.int32]]:
     """Distances (m) and geom ids of the first hits of rays from ``origin`` along unit
     ``directions`` (n x 3), ignoring the body ``exclude_body``; geom -1 for no hit."""
     n = len(directions)
@@ -102,14 +108,15 @@ def multi_ray(model: Model, data: Data, origin: Array, directions: Array, exclud
 def ray(model: Model, data: Data, origin: Array, direction: Array, exclude_body: int
         ) -> tuple[float, int]:
     """Distance (m, -1 for no hit) along a unit ``direction`` from ``origin`` to the first geom
-    (static ones included) not of body ``exclude_body``, and that geom's id (-1)."""
+    (static ones included, mass-only ones not: :data:`MASS_GROUP`) not of body
+    ``exclude_body``, and that geom's id (-1)."""
     geom = np.array([-1], dtype=np.int32)
     dist = mujoco.mj_ray(model, data, np.asarray(origin, dtype=float),
-                         np.asarray(direction, dtype=float), None, 1, exclude_body, geom)
+                         np.asarray(direction, dtype=float), _RAY_GROUPS, 1, exclude_body, geom)
     return float(dist), int(geom[0])
 
 
-def contacts(data: Data) -> tuple[Array, Array]:
+def contacts(data: Data) -> tuple[NDArray[np.int32], Array]:
     """The current contacts: geom id pairs (n x 2) and signed distances (m, negative when the
     geoms overlap), as views of MuJoCo's arrays (copy before keeping them)."""
     n = int(data.ncon)
@@ -119,12 +126,19 @@ def contacts(data: Data) -> tuple[Array, Array]:
     return con.geom[:n], con.dist[:n]
 
 
-def quat_from_matrices(mats: Array) -> Array:
-    """Unit quaternions (w, x, y, z; n x 4) of rotation matrices (n x 9, row-major)."""
-    out = np.empty((len(mats), 4))
-    for i, mat in enumerate(mats):
-        mujoco.mju_mat2Quat(out[i], mat)
-    return out
+def set_mocap(data: Data, mocap: int, pos: Array, mat: Array) -> None:
+    """Put the kinematic (mocap) body ``mocap`` at ``pos`` (m) with the orientation of the
+    row-major rotation ``mat`` (9)."""
+    data.mocap_pos[mocap] = pos
+    mujoco.mju_mat2Quat(data.mocap_quat[mocap], mat)
+
+
+def set_mocaps(data: Data, mocaps: Array, sites: Array) -> None:
+    """Put the kinematic (mocap) bodies ``mocaps`` where the sites ``sites`` are."""
+    data.mocap_pos[mocaps] = data.site_xpos[sites]
+    quats, mats = data.mocap_quat, data.site_xmat
+    for mocap, site in zip(mocaps.tolist(), sites.tolist(), strict=True):
+        mujoco.mju_mat2Quat(quats[mocap], mats[site])
 
 
 def add_weld(spec: Spec, name: str, body1: str, body2: str, solref: tuple[float, float],

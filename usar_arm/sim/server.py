@@ -104,7 +104,8 @@ class SimServer:
         self.style: NumberStyle = STYLES[self.options.wire_precision]
         self.world = PhysicsWorld(timestep=1.0 / self.options.physics_hz,
                                   gravity=self.options.gravity,
-                                  scenery=self.world_spec.boxes, floor_z=self.world_spec.floor_z)
+                                  scenery=self.world_spec.boxes, floor_z=self.world_spec.floor_z,
+                                  cell=self.world_spec.cell)
         self.max_connections = MAX_CONNECTIONS
         self._clients: dict[str, Connection] = {}
         """Session key -> the connection that owns the session (``connection.session``)."""
@@ -216,11 +217,22 @@ class SimServer:
             self._clients.pop(session.key, None)
             if session.robot is not None:
                 self._leaving.append(session.key)
+            if session.world_controller is not None:
+                session.world_controller.close(self.world)
 
     def handle(self, session: Session, msg: m.Message) -> None:
         """Act on one message of a client (the loop thread, between physics frames)."""
         with self._lock:
-            session.handle(msg, self.world, self.world_spec, self.robots, self.style)
+            session.handle(msg, self.world, self.world_spec, self.robots, self.style,
+                           self._find_robot)
+
+    def _find_robot(self, name: str) -> str | None:
+        """The key of the robot INIT named ``name`` (exactly, as ``GetBotController``)."""
+        for conn in self._clients.values():
+            session = conn.session
+            if session is not None and session.robot is not None and session.robot_name == name:
+                return session.key
+        return None
 
     def clients(self) -> list[ClientInfo]:
         """The connected clients, read consistently from any thread."""
