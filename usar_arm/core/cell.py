@@ -336,3 +336,15 @@ def load_cell(path_or_name: str | Path) -> Cell:
         raise FileFormatError(text, "no such description file")
     return parse_cell(read_yaml_file(path, text), text if shipped is None else str(path),
                       path.parent)
+
+
+@dataclass(frozen=True, eq=False)
+class Sighting:
+    """A WorldController object as the simulator reports it: its name, class, pose (4x4,
+    z-down world: GetSTA's Location and Rotation) and world-axis bounding box size (m)."""
+
+    name: str
+    wc_class: WcClass
+    pose: Array
+    size: tuple[float, float, float]
+    memory: str = ""

@@ -1,5 +1,7 @@
 """A work cell as a planning Scene: its static scenery, and the WorldController's objects from
-the description or from what the simulator says is really there (its GetSTA reply).
+the description or from what the simulator says is really there (its GetSTA reply, with each
+object's class from the per-class queries: :meth:`usar_arm.usarsim.world_controller.
+WorldControllerClient.sightings`), so that the arm plans around what is really there.
 
 An object of a WorldController class becomes its class's boxes (:mod:`usar_arm.core.wc_classes`):
 one box named after the object for a solid one, and for an open container its floor and four
@@ -8,11 +10,18 @@ walls, named ``<object>/floor``, ``<object>/wall_front``... so a part can be pla
 
 from __future__ import annotations
 
-from usar_arm.core.cell import Cell, MeshFile, StaticPiece
+from collections.abc import Sequence
+
+import numpy as np
+
+from usar_arm.core.cell import Cell, MeshFile, Sighting, StaticPiece
 from usar_arm.core.errors import FileFormatError
-from usar_arm.core.spatial import Array, transform
+from usar_arm.core.spatial import FLIP_X, Array, invert, transform
 from usar_arm.core.wc_classes import WcClass
-from usar_arm.planning.scene import Box, Mesh, SceneObject, Shape
+from usar_arm.planning.scene import Box, Mesh, Scene, SceneObject, Shape
+
+_FLIP = transform(FLIP_X)
+"""USARSim (z down) <-> REP-103 (z up): the same 4x4 both ways."""
 
 
 def _shape(piece: StaticPiece, path: str) -> Shape:
@@ -54,3 +63,29 @@ def cell_objects(cell: Cell, path: str = "") -> tuple[SceneObject, ...]:
         out += wc_object_pieces(placement.name, placement.wc_class, placement.pose,
                                 placement.scale)
     return tuple(out)
+
+
+def sighting_scale(s: Sighting) -> tuple[float, float, float]:
+    """The scale an object was spawned with, from its class and what GetSTA reports: the
+    world-axis bounding box of a box of edge lengths ``e`` turned by ``R`` is ``|R| e``, so
+    ``e`` is the least-squares solution of ``|R| e = size`` (exact unless the object is
+    turned to an axis-symmetric 45 degrees, where it is the best guess)."""
+    edges, *_ = np.linalg.lstsq(np.abs(s.pose[:3, :3]), np.asarray(s.size, dtype=float),
+                                rcond=None)
+    scale = np.maximum(edges / np.asarray(s.wc_class.size), 1e-3)
+    return (float(scale[0]), float(scale[1]), float(scale[2]))
+
+
+def scene_from_sightings(sightings: Sequence[Sighting], cell: Cell | None = None,
+                         robot_pose: Array | None = None, name: str = "simulator") -> Scene:
+    """The planning Scene of what the simulator reports: the cell's static scenery (when
+    given), then each sighted object as its class's boxes, in the base_link of a robot at
+    ``robot_pose`` (4x4, z-down world; default: at RobotStart1, the world origin)."""
+    base = np.eye(4) if robot_pose is None else robot_pose
+    to_base = invert(_FLIP @ base @ _FLIP)  # the REP-103 world -> the robot's base_link
+    objects = [SceneObject(o.name, o.shape, to_base @ o.pose, o.allow)
+               for o in (static_objects(cell) if cell is not None else ())]
+    for s in sightings:
+        pose = _FLIP @ invert(base) @ s.pose @ _FLIP
+        objects += wc_object_pieces(s.name, s.wc_class, pose, sighting_scale(s))
+    return Scene(name, tuple(objects))

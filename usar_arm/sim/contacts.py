@@ -106,10 +106,10 @@ class ContactLog:
                 rec = self._open.setdefault(robot, {}).get(pair)
                 if rec is None:
                     self._open[robot][pair] = [time, time, depth, 1]
-                else:
+                else:  # (a pair of geoms may touch at several points in one step)
+                    rec[3] += rec[1] != time
                     rec[1] = time
                     rec[2] = max(rec[2], depth)
-                    rec[3] += 1
 
     def take(self, robot: str) -> tuple[ContactPair, ...]:
         """The contacts of ``robot`` since its last report (and start a new report)."""

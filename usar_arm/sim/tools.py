@@ -29,10 +29,11 @@ from usar_arm.sim.world_objects import WcObject, WorldObjects
 
 HOLD_SOLREF = (0.002, 1.0)
 """Weld of a tool to its carrier: the stiffest MuJoCo allows at 1 ms steps."""
-GRIP_SOLREF = (0.005, 1.0)
-"""Weld of a gripped object to the tool: firm, but softer than a contact, so that an object
-driven into an obstacle is pushed off its grip pose (and the suction is lost) rather than
-driven through."""
+GRIP_SOLREF = (0.03, 1.0)
+"""Weld of a gripped object to the tool: softer than a contact (MuJoCo's default time constant
+0.02 s), so that an object driven into an obstacle is held back by it, off its grip pose (and
+the suction is lost, as UDK's check finds), rather than driven through. A held object does not
+sag in it: gravity is compensated while it is held (:mod:`.world_objects`)."""
 
 
 @dataclass

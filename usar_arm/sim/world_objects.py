@@ -25,7 +25,11 @@ MOVING_PHYSICS = ("RigidBody", "Falling", "Ground")
 """Physics modes (compared exactly, as UDK's ``!=`` does) under which an object moves."""
 STAY_SOLREF = (0.002, 1.0)
 """Time constant (s) and damping ratio of the weld that keeps a static object in place: the
-stiffest MuJoCo allows at 1 ms steps (it sags about 0.04 mm under its own weight)."""
+stiffest MuJoCo allows at 1 ms steps."""
+FLOATING = 1e-9
+"""The gravity compensation every object is built with, none to speak of: MuJoCo compensates
+gravity only for bodies that had some when the model was compiled, and a static or held object
+gets all of it (1) at run time, so that it does not sag in its weld."""
 
 
 @dataclass
@@ -89,6 +93,7 @@ class WorldObjects:
         body = spec.worldbody.add_body(name=obj.body, pos=pose[:3, 3].tolist(),
                                        quat=quat(pose[:3, :3]))
         body.add_freejoint(name=f"{obj.body}/free")
+        body.gravcomp = FLOATING  # (MuJoCo applies gravity compensation only to bodies
         boxes = obj.wc_class.boxes(obj.scale)
         volumes = [float(np.prod(size)) for _, _, size in boxes]
         mass = max(obj.wc_class.scaled_mass(obj.scale), 1e-4)
@@ -124,10 +129,12 @@ class WorldObjects:
         return transform(matrix_from_quat(q[3:]), q[:3])
 
     def hold_in_place(self, m: mj.Model, d: mj.Data, obj: WcObject, on: bool) -> None:
-        """Weld ``obj`` to the world where it is now (``on``), or let it move."""
+        """Weld ``obj`` to the world where it is now (``on``), or let it move (under gravity
+        unless a vacuum holds it)."""
         q = d.qpos[obj.qpos_adr:obj.qpos_adr + 7]
         mj.set_weld_pose(m, obj.stay_eq, 0, obj.body_id, q[:3].copy(), q[3:].copy())
         d.eq_active[obj.stay_eq] = on
+        m.body_gravcomp[obj.body_id] = 1.0 if on or obj.held else FLOATING
 
     def set_pose(self, m: mj.Model, d: mj.Data, obj: WcObject, pose: Array) -> None:
         """Teleport ``obj`` to ``pose`` (4x4, z-down world), at rest (AbsMove, RelMove)."""

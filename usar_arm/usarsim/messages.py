@@ -347,6 +347,16 @@ class Eff:
     time: float | None = None
     extra: tuple[Block, ...] = ()
 
+    def get(self, key: str) -> str | None:
+        """The value of a data block (``Status``, ``ToolType``, ``Tool``), any case."""
+        return next((v for k, v in self.extra if k.lower() == key.lower()), None)
+
+    @property
+    def status(self) -> str | None:
+        """``OPEN`` or ``CLOSED`` (upper case), None for an effector without a Status."""
+        value = self.get("Status")
+        return None if value is None else value.upper()
+
 
 # ----------------------------------------------------------------------- anything else
 
