@@ -21,7 +21,7 @@ from usar_arm.sim.connection import MAX_WRITE_BUFFER, Connection
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_session import Session
 from usar_arm.sim.robot_spec import RobotSpec, builtin_robots
-from usar_arm.sim.truth import Truth, tool0_in_base
+from usar_arm.sim.truth import EffectorTruth, Truth, in_base_link, tool0_in_base
 from usar_arm.sim.world_spec import WorldSpec, load_world
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import STYLES, NumberStyle
@@ -264,7 +264,16 @@ class SimServer:
                 for act in session.robot.actuators:
                     joints[act.name] = world.joint_values(key, act.name)
                     tool0[act.name] = tool0_in_base(act, platform, world.tip_pose(key, act.name))
-                return Truth(key, session.peer, world.time, joints, tool0)
+                tools = {}
+                for tool in world.rig.tools.values():
+                    if tool.key == key:
+                        pose = in_base_link(platform, world.rig.tool_pose(world.data, tool))
+                        tools[tool.spec.name] = EffectorTruth(
+                            tool.spec.name, tool.holder is not None,
+                            tool.holder.spec.name if tool.holder else None,
+                            tool.held.name if tool.held else None, pose)
+                return Truth(key, session.peer, world.time, joints, tool0, tools,
+                             world.contacts.history(key))
         return None
 
     # ------------------------------------------------------------------ physics
