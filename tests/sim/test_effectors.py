@@ -192,7 +192,7 @@ def test_a_static_object_is_held_and_stays_where_it_is_released(cell) -> None:
     drive(client, np.zeros(6))
     tip = changer_pose(np.zeros(6))[:3, 3] + (0.25, 0.0, 0.0)  # 0.25 m out of the flange
     with WorldControllerClient(port=server.port) as wc:
-        wc.create("floating", "WCCrate", tuple(tip + (0.05, 0.0, 0.0)), scale=PART_SCALE,
+        wc.create("floating", "WCCrate", tuple(tip + np.array([0.05, 0.0, 0.0])), scale=PART_SCALE,
                   physics="None")  # a static crate in the air, its near face in the zone
         client.set_effector("Gripper", "KR60gripper", "CLOSE")
         grip = client.wait_grip("KR60gripper", after_time=client.wait_effector(
@@ -219,7 +219,7 @@ def test_suction_is_lost_when_the_held_part_is_driven_into_the_tower(cell) -> No
         lifted = ik_down(np.array([PICK[0], PICK[1], -1.52]))
         drive(client, lifted)
         with ContactWatch(client.subscribe, "KR60") as watch:
-            swing = lifted + (0.6, 0, 0, 0, 0, 0)  # about the base, the part into the tower
+            swing = lifted + np.array([0.6, 0, 0, 0, 0, 0])  # about the base, the part into the tower
             client.act("KR60Arm", [float(v) for v in swing])
             eff = client.wait_effector("KR60gripper", "OPEN", timeout=10.0)  # no command
             assert client.wait_grip("KR60gripper", after_time=eff.time).holding is False
