@@ -219,7 +219,7 @@ def test_suction_is_lost_when_the_held_part_is_driven_into_the_tower(cell) -> No
         lifted = ik_down(np.array([PICK[0], PICK[1], -1.52]))
         drive(client, lifted)
         with ContactWatch(client.subscribe, "KR60") as watch:
-            swing = lifted + np.array([0.6, 0, 0, 0, 0, 0])  # about the base, the part into the tower
+            swing = lifted + np.array([0.6, 0, 0, 0, 0, 0])  # about the base: into the tower
             client.act("KR60Arm", [float(v) for v in swing])
             eff = client.wait_effector("KR60gripper", "OPEN", timeout=10.0)  # no command
             assert client.wait_grip("KR60gripper", after_time=eff.time).holding is False
@@ -232,8 +232,8 @@ def test_suction_is_lost_when_the_held_part_is_driven_into_the_tower(cell) -> No
 
 def test_tool_changer_drops_the_gripper_and_picks_it_up_only_within_tolerance(cell) -> None:
     server, client = cell
-    above = PICK - (0.0, 0.0, 0.05 + 0.03)  # the gripper's tip 0.2 m above the table...
-    above[2] = -0.70 - 0.183 - 0.02
+    above = PICK.copy()
+    above[2] = -0.70 - 0.183 - 0.02  # the gripper's tip 2 cm above the table
     q_above = ik_down(above)
     drive(client, q_above)
     client.set_effector("ToolChanger", "toolchange", "OPEN")
