@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from usar_arm.core.cell import load_cell
-from usar_arm.core.spatial import FLIP_X, Array, rpy_to_matrix, transform
+from usar_arm.core.spatial import FLIP_X, Array, exp_so3, matrix_to_rpy, rpy_to_matrix, transform
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, SceneObject
 from usar_arm.planning.scene_file import load_scene
 from usar_arm.sim import mj
@@ -108,7 +108,6 @@ def test_the_spawned_part_and_bin_are_the_planners_and_the_bin_is_open() -> None
             WorldControllerClient(port=server.port) as wc:
         for p in cell.spawn:  # the demo's way: CONTROL Create from the description
             zdown = FLIP @ p.pose @ FLIP
-            from usar_arm.core.spatial import matrix_to_rpy
             wc.create(p.name, p.wc_class.name, zdown[:3, 3], matrix_to_rpy(zdown[:3, :3]),
                       p.scale, p.physics)
         world = server.world
@@ -169,7 +168,6 @@ def _urdf_link_poses(joints: list[dict], q: np.ndarray) -> dict[str, Array]:
         motion = np.eye(4)
         if j["type"] in ("revolute", "continuous"):
             axis = j["axis"] / np.linalg.norm(j["axis"])
-            from usar_arm.core.spatial import exp_so3
             motion = transform(exp_so3(axis * q[k]))
             k += 1
         elif j["type"] == "prismatic":
@@ -202,7 +200,8 @@ def _capsule_samples(world: PhysicsWorld, g: int, rng: np.random.Generator) -> n
     along = rng.uniform(-half, half, size=n)
     local = dirs * radius + np.column_stack([np.zeros(n), np.zeros(n), along])
     ends = np.array([[0, 0, -half], [0, 0, half]])  # the caps' extreme points too
-    local = np.vstack([local, ends + [0, 0, -radius], ends + [0, 0, radius]])
+    cap = np.array([0.0, 0.0, radius])
+    local = np.vstack([local, ends - cap, ends + cap])
     return (pose[:3, :3] @ local.T).T + pose[:3, 3]
 
 
