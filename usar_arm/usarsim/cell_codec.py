@@ -123,6 +123,7 @@ def parse_contact_report(r: BlockReader) -> m.ContactReport:
     """``SEN {Time t} {Type Contact} {Name n} {Count k} ({Pair a b} {First ..} {Last ..}
     {Depth ..} {Steps ..})*``."""
     time = r.find("Time")
+    type_ = r.require("Type", "Contact")
     name = r.require("Name", "KR60")
     count = r.require("Count", "0")
     pairs, i, blocks = [], 0, r.blocks
@@ -141,7 +142,8 @@ def parse_contact_report(r: BlockReader) -> m.ContactReport:
         i += 5
     if r.int(count) != len(pairs):
         raise r.error(count, f"Count says {count.value} but {len(pairs)} pair(s) follow")
-    return m.ContactReport(name.value, tuple(pairs), None if time is None else r.number(time))
+    return m.ContactReport(name.value, tuple(pairs), None if time is None else r.number(time),
+                           type_.value)
 
 
 def format_contact_report(msg: m.Message, s: NumberStyle) -> str:
