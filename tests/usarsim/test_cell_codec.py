@@ -94,7 +94,7 @@ def test_extension_lines() -> None:
     with pytest.raises(ProtocolError, match="Count says 2"):
         parse_line("SEN {Type Contact} {Name KR60} {Count 2} {Pair a b} {First 1} {Last 1} "
                    "{Depth 0} {Steps 1}")
-    with pytest.raises(ProtocolError, match="expected {Pair a b}"):
+    with pytest.raises(ProtocolError, match=r"expected \{Pair a b\}"):
         parse_line("SEN {Type Contact} {Name KR60} {Count 1} {Pair a} {First 1} {Last 1} "
                    "{Depth 0} {Steps 1}")
 
