@@ -317,11 +317,13 @@ def read_yaml_file(path: Path, name: str) -> Any:
         raise FileFormatError(name, f"not valid YAML: {exc}") from None
 
 
-def load_cell(path_or_name: str | Path) -> Cell:
-    """A cell from a YAML file, or a shipped one by name (``table``).
+def find_description(path_or_name: str | Path, shipped: tuple[str, ...], kind: str = "description"
+                     ) -> tuple[Path, str]:
+    """The file of ``path_or_name``: the file itself, or the shipped one of that name when it
+    is in ``shipped`` and no such file exists; with the name errors should give it.
 
     Raises:
-        FileFormatError: no such file, or an error in it (file, line and field named).
+        FileFormatError: neither (the shipped names listed), or an unusable file name.
     """
     text = str(path_or_name)
     path = Path(text)
@@ -329,13 +331,22 @@ def load_cell(path_or_name: str | Path) -> Cell:
         exists = path.exists()
     except OSError as exc:  # e.g. a name longer than the file system allows
         raise FileFormatError(text, f"not a usable file name: {exc.strerror or exc}") from None
-    shipped = None if exists else shipped_path(text)
-    if shipped is not None:
-        path = shipped
-    elif not exists:
-        raise FileFormatError(text, "no such description file")
-    return parse_cell(read_yaml_file(path, text), text if shipped is None else str(path),
-                      path.parent)
+    found = shipped_path(text) if text in shipped and not exists else None
+    if found is not None:
+        return found, str(found)
+    if not exists:
+        raise FileFormatError(text, f"no such {kind} file (shipped: {', '.join(shipped)})")
+    return path, text
+
+
+def load_cell(path_or_name: str | Path) -> Cell:
+    """A cell from a YAML file, or a shipped one by name (``table``).
+
+    Raises:
+        FileFormatError: no such file, or an error in it (file, line and field named).
+    """
+    path, name = find_description(path_or_name, ("table",))
+    return parse_cell(read_yaml_file(path, name), name, path.parent)
 
 
 @dataclass(frozen=True, eq=False)

@@ -38,7 +38,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from usar_arm.core.cell import SHAPES, parse_cell, read_yaml_file, shipped_path
+from usar_arm.core.cell import SHAPES, find_description, parse_cell, read_yaml_file
 from usar_arm.core.errors import FileFormatError
 from usar_arm.planning.cell_scene import cell_objects
 from usar_arm.planning.scene import Scene
@@ -58,18 +58,8 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
 def load_scene(path_or_name: str | Path) -> Scene:
     """A scene from a YAML file, or one of the shipped scenes by name (empty, table, shelf,
     cage)."""
-    text = str(path_or_name)
-    path = Path(text)
-    try:
-        exists = path.exists()
-    except OSError as exc:  # e.g. a name longer than the file system allows
-        raise FileFormatError(text, f"not a usable file name: {exc.strerror or exc}") from None
-    shipped = shipped_path(text) if text in BUILTIN and not exists else None
-    if shipped is not None:
-        return load_scene(shipped)
-    if not exists:
-        raise FileFormatError(text, f"no such scene file (shipped scenes: {', '.join(BUILTIN)})")
-    return parse_scene(read_yaml_file(path, text), text, path.parent)
+    path, name = find_description(path_or_name, BUILTIN, "scene")
+    return parse_scene(read_yaml_file(path, name), name, path.parent)
 
 
 def validate_allow(scene: Scene, links: set[str], path: str = "") -> None:
