@@ -98,9 +98,8 @@ class ToolRig:
     def __init__(self) -> None:
         self.changers: dict[tuple[str, str], ChangerState] = {}
         self.tools: dict[tuple[str, str], ToolState] = {}
-        self._mocaps = np.zeros(0, dtype=int)
-        self._sites = np.zeros(0, dtype=int)
-        """Mocap indices and site ids of the carriers holding a tool: those that move."""
+        self._followers: list[mj.Follower] = []
+        """The carriers holding a tool (those that move), as views of the data."""
 
     # ------------------------------------------------------------------ building
     def build(self, spec: mj.Spec, key: str, changers: list[tuple[str, ToolChangerSpec, str]],
@@ -162,7 +161,7 @@ class ToolRig:
 
     def index(self, m: mj.Model, d: mj.Data) -> None:
         """Find everything in a rebuilt model (after ``mj_forward``) and re-apply the welds."""
-        self._mocaps = self._sites = np.zeros(0, dtype=int)
+        self._followers = []
         for c in self.changers.values():
             c.site_id = mj.name_id(m, "site", c.site)
             c.carrier_id = mj.name_id(m, "body", c.carrier)
@@ -176,7 +175,7 @@ class ToolRig:
             t.geom_id = mj.name_id(m, "geom", t.geom)
             m.geom_conaffinity[t.geom_id] = FREE_TOOL_AFFINITY
         for c in self.changers.values():
-            mj.set_mocap(d, c.mocap, d.site_xpos[c.site_id], d.site_xmat[c.site_id])
+            mj.follow([mj.follower(d, c.mocap, c.site_id)])
             if c.tool is not None:
                 self._weld_tool(m, d, c, c.tool, snap=False)
         for t in self.tools.values():
@@ -187,13 +186,12 @@ class ToolRig:
     def follow(self, d: mj.Data) -> None:
         """Move every carrier that holds a tool to its tool changer's frame (where the arm
         is now); an empty carrier carries nothing and need not move."""
-        if len(self._mocaps):
-            mj.set_mocaps(d, self._mocaps, self._sites)
+        if self._followers:
+            mj.follow(self._followers)
 
-    def _refresh(self) -> None:
-        moving = [c for c in self.changers.values() if c.tool is not None]
-        self._mocaps = np.array([c.mocap for c in moving], dtype=int)
-        self._sites = np.array([c.site_id for c in moving], dtype=int)
+    def _refresh(self, d: mj.Data) -> None:
+        self._followers = [mj.follower(d, c.mocap, c.site_id) for c in self.changers.values()
+                           if c.tool is not None]
 
     # ------------------------------------------------------------------ poses
     def tool_pose(self, d: mj.Data, tool: ToolState) -> Array:
@@ -223,7 +221,7 @@ class ToolRig:
                          np.array([1.0, 0.0, 0.0, 0.0]))
         d.eq_active[c.hold_eq] = True
         m.geom_conaffinity[tool.geom_id] = HELD_TOOL_AFFINITY
-        self._refresh()
+        self._refresh(d)
 
     def detach(self, m: mj.Model, d: mj.Data, c: ChangerState) -> ToolState | None:
         """Let go of ``c``'s tool (it falls freely); the tool, or None when there was none."""
@@ -233,7 +231,7 @@ class ToolRig:
         d.eq_active[c.hold_eq] = False
         m.geom_conaffinity[tool.geom_id] = FREE_TOOL_AFFINITY
         c.tool, tool.holder = None, None
-        self._refresh()
+        self._refresh(d)
         return tool
 
     def tool_in_reach(self, m: mj.Model, d: mj.Data, c: ChangerState) -> ToolState | None:
