@@ -46,9 +46,10 @@ def test_the_table_scene_spawns_a_crate_and_an_open_bin() -> None:
     inner = [o.pose[:3, 3] for o in walls]
     assert np.allclose(np.mean(inner, axis=0)[:2], (1.45, 0.50))  # around the bin's centre
     assert "bin" not in {o.name for o in scene.objects}  # an open container has no lid
-    static = [o.name for o in scene.objects if "/" not in o.name and o.name != "part"]
-    assert static == ["floor", "table_top", "leg_front_right", "leg_front_left",
-                      "leg_back_right", "leg_back_left", "tower", "fixture"]
+    names = [o.name.split("/")[0] for o in scene.objects]  # the description's order
+    assert list(dict.fromkeys(names)) == ["floor", "table_top", "leg_front_right",
+                                          "leg_front_left", "leg_back_right", "leg_back_left",
+                                          "part", "tower", "bin", "fixture"]
 
 
 def test_a_container_is_a_floor_and_four_walls_that_fill_its_outline() -> None:
@@ -69,8 +70,10 @@ def test_scene_from_sightings_gives_the_descriptions_scene() -> None:
         sightings.append(Sighting(p.name, p.wc_class, zdown, size))
     seen = scene_from_sightings(sightings, cell)
     described = load_scene("table")
-    assert [o.name for o in seen.objects] == [o.name for o in described.objects]
-    for a, b in zip(seen.objects, described.objects, strict=True):
+    assert sorted(o.name for o in seen.objects) == sorted(o.name for o in described.objects)
+    by_name = {o.name: o for o in described.objects}
+    for a in seen.objects:  # (the scenery first, then the objects in GetSTA's order)
+        b = by_name[a.name]
         assert np.allclose(a.pose, b.pose, atol=1e-9), a.name
         if isinstance(a.shape, Box):
             assert np.allclose(a.shape.size, b.shape.size), a.name  # type: ignore[union-attr]
@@ -102,14 +105,18 @@ def test_the_scale_is_recovered_from_gets_ta_size_and_rotation(rpy: tuple[float,
 
 def test_description_errors_name_the_line_and_the_field(tmp_path: Path) -> None:
     cases = {
-        "spawn:\n  - {name: p, class: WCNothing, xyz: [0, 0, 0]}\n": (2, "spawn[0].class"),
-        "spawn:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], scale: [1, 0, 1]}\n":
-            (2, "spawn[0].scale"),
-        "spawn:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], permanent: maybe}\n":
-            (2, "spawn[0].permanent"),
-        "spawn:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], colour: red}\n":
-            (2, "spawn[0].colour"),
-        "spawn:\n  - {name: p, class: WCCrate}\n": (2, "spawn[0].xyz"),
+        "objects:\n  - {name: p, class: WCNothing, xyz: [0, 0, 0]}\n": (2, "objects[0].class"),
+        "objects:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], scale: [1, 0, 1]}\n":
+            (2, "objects[0].scale"),
+        "objects:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], permanent: maybe}\n":
+            (2, "objects[0].permanent"),
+        "objects:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], colour: red}\n":
+            (2, "objects[0].colour"),
+        "objects:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0], box: [1, 1, 1]}\n":
+            (2, "objects[0].box"),  # a class or a shape, not both
+        "objects:\n  - {name: p, box: [1, 1, 1], xyz: [0, 0, 0], physics: None}\n":
+            (2, "objects[0].physics"),  # a static object has no physics
+        "objects:\n  - {name: p, class: WCCrate}\n": (2, "objects[0].xyz"),
     }
     for text, (line, field) in cases.items():
         path = tmp_path / "cell.yaml"
@@ -121,6 +128,6 @@ def test_description_errors_name_the_line_and_the_field(tmp_path: Path) -> None:
             load_cell(path)
     path = tmp_path / "both.yaml"
     path.write_text("objects:\n  - {name: p, box: [1, 1, 1], xyz: [0, 0, 0]}\n"
-                    "spawn:\n  - {name: p, class: WCCrate, xyz: [0, 0, 0]}\n")
-    with pytest.raises(FileFormatError, match="both a static object and a spawned one"):
+                    "  - {name: p, class: WCCrate, xyz: [0, 0, 0]}\n")
+    with pytest.raises(FileFormatError, match="duplicate object name 'p'"):
         load_cell(path)

@@ -6,7 +6,7 @@ Format (lengths in m, angles in rad; REP-103, z up, in the frame of a robot stan
 
     name: table
     description: a work table in front of the arm
-    objects:                                  # static scenery (also: a planning scene's obstacles)
+    objects:                      # the static scenery (a shape) and the spawned objects (a class)
       - name: top
         box: [1.0, 1.6, 0.05]                 # edge lengths x, y, z
         xyz: [1.55, 0.0, 0.675]               # centre
@@ -15,7 +15,7 @@ Format (lengths in m, angles in rad; REP-103, z up, in the frame of a robot stan
       - {name: ball, sphere: {radius: 0.1}, xyz: [1.2, 0.4, 0.8]}
       - {name: fixture, mesh: {file: meshes/fixture.stl, scale: 1.0}, xyz: [1.6, 0.3, 0.7]}
       - {name: floor, box: [6, 6, 0.05], xyz: [0, 0, -0.025], allow: [base_link]}
-    spawn:                                    # WorldController objects (CONTROL {Type Create})
+      # A WorldController object (CONTROL {Type Create}): a class instead of a shape.
       - {name: part, class: WCCrate, xyz: [1.45, -0.45, 0.75], scale: [0.4, 0.4, 0.4],
          physics: RigidBody}
 
@@ -44,7 +44,7 @@ SHAPES = ("box", "cylinder", "sphere", "mesh")
 KEYS = {"name", "xyz", "rpy", "allow", *SHAPES}
 SPAWN_KEYS = {"name", "class", "xyz", "rpy", "scale", "physics", "permanent", "memory",
               "material"}
-TOP_KEYS = {"name", "description", "objects", "spawn"}
+TOP_KEYS = {"name", "description", "objects"}
 SHAPE_KEYS = {"cylinder": ("radius", "length"), "sphere": ("radius",), "mesh": ("file", "scale")}
 """The keys of each shape given as a mapping (a box is a list of edge lengths)."""
 
@@ -99,6 +99,8 @@ class Cell:
     description: str
     static: tuple[StaticPiece, ...]
     spawn: tuple[Placement, ...] = ()
+    order: tuple[str, ...] = ()
+    """Every object's name in the description's order."""
 
 
 def _finite(value: Any) -> bool:
@@ -218,50 +220,63 @@ class CellReader:
             out.append((label, field, obj))
         return out
 
-    def static(self, data: dict[str, Any]) -> tuple[StaticPiece, ...]:
-        """The ``objects`` list."""
-        pieces = []
-        for label, field, obj in self.entries(data, "objects", KEYS):
-            kinds = [k for k in SHAPES if k in obj]
-            if len(kinds) != 1:
-                raise self.fail(f"object '{label}' needs exactly one shape of: "
-                                f"{', '.join(SHAPES)} (found {kinds or 'none'})", obj, None,
-                                field)
-            shape = self.shape(obj, kinds[0], field)
-            pose = self.pose(obj, label, field)
-            allow = obj.get("allow", [])
-            if not isinstance(allow, list) or not all(isinstance(a, str) for a in allow):
-                raise self.fail("'allow' must be a list of link names", obj, "allow",
-                                f"{field}.allow")
-            pieces.append(StaticPiece(label, shape, pose, tuple(allow)))
-        return tuple(pieces)
+    def objects(self, data: dict[str, Any]
+                ) -> tuple[tuple[StaticPiece, ...], tuple[Placement, ...], tuple[str, ...]]:
+        """The ``objects`` list: the static pieces (with a shape), the WorldController's
+        objects (with a ``class``), and every name in the file's order."""
+        static, spawn = [], []
+        entries = self.entries(data, "objects", KEYS | SPAWN_KEYS)
+        for label, field, obj in entries:
+            known = SPAWN_KEYS if "class" in obj else KEYS
+            wrong = _unknown_keys(obj, known)
+            if wrong:
+                kind = "a WorldController object" if "class" in obj else "a static object"
+                raise self.fail(f"'{wrong[0]}' is not a key of {kind} (expected: "
+                                f"{', '.join(sorted(known))})", obj, wrong[0],
+                                f"{field}.{wrong[0]}")
+            if "class" in obj:
+                spawn.append(self.spawned(label, field, obj))
+            else:
+                static.append(self.piece(label, field, obj))
+        return tuple(static), tuple(spawn), tuple(label for label, _, _ in entries)
 
-    def spawn(self, data: dict[str, Any]) -> tuple[Placement, ...]:
-        """The ``spawn`` list."""
-        out = []
-        for label, field, obj in self.entries(data, "spawn", SPAWN_KEYS):
-            name = obj.get("class")
-            cls = find_class(name) if isinstance(name, str) else None
-            if cls is None:
-                raise self.fail(f"'{label}' needs a WorldController class (known: "
-                                f"{', '.join(_known())}), got {name!r}", obj,
-                                "class" if "class" in obj else None, f"{field}.class")
-            scale = (tuple(self.numbers(obj, "scale", f"{field}.scale", 3, positive=True))
-                     if "scale" in obj else (1.0, 1.0, 1.0))
-            texts = {}
-            for key, default in (("physics", "RigidBody"), ("memory", ""), ("material", "")):
-                value = obj.get(key, default)
-                if not isinstance(value, str):
-                    raise self.fail(f"expected text, got {value!r}", obj, key, f"{field}.{key}")
-                texts[key] = value
-            permanent = obj.get("permanent", False)
-            if not isinstance(permanent, bool):
-                raise self.fail(f"expected true or false, got {permanent!r}", obj, "permanent",
-                                f"{field}.permanent")
-            out.append(Placement(label, cls, self.pose(obj, label, field),
-                                 scale, texts["physics"], permanent,  # type: ignore[arg-type]
-                                 texts["memory"], texts["material"]))
-        return tuple(out)
+    def piece(self, label: str, field: str, obj: dict[str, Any]) -> StaticPiece:
+        """A static object."""
+        kinds = [k for k in SHAPES if k in obj]
+        if len(kinds) != 1:
+            raise self.fail(f"object '{label}' needs exactly one shape of: "
+                            f"{', '.join(SHAPES)} (found {kinds or 'none'})", obj, None,
+                            field)
+        shape = self.shape(obj, kinds[0], field)
+        pose = self.pose(obj, label, field)
+        allow = obj.get("allow", [])
+        if not isinstance(allow, list) or not all(isinstance(a, str) for a in allow):
+            raise self.fail("'allow' must be a list of link names", obj, "allow",
+                            f"{field}.allow")
+        return StaticPiece(label, shape, pose, tuple(allow))
+
+    def spawned(self, label: str, field: str, obj: dict[str, Any]) -> Placement:
+        """A WorldController object."""
+        name = obj.get("class")
+        cls = find_class(name) if isinstance(name, str) else None
+        if cls is None:
+            raise self.fail(f"'{label}' needs a WorldController class (known: "
+                            f"{', '.join(_known())}), got {name!r}", obj,
+                            "class" if "class" in obj else None, f"{field}.class")
+        scale = (tuple(self.numbers(obj, "scale", f"{field}.scale", 3, positive=True))
+                 if "scale" in obj else (1.0, 1.0, 1.0))
+        texts = {}
+        for key, default in (("physics", "RigidBody"), ("memory", ""), ("material", "")):
+            value = obj.get(key, default)
+            if not isinstance(value, str):
+                raise self.fail(f"expected text, got {value!r}", obj, key, f"{field}.{key}")
+            texts[key] = value
+        permanent = obj.get("permanent", False)
+        if not isinstance(permanent, bool):
+            raise self.fail(f"expected true or false, got {permanent!r}", obj, "permanent",
+                            f"{field}.permanent")
+        return Placement(label, cls, self.pose(obj, label, field), scale,  # type: ignore[arg-type]
+                         texts["physics"], permanent, texts["memory"], texts["material"])
 
 
 def _known() -> list[str]:
@@ -285,13 +300,8 @@ def parse_cell(data: Any, path: str, base: Path) -> Cell:
     elif not isinstance(name, str):
         raise reader.fail(f"expected the name as text, got {name!r}", data, "name", "name")
     description = data.get("description", "")
-    static = reader.static(data)
-    spawn = reader.spawn(data)
-    taken = {p.name for p in static} & {p.name for p in spawn}
-    if taken:
-        raise FileFormatError(path, f"'{sorted(taken)[0]}' names both a static object and a "
-                              "spawned one", field="spawn")
-    return Cell(name, str(description), static, spawn)
+    static, spawn, order = reader.objects(data)
+    return Cell(name, str(description), static, spawn, order)
 
 
 def shipped_path(name: str) -> Path | None:

@@ -56,13 +56,12 @@ def static_objects(cell: Cell, path: str = "") -> tuple[SceneObject, ...]:
 
 
 def cell_objects(cell: Cell, path: str = "") -> tuple[SceneObject, ...]:
-    """A cell's obstacles: its static scenery, then its spawned objects at the poses the
-    description gives them."""
-    out = list(static_objects(cell, path))
-    for placement in cell.spawn:
-        out += wc_object_pieces(placement.name, placement.wc_class, placement.pose,
-                                placement.scale)
-    return tuple(out)
+    """A cell's obstacles in the description's order: its static scenery, and its spawned
+    objects at the poses the description gives them."""
+    pieces = {o.name: [o] for o in static_objects(cell, path)}
+    for p in cell.spawn:
+        pieces[p.name] = wc_object_pieces(p.name, p.wc_class, p.pose, p.scale)
+    return tuple(o for name in (cell.order or tuple(pieces)) for o in pieces[name])
 
 
 def sighting_scale(s: Sighting) -> tuple[float, float, float]:

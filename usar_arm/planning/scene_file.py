@@ -22,8 +22,9 @@ Format (lengths in m, angles in rad)::
         box: [6, 6, 0.05]
         xyz: [0, 0, -0.025]
         allow: [base_link]               # links allowed to touch it
+      - {name: part, class: WCCrate, xyz: [1.45, -0.45, 0.75], scale: [0.4, 0.4, 0.4]}
 
-A scene may also list WorldController objects under ``spawn:`` (a work cell's description,
+An object may name a WorldController class instead of a shape (a work cell's description,
 :mod:`usar_arm.core.cell`: the shipped ``table`` is the demo's cell, whose static objects are
 also the embedded simulator's default scenery): each becomes its class's shapes (an open
 container, a floor and four walls, as ``<name>/floor``, ``<name>/wall_front``...).
