@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from usar_arm.core.cell_errors import WorldControllerError
+from usar_arm.planning.cell_scene import scene_from_sightings
 from usar_arm.sim.server import SimOptions, SimServer
 from usar_arm.sim.world_controller import parse_vector
 from usar_arm.usarsim import messages as m
@@ -178,3 +179,25 @@ def test_closing_the_world_controller_cleans_up_all_but_the_permanent(
 def test_parse_vector_is_utilities_parse_vector(text: str, vector: tuple[float, ...],
                                                 ok: bool) -> None:
     assert parse_vector(text) == (vector, ok)
+
+
+def test_sightings_name_each_objects_class_and_give_the_planners_scene(
+        wc: WorldControllerClient) -> None:
+    wc.create("crate", "WCCrateRed", (0.0, 3.0, -0.5), scale=(0.5, 1.0, 2.0), physics="None")
+    wc.create("tray", "WCKitTray", (0.0, -3.0, -0.5), rotation=(0.0, 0.0, 0.3), physics="None")
+    seen = {s.name: s for s in wc.sightings()}
+    assert {n: s.wc_class.name for n, s in seen.items()} == {"crate": "WCCrateRed",
+                                                             "tray": "WCKitTray"}
+    scene = scene_from_sightings(list(seen.values()))
+    crate = scene.object("crate")
+    assert crate.shape.size == pytest.approx((0.15, 0.30, 0.50), abs=2e-4)  # type: ignore[union-attr]
+    assert crate.pose[:3, 3] == pytest.approx((0.0, -3.0, 0.5), abs=2e-4)  # REP-103 base_link
+    assert {o.name for o in scene.objects} >= {"tray/floor", "tray/wall_left"}
+
+
+def test_the_fanucs_tool_changer_starts_empty(server: SimServer) -> None:
+    with UsarClient(port=server.port) as robot:
+        robot.spawn("USARBot.Fanuc_M16iB20", location=(0.0, -4.0, 0.0))
+        eff = robot.wait_effector("toolchanger")
+        assert eff.status == "OPEN" and eff.get("Tool") is None
+        assert robot.get_conf("ToolChanger").items[0].name == "toolchanger"  # type: ignore[union-attr]
