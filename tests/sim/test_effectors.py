@@ -274,8 +274,9 @@ def test_close_while_holding_and_open_while_empty_change_nothing(cell) -> None:
 
 def test_the_held_tool_and_object_do_not_load_the_arm(cell) -> None:
     """The tool rides on its carrier and the object on the tool: the arm's joints settle
-    exactly where they do without a tool (the joints of two arms, one holding the gripper and
-    a crate, one without a tool, agree to 1e-6 rad)."""
+    where they do without a tool: the joints of two arms, one holding the gripper and a crate,
+    one without a tool, agree to 1e-5 rad (welded to the flange, the 1.8 kg would sag joint 2
+    by about 20 mrad)."""
     server, client = cell
     other = UsarClient(port=server.port, timeout=10.0)
     other.connect()
@@ -288,11 +289,11 @@ def test_the_held_tool_and_object_do_not_load_the_arm(cell) -> None:
         q = ik_down(PICK - (0.0, 0.0, 0.05 + 0.25 + 0.15))
         drive(client, q)
         drive(other, q)
-        time.sleep(1.0)
+        time.sleep(2.0)  # settled (to well below 1e-5 rad)
         held = server.truth(client.local_port)
         bare = server.truth(other.local_port)
         assert held is not None and bare is not None
         assert held.effectors["KR60gripper"].held == "part"
         assert not bare.effectors["KR60gripper"].attached
-        assert np.allclose(held.joints["KR60Arm"], bare.joints["KR60Arm"], atol=1e-6)
+        assert np.allclose(held.joints["KR60Arm"], bare.joints["KR60Arm"], atol=1e-5)
     other.close()

@@ -49,7 +49,7 @@ def test_create_and_get_sta_in_udks_exact_unclosed_form(wc: WorldControllerClien
     wc.create("part", "WCCrate", ON_TABLE, scale=SMALL, memory="tag7")
     line = _sta_line(wc)
     assert re.fullmatch(r"STA \{Name part\} \{Size 0\.1[12]\d\d,0\.1[12]\d\d,0\.(0999|1000)\} "
-                        r"\{Location 1\.(5999|6000),0\.(4999|5000),-0\.7(499|500) "
+                        r"\{Location 1\.(5999|6000),0\.(4999|5000),-0\.7(49\d|500) "
                         r"\{Memory \{tag7\} \{Rotation -?0\.000\d,-?0\.000\d,-?0\.000\d\}",
                         line), line
     assert _sta_line(wc, name="PART") == "STA"  # GetSTA's name filter is exact; no object: "STA"
