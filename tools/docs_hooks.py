@@ -2,7 +2,8 @@
 have a docstring, or the strict build fails; and the docstrings' Sphinx roles
 (``:class:`Arm```) show as the code they name.
 
-Public: each name in ``__all__`` of ``usar_arm`` and of each of its subpackages, and the public
+Public: each name ``usar_arm`` and each of its subpackages list (their ``__all__``: the
+TYPE_CHECKING block, ``tools/griffe_public.py``), and the public
 methods and properties of those that are classes (mkdocstrings renders these; without a
 docstring it would leave them out silently). Read statically by griffe, as mkdocstrings reads
 them: nothing is imported. Run alone, ``python tools/docs_hooks.py`` prints what is missing and
@@ -18,6 +19,9 @@ from pathlib import Path
 from typing import Any
 
 import griffe
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from griffe_public import PublicNames
 
 ROOT = Path(__file__).resolve().parents[1]
 log = logging.getLogger("mkdocs.hooks.docstrings")
@@ -43,7 +47,9 @@ def _members(cls: Any) -> list[Any]:
 def missing_docstrings(root: Path = ROOT) -> list[str]:
     """``package.name`` (or ``package.Class.member``) of every public name without a docstring,
     and of every name in an ``__all__`` that does not resolve."""
-    package = griffe.load("usar_arm", search_paths=[str(root)], resolve_aliases=False)
+    extensions = griffe.load_extensions(PublicNames)
+    package = griffe.load("usar_arm", search_paths=[str(root)], resolve_aliases=False,
+                          extensions=extensions)
     packages = [package, *(m for n, m in package.members.items()
                            if not m.is_alias and m.is_module and m.is_subpackage)]
     missing = []

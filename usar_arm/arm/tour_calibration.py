@@ -30,7 +30,7 @@ import numpy as np
 
 from usar_arm.arm.facade import Arm
 from usar_arm.arm.tour import Progress, choose_configurations, collect
-from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
+from usar_arm.calibrate.identification import Calibration, CalibrationOptions, identify
 from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.tour_readings import TourReadings, read_tour

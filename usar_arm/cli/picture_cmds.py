@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
@@ -18,8 +19,8 @@ from usar_arm.planning.scene_file import load_scene
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    r = sub.add_parser(
-        "render", help="draw the arm (and a trajectory's tool path) in its scene as a PNG",
+    r = add_command(
+        sub, "render",
         description="A PNG of the arm's URDF cylinders at --joints (default: home, or the "
                     "trajectory's end), the scene's obstacles, and the tool0 path of "
                     "--trajectory with its start pose as a ghost; or, with --world, a world "
@@ -41,8 +42,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     add_verbosity(r)
     r.set_defaults(handler=run_render)
 
-    p = sub.add_parser(
-        "plot", help="plot a trajectory's joints against their limits as a PNG",
+    p = add_command(
+        sub, "plot",
         description="Position, velocity, acceleration and jerk of every joint over time, with "
                     "dashed limit lines; executed ASTA samples are overlaid when the file has "
                     "them (execute --out, plan --execute --out).")
@@ -53,8 +54,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     add_verbosity(p)
     p.set_defaults(handler=run_plot)
 
-    v = sub.add_parser(
-        "view", help="replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
+    v = add_command(
+        sub, "view",
         description="Serve a viser page (open it in a browser) that replays the trajectory on "
                     "the arm's URDF in its scene, with play/pause and a time slider, until "
                     "Ctrl-C; or write a self-contained HTML replay with --html.")
