@@ -23,7 +23,6 @@ if TYPE_CHECKING:  # the public names, one per line, imported on first use (core
     from usar_arm.core.errors import InvalidInputError as InvalidInputError
     from usar_arm.core.errors import JointLimitError as JointLimitError
     from usar_arm.core.errors import LinBlockedError as LinBlockedError
-    from usar_arm.core.errors import MapTooLargeError as MapTooLargeError
     from usar_arm.core.errors import NoPathError as NoPathError
     from usar_arm.core.errors import OutOfLimitsError as OutOfLimitsError
     from usar_arm.core.errors import PlanningError as PlanningError
@@ -36,14 +35,15 @@ if TYPE_CHECKING:  # the public names, one per line, imported on first use (core
     from usar_arm.core.errors import UnknownRobotError as UnknownRobotError
     from usar_arm.core.errors import UnknownStartError as UnknownStartError
     from usar_arm.core.errors import UnreachableError as UnreachableError
-    from usar_arm.core.errors import UnreachableTargetError as UnreachableTargetError
     from usar_arm.core.errors import UsarArmError as UsarArmError
     from usar_arm.core.errors import ValidationError as ValidationError
     from usar_arm.core.fileio import write_atomic as write_atomic
     from usar_arm.core.fileio import write_tree_atomic as write_tree_atomic
     from usar_arm.core.job_errors import ChunkFailedError as ChunkFailedError
     from usar_arm.core.job_errors import ClusterUnavailableError as ClusterUnavailableError
+    from usar_arm.core.job_errors import MapTooLargeError as MapTooLargeError
     from usar_arm.core.job_errors import ResumeMismatchError as ResumeMismatchError
+    from usar_arm.core.job_errors import UnreachableTargetError as UnreachableTargetError
     from usar_arm.core.model import Joint as Joint
     from usar_arm.core.model import JointLimits as JointLimits
     from usar_arm.core.model import JointType as JointType
