@@ -27,7 +27,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
                     "file's top view. Headless (matplotlib).")
     r.add_argument("--joints", type=float, nargs="+", metavar="Q", help="configuration to draw")
     r.add_argument("--scene", default=None, metavar="FILE",
-                   help="a scene YAML file, or one of empty, table, shelf, cage")
+                   help="a scene YAML file, or one of empty, table, shelf, cage (default: "
+                        "the scene --trajectory was planned in)")
     r.add_argument("--trajectory", default=None, metavar="TRAJ.json",
                    help="draw its tool0 path (a trajectory from plan --out)")
     r.add_argument("--world", default=None, metavar="FILE|NAME",
@@ -61,7 +62,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
                     "Ctrl-C; or write a self-contained HTML replay with --html.")
     v.add_argument("trajectory", metavar="TRAJ.json")
     v.add_argument("--scene", default=None, metavar="FILE",
-                   help="a scene YAML file, or one of empty, table, shelf, cage")
+                   help="a scene YAML file, or one of empty, table, shelf, cage (default: "
+                        "the scene the trajectory was planned in)")
     v.add_argument("--html", default=None, metavar="FILE",
                    help="write a self-contained HTML replay instead of serving")
     v.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
@@ -73,8 +75,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     v.set_defaults(handler=run_view)
 
 
-def _scene(name: str | None) -> Scene | None:
-    return load_scene(name) if name else None
+def _scene(name: str | None, traj: Trajectory | None = None) -> Scene | None:
+    """The scene named on the command line, else the one the trajectory was planned in."""
+    named = name or (traj.scene if traj is not None else None)
+    return load_scene(named) if named else None
 
 
 def _check_joints(robot: Robot, traj: Trajectory, path: str) -> None:
@@ -91,8 +95,8 @@ def run_render(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--size must be at least 100 x 100 pixels, got {args.size}")
     if args.world is not None:
         return _render_world(args)
-    scene = _scene(args.scene)
     traj = Trajectory.load(args.trajectory) if args.trajectory else None
+    scene = _scene(args.scene, traj)
     robot = robot_from_args(args)
     chain = robot.chain
     if args.joints is not None:
@@ -118,10 +122,7 @@ def run_render(args: argparse.Namespace) -> int:
 def _render_world(args: argparse.Namespace) -> int:
     from usar_arm.export.world_plot import render_world  # matplotlib: only when drawing
 
-    try:
-        scenery = load_scenery(args.world)
-    except FileNotFoundError as exc:
-        raise InvalidInputError(str(exc)) from None
+    scenery = load_scenery(args.world)
     render_world(args.out, scenery, title=Path(args.world).stem, size=tuple(args.size))
     out(f"wrote {args.out} ({len(scenery.boxes)} boxes)")
     return EXIT_OK
@@ -142,7 +143,7 @@ def run_view(args: argparse.Namespace) -> int:
 
     setup_logging(verbosity(args))
     traj = Trajectory.load(args.trajectory)
-    scene = _scene(args.scene)
+    scene = _scene(args.scene, traj)
     robot = robot_from_args(args)
     _check_joints(robot, traj, args.trajectory)
     if args.html:

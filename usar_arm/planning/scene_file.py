@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_arm.core.errors import FileFormatError
+from usar_arm.core.named_file import resolve_name
 from usar_arm.core.spatial import transform_from_xyz_rpy
 from usar_arm.core.yamlio import line_of, load_yaml
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Shape, Sphere
@@ -188,20 +189,18 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
 
 def load_scene(path_or_name: str | Path) -> Scene:
     """A scene from a YAML file, or one of the shipped scenes by name (empty, table, shelf,
-    cage)."""
-    text = str(path_or_name)
-    path = Path(text)
-    try:
-        exists = path.exists()
-    except OSError as exc:  # e.g. a name longer than the file system allows
-        raise FileFormatError(text, f"not a usable file name: {exc.strerror or exc}") from None
-    if text in BUILTIN and not exists:
+    cage; a name or a path by :mod:`usar_arm.core.named_file`'s rule).
+
+    Raises:
+        FileFormatError: no such scene (what was tried), or the file is not a scene.
+    """
+    named = resolve_name(path_or_name, "scene", BUILTIN)
+    if named.shipped is not None:
         with resources.as_file(resources.files("usar_arm") / "data" / "scenes"
-                               / f"{text}.yaml") as fp:
+                               / f"{named.shipped}.yaml") as fp:
             return load_scene(fp)
-    if not exists:
-        raise FileFormatError(text, f"no such scene file (shipped scenes: {', '.join(BUILTIN)})")
-    return parse_scene(_read_yaml(path, text), text, path.parent)
+    assert named.path is not None
+    return parse_scene(_read_yaml(named.path, named.given), named.given, named.path.parent)
 
 
 def _read_yaml(path: Path, name: str) -> Any:
