@@ -1,5 +1,5 @@
 """The ``usar-arm`` command: argparse subcommands in the ``ros2 <verb>`` style
-(:func:`usar_arm.cli.main.main`; the executable is :mod:`usar_arm.__main__`).
+(:mod:`.main`; the executable is :mod:`usar_arm.__main__`).
 
 This package is the only place that prints, reads argv and sets exit codes. Results go to
 stdout (``--json``: one JSON object with stable keys); logs and progress go to stderr. It

@@ -158,7 +158,9 @@ class Executor:
     Args:
         client: the connection that owns the robot.
         actuator: its name (ACT/ASTA). links: USARSim link (1-based) of each joint, in order.
-        names, lower, upper: joint names and limits (targets are always clamped into them).
+        names: the joint names.
+        lower: each joint's lower limit (rad or m; targets are always clamped into the limits).
+        upper: each joint's upper limit (rad or m).
         options: rates, tolerances, bounds.
     """
 
