@@ -67,8 +67,9 @@ typecheck: $(TEST_VENV)/.installed
 # The documentation site (mkdocs.yml) into build/site, with --strict: a broken link or anchor, or
 # a public name without a docstring (tools/docs_hooks.py), fails it. Its own venv: mkdocstrings
 # reads the package's source with griffe and imports nothing, so the package goes in without its
-# dependencies (no Pinocchio, OMPL or MuJoCo to download for the docs).
-DOCS_PACKAGES := "mkdocs>=1.6,<2" "mkdocs-material>=9.5,<10" "mkdocstrings[python]>=0.27"
+# dependencies (no Pinocchio, OMPL or MuJoCo to download for the docs). ruff formats the long
+# signatures.
+DOCS_PACKAGES := "mkdocs>=1.6,<2" "mkdocs-material>=9.5,<10" "mkdocstrings[python]>=0.27" "ruff>=0.6"
 
 $(DOCS_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DOCS_VENV)

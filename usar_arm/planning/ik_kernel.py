@@ -6,10 +6,10 @@ distance to the seed and polishes them in that order by Newton steps on the prod
 exponentials of the same URDF (:mod:`.poe`), returning the first that reaches the tolerance
 inside the limits: the branch :meth:`IKSolver._solve_analytic <.ik.IKSolver>` would choose.
 
-Whatever needs judgement it hands back (status :data:`.ik_kernel.FALLBACK`) to the Python path: a
-wrist near its singularity (q5 ~ 0, where the Python path tries several splits of q4 + q6), a solution a
-hair outside a limit (which the Python path retries on the limit), or no branch at all (which
-the Python path turns into a numeric search or a typed error).
+Whatever needs judgement it hands back (status :data:`.ik_kernel.FALLBACK`) to the Python
+path: a wrist near its singularity (q5 ~ 0, where the Python path tries several splits of
+q4 + q6), a solution a hair outside a limit (which the Python path retries on the limit), or no
+branch at all (which the Python path turns into a numeric search or a typed error).
 
 The arm's constants travel in one float vector built by :func:`pack` (indices ``C_*``).
 """
