@@ -11,6 +11,7 @@ viser is imported lazily (:mod:`.viser_page`), so the rest of the package works 
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,6 +93,16 @@ def _build(server: Any, urdf_text: str, trajectory: Trajectory, scene: Scene | N
     return replay
 
 
+TIME_STEP = 0.01
+"""The time slider's step (s). Its box is a few digits wide: the slider's value and its end
+are kept to this step, so that the box shows them whole (a time of 0.23075 s showed 0.2307)."""
+
+
+def time_box(seconds: float) -> float:
+    """The time slider's end for a motion of ``seconds``: rounded up to :data:`TIME_STEP`."""
+    return max(TIME_STEP, round(math.ceil(round(seconds / TIME_STEP, 6)) * TIME_STEP, 2))
+
+
 def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = None,
                  host: str = "127.0.0.1", port: int = 8080, loop: bool = True,
                  fps: float = 30.0) -> ReplayServer:
@@ -116,7 +127,7 @@ def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = N
         playing = gui.add_checkbox("Play", initial_value=True)
         looping = gui.add_checkbox("Loop", initial_value=loop)
         speed = gui.add_slider("Speed (x)", min=0.1, max=2.0, step=0.1, initial_value=1.0)
-        slider = gui.add_slider("Time (s)", min=0.0, max=max(duration, 1e-3), step=0.01,
+        slider = gui.add_slider("Time (s)", min=0.0, max=time_box(duration), step=TIME_STEP,
                                 initial_value=0.0)
     except BaseException:
         with quiet():
@@ -136,7 +147,7 @@ def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = N
         if t > duration:
             t = 0.0 if looping.value else duration
             playing.value = bool(looping.value)
-        slider.value = t
+        slider.value = round(t, 2)  # (to TIME_STEP: the box shows it whole)
 
     handle.every(1.0 / fps, play, "usar-arm-replay")
     log.info("replay served at %s", handle.url)

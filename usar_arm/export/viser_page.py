@@ -129,7 +129,10 @@ class ReplayServer:
 
 
 def add_ground(server: Any) -> None:
-    """z up, and a 6 m grid on the floor (0.25 m cells, 1 m sections)."""
+    """z up, a 6 m grid on the floor (0.25 m cells, 1 m sections), and the default lights
+    without viser's image-based environment: a browser without a GPU (software WebGL) took
+    minutes to light the scene from the environment image, showing it faded until then."""
     server.scene.set_up_direction("+z")
+    server.scene.configure_environment_map(hdri=None)
     server.scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25, section_size=1.0,
                           position=(0.0, 0.0, 0.001))
