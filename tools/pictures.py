@@ -257,4 +257,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    sys.modules.setdefault("pictures", sys.modules["__main__"])  # (the hooks register here)
     sys.exit(main())
