@@ -273,6 +273,11 @@ VIEWER_READY = ("(() => { const c = Array.from(document.querySelectorAll('canvas
 """True once viser's page shows its 3D canvas and the replay's controls."""
 
 
+DISMISS = ("Array.from(document.querySelectorAll('button')).filter(b => b.parentElement && "
+           "b.parentElement.innerText.includes('Software WebGL')).forEach(b => b.click())")
+"""Closes viser's notice that WebGL runs in software (headless Chromium has no GPU)."""
+
+
 def _viewer(out: Path, scratch: Path) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from pictures import usar_arm
@@ -284,6 +289,8 @@ def _viewer(out: Path, scratch: Path) -> None:
             page.goto(url)
             page.wait_for(VIEWER_READY)
             page.pump(4.0)  # the scene streams in over the page's websocket
+            page.evaluate(DISMISS)  # (a user with a GPU never sees it)
+            page.pump(1.0)
             page.screenshot(out)
     finally:
         process.kill()
