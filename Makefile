@@ -9,8 +9,8 @@ DOCS_VENV := .venv-docs
 WARM_UP := from usar_arm.planning.compiled import warm_up; warm_up(); \
 	from usar_arm.workspace.kernels import warm_up; warm_up()
 
-.PHONY: demo test test-all test-slow lint typecheck docs bench bench-quick load soak clean \
-	ros-setup ros1-system ros1-setup
+.PHONY: demo test test-all test-slow lint typecheck docs pictures bench bench-quick load soak \
+	clean ros-setup ros1-system ros1-setup
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -49,8 +49,10 @@ demo: $(DEMO_VENV)/.installed
 # The default suite: unit, integration and end-to-end tests against the embedded simulator
 # (everything not marked slow), on both cores. The consumer tests (tests/consumers, about 100 s
 # run alone) drive Tesseract in its own venv, bench/.venvs/tesseract (created here once, about
-# 2 minutes and 320 MB; never a dependency of the package).
-test: $(TEST_VENV)/.installed ros1-system
+# 2 minutes and 320 MB; never a dependency of the package). tests/test_web_pages.py builds the
+# site with the docs venv and opens it, and the viewer, in headless Chromium (installed with
+# apt-get when missing); ros1-system installs Debian's ROS 1 for tests/ros1.
+test: $(TEST_VENV)/.installed $(DOCS_VENV)/.installed ros1-system
 	$(PYTHON) bench/peers/venvs.py --only tesseract
 	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow and not realtime" tests
 
@@ -77,8 +79,9 @@ typecheck: $(TEST_VENV)/.installed
 # The documentation site (mkdocs.yml) into build/site, with --strict: a broken link or anchor, or
 # a public name without a docstring (tools/docs_hooks.py), fails it. Its own venv: mkdocstrings
 # reads the package's source with griffe and imports nothing, so the package goes in without its
-# dependencies (no Pinocchio, OMPL or MuJoCo to download for the docs).
-DOCS_PACKAGES := "mkdocs>=1.6,<2" "mkdocs-material>=9.5,<10" "mkdocstrings[python]>=0.27"
+# dependencies (no Pinocchio, OMPL or MuJoCo to download for the docs). ruff formats the long
+# signatures.
+DOCS_PACKAGES := "mkdocs>=1.6,<2" "mkdocs-material>=9.5,<10" "mkdocstrings[python]>=0.27" "ruff>=0.6"
 
 $(DOCS_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DOCS_VENV)
@@ -89,6 +92,13 @@ $(DOCS_VENV)/.installed: pyproject.toml
 
 docs: $(DOCS_VENV)/.installed
 	NO_MKDOCS_2_WARNING=1 $(DOCS_VENV)/bin/mkdocs build --strict --site-dir build/site
+
+# Every picture the README and the docs show, drawn again (tools/pictures.py; each records its
+# command and a hash of its inputs, and tests/test_pictures.py names the stale ones). The
+# reachability map took 31 minutes on 2 busy cores; `tools/pictures.py --stale` draws only
+# what changed.
+pictures: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/python tools/pictures.py --write
 
 # Benchmarks (bench/README-peers.md, bench/results/README.md). Each peer gets its own venv in
 # bench/.venvs (created once by venvs.py; mplib needs numpy < 2); usar-arm runs in the test venv.

@@ -111,7 +111,7 @@ def test_the_site_shows_every_page() -> None:
 
 
 def test_the_readme_lists_every_command() -> None:
-    from usar_arm.cli.main import COMMANDS  # usar-arm --help's commands, in its order
+    from usar_arm.cli.commands import COMMANDS  # usar-arm --help's commands, in its order
 
     listed = re.findall(r"^\| `usar-arm ([a-z-]+)", README.read_text(), flags=re.MULTILINE)
     commands = list(COMMANDS)

@@ -1,8 +1,10 @@
 """MkDocs hooks of ``make docs`` (mkdocs.yml ``hooks``): every public name of the package must
-have a docstring, or the strict build fails; and the docstrings' Sphinx roles
-(``:class:`Arm```) show as the code they name.
+have a docstring, and every cross-reference of a docstring must name an object
+(``tools/griffe_roles.py``), or the strict build fails; each API page ends with its package's
+modules, each with its docstring, so that a reference to a module has a place to link to.
 
-Public: each name in ``__all__`` of ``usar_arm`` and of each of its subpackages, and the public
+Public: each name ``usar_arm`` and each of its subpackages list (their ``__all__``: the
+TYPE_CHECKING block, ``tools/griffe_public.py``), and the public
 methods and properties of those that are classes (mkdocstrings renders these; without a
 docstring it would leave them out silently). Read statically by griffe, as mkdocstrings reads
 them: nothing is imported. Run alone, ``python tools/docs_hooks.py`` prints what is missing and
@@ -12,16 +14,17 @@ exits 1 if anything is.
 from __future__ import annotations
 
 import logging
-import re
 import sys
 from pathlib import Path
 from typing import Any
 
 import griffe
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from griffe_public import PublicNames
+
 ROOT = Path(__file__).resolve().parents[1]
 log = logging.getLogger("mkdocs.hooks.docstrings")
-ROLE = re.compile(r":(?:class|mod|meth|func|attr|data|exc|obj):(?=<code>)")
 
 
 def _documented(obj: Any) -> bool:
@@ -43,7 +46,9 @@ def _members(cls: Any) -> list[Any]:
 def missing_docstrings(root: Path = ROOT) -> list[str]:
     """``package.name`` (or ``package.Class.member``) of every public name without a docstring,
     and of every name in an ``__all__`` that does not resolve."""
-    package = griffe.load("usar_arm", search_paths=[str(root)], resolve_aliases=False)
+    extensions = griffe.load_extensions(PublicNames)
+    package = griffe.load("usar_arm", search_paths=[str(root)], resolve_aliases=False,
+                          extensions=extensions)
     packages = [package, *(m for n, m in package.members.items()
                            if not m.is_alias and m.is_module and m.is_subpackage)]
     missing = []
@@ -71,10 +76,35 @@ def on_pre_build(config: Any) -> None:
         log.warning("public name without a docstring: %s", line)
 
 
-def on_page_content(html: str, **_: Any) -> str:
-    """Drop the role of a Sphinx cross-reference, which mkdocstrings leaves as text before the
-    code it names."""
-    return ROLE.sub("", html)
+def modules_section(package: str, root: Path = ROOT) -> str:
+    """The markdown that renders each module of ``usar_arm.<package>`` with its docstring
+    alone (its public names are on the page above)."""
+    folder = root / "usar_arm" / package
+    names = sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__")
+    names += sorted(p.parent.name for p in folder.glob("*/__init__.py"))
+    paths = [f"usar_arm.{package}.{name}" for name in names]
+    if package == "cli":  # (the executable, python -m usar_arm, beside the command line)
+        paths.append("usar_arm.__main__")
+    blocks = [f"::: {path}\n    options:\n      members: false\n"
+              f"      show_root_heading: true\n      heading_level: 3\n" for path in paths]
+    return "\n\n## Modules\n\n" + "\n".join(blocks) if blocks else ""
+
+
+def on_page_markdown(markdown: str, page: Any, **_: Any) -> str:
+    """End each API page (``api/<package>.md``) with its package's modules."""
+    source = Path(page.file.src_path)
+    if source.parent.name == "api":
+        return markdown + modules_section(source.stem)
+    return markdown
+
+
+def on_post_build(config: Any) -> None:
+    """Warn (an error under ``--strict``) for every cross-reference that names no object."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from griffe_roles import UNRESOLVED
+
+    for line in dict.fromkeys(UNRESOLVED):
+        log.warning("cross-reference to nothing: %s", line)
 
 
 if __name__ == "__main__":

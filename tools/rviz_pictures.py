@@ -182,5 +182,37 @@ def main() -> int:
     return 0
 
 
+INPUTS = {"KR60": ("usar_arm/sim/robots/kr60.yaml", "robots/generated/KR60.urdf"),
+          "P3AT": ("usar_arm/sim/robots/p3at.yaml", "usar_arm/sim/worlds/default.yaml")}
+"""What each screenshot shows besides the node and RViz's configuration (the pictures registry
+of tools/pictures.py hashes them to tell when a screenshot is stale)."""
+NODE = ("usar_arm/ros/node.py", "usar_arm/ros/platform_node.py", "usar_arm/ros/ros1.py",
+        "usar_arm/ros/convert.py", "usar_arm/ros/frames.py", "tools/rviz_pictures.py")
+
+
+def _register() -> None:
+    """Register both screenshots with tools/pictures.py (``make pictures`` draws them)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from pictures import PICTURES, register
+    from pictures import Picture as Registered
+
+    for robot, config in CONFIGS.items():
+        name = f"rviz-{robot.lower()}"
+        if name in PICTURES:
+            continue
+        register(Registered(
+            f"docs/images/{name}.png",
+            f"python tools/rviz_pictures.py --robots {robot}  (usar-arm ros --ros1 --robot "
+            f"{robot}; rviz -d {config}, under Xvfb)",
+            (*INPUTS[robot], *NODE, f"usar_arm/ros/ros1_package/rviz/{config}"),
+            lambda out, scratch, robot=robot: _render_into(robot, out, scratch)))
+
+
+def _render_into(robot: str, out: Path, scratch: Path) -> None:
+    render(robot, out, scratch)
+
+
+_register()
+
 if __name__ == "__main__":
     sys.exit(main())

@@ -12,11 +12,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
-from usar_arm.core.version import __version__
 
-if TYPE_CHECKING:
-    from usar_arm.arm.facade import Arm
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.arm.facade import Arm as Arm
+    from usar_arm.core.version import __version__ as __version__
 
-__all__ = ["Arm", "__version__"]
-
-__getattr__ = exports(__name__, {"arm.facade": ("Arm",)})
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -10,7 +10,7 @@ from scipy.signal import lfilter
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings
 from usar_arm.calibrate.changepoint import ALPHA, change_point, split_statistic
-from usar_arm.calibrate.identify import identify
+from usar_arm.calibrate.identification import identify
 from usar_arm.core.spatial import transform_from_xyz_rpy
 from usar_arm.planning.kinematics import KinematicModel
 

@@ -13,7 +13,7 @@ import pytest
 from usar_arm.arm.facade import Arm
 from usar_arm.arm.tour_calibration import CalibrationSettings, cached_calibration
 from usar_arm.calibrate.bounds import Bounds
-from usar_arm.calibrate.identify import CalibrationOptions
+from usar_arm.calibrate.identification import CalibrationOptions
 from usar_arm.cli.main import main
 from usar_arm.core.errors import EXIT_OK
 from usar_arm.description.cache import (

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
-from usar_arm.calibrate.identify import AUTO_MODEL, CalibrationOptions, identify
+from usar_arm.calibrate.identification import AUTO_MODEL, CalibrationOptions, identify
 from usar_arm.calibrate.measurements import Measurement
 from usar_arm.core.errors import CalibrationError
 from usar_arm.core.spatial import FLIP_X, transform, transform_from_xyz_rpy

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings, tool_errors
-from usar_arm.calibrate.identify import AUTO_MODEL, CalibrationOptions, identify
+from usar_arm.calibrate.identification import AUTO_MODEL, CalibrationOptions, identify
 from usar_arm.calibrate.quantised import MODELS
 from usar_arm.core.spatial import FLIP_X, transform, transform_from_xyz_rpy
 from usar_arm.planning.kinematics import KinematicModel

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tests.calibrate.synthetic import KR60, perturbed, random_q, readings
-from usar_arm.calibrate.identify import identify
+from usar_arm.calibrate.identification import identify
 from usar_arm.calibrate.written import check_written, written_check
 from usar_arm.core.errors import CalibrationError
 from usar_arm.planning.kinematics import KinematicModel

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from usar_arm.__main__ import local_ray_cpus
-from usar_arm.cli.main import COMMANDS, SUMMARIES, build_parser, register
+from usar_arm.cli.commands import COMMANDS, add_command
+from usar_arm.cli.main import build_parser, register
 
 CORES = os.cpu_count() or 1
 
@@ -50,18 +51,23 @@ def _subcommands(parser: argparse.ArgumentParser) -> list[str]:
 
 def test_the_command_table_is_what_the_modules_register_in_the_order_of_help() -> None:
     assert _subcommands(build_parser()) == list(COMMANDS)
-    for command, module in COMMANDS.items():  # and one command loads its own module's only
-        own = [c for c, m in COMMANDS.items() if m == module]
+    for command, listed in COMMANDS.items():  # and one command loads its own module's only
+        own = [c for c, other in COMMANDS.items() if other.module == listed.module]
         assert _subcommands(build_parser(command)) == own
 
 
 def test_the_summaries_help_lists_are_what_the_modules_register() -> None:
     registered: dict[str, str | None] = {}
-    for module in dict.fromkeys(COMMANDS.values()):
+    for module in dict.fromkeys(c.module for c in COMMANDS.values()):
         action = argparse.ArgumentParser().add_subparsers()
         register(action, module)
         registered |= {a.dest: a.help for a in action._choices_actions}
-    assert registered == SUMMARIES and list(SUMMARIES) == list(COMMANDS)
+    assert registered == {name: c.summary for name, c in COMMANDS.items()}
+
+
+def test_a_command_outside_the_table_cannot_be_registered() -> None:
+    with pytest.raises(KeyError, match="no-such-command"):
+        add_command(argparse.ArgumentParser().add_subparsers(), "no-such-command")
 
 
 HELP_ALONE = """
@@ -82,7 +88,7 @@ def test_help_lists_the_commands_without_loading_them() -> None:
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "none"
     shown = "".join(done.stdout.split())  # (argparse wraps the lines, at hyphens too)
-    assert all("".join(summary.split()) in shown for summary in SUMMARIES.values())
+    assert all("".join(c.summary.split()) in shown for c in COMMANDS.values())
 
 
 ONE_COMMAND = """

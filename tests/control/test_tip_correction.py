@@ -7,15 +7,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from usar_arm.control.tip_bias import BiasEstimate
 from usar_arm.control.tip_correction import (
     DITHERS,
     LOCK_MARGIN,
     ZERO_MARGIN,
+    TipCorrection,
     away_from_lock,
     away_from_zero,
     dither_pose,
     model_tolerance,
 )
+from usar_arm.control.tool_accuracy import ToolAccuracy, sensor_accuracy
 from usar_arm.core.spatial import log_so3, matrix_to_rpy, rpy_to_matrix, transform
 
 angles = st.floats(-3.0, 3.0)
@@ -70,3 +73,27 @@ def test_the_model_tolerance_follows_the_joint_resolution() -> None:
     # RMS over joints of |d pose/dq| (2 m and 1 m; 1 rad and 1 rad), times the half step, x2.
     assert tol_m == pytest.approx(1e-4 * np.sqrt(5), rel=1e-4)
     assert tol_rad == pytest.approx(1e-4 * np.sqrt(2), rel=1e-4)
+
+
+def test_a_sensor_measurement_is_the_pose_error_to_the_target() -> None:
+    target = transform(rpy_to_matrix((0.0, np.pi, 0.0)), (1.0, 0.0, 1.0))
+    measured = transform(rpy_to_matrix((0.002, np.pi, 0.0)), (1.003, 0.004, 1.0))
+    tip = sensor_accuracy("KR60ArmTipTruth", target, measured, 0.001)
+    assert tip.source == "KR60ArmTipTruth" and tip.sensor_step_m == 0.001
+    assert tip.error_m == pytest.approx(0.005) and tip.error_rad == pytest.approx(0.002)
+
+
+def test_a_correction_replaces_the_error_and_reports_its_figures() -> None:
+    bias = BiasEstimate(np.array([0.003, 0.0, 0.004]), np.array([0.0, 0.0, 2e-4]),
+                        np.full(3, 1e-4), 1e-4, True)
+    fix = TipCorrection(np.zeros(6), 2.1e-3, 4e-4, 1e-4, 5e-5, 12, bias, rounds=2,
+                        verified=False)
+    before = ToolAccuracy("sensor", 2.1e-3, 4e-4, sensor_step_m=0.001)
+    after = fix.applied_to(before)
+    assert (after.source, after.sensor_step_m) == ("sensor", 0.001)
+    assert (after.error_m, after.error_rad) == (1e-4, 5e-5)
+    figures = after.correction
+    assert figures is not None
+    assert (figures.before_m, figures.before_rad, figures.readings) == (2.1e-3, 4e-4, 12)
+    assert figures.bias_m == pytest.approx(0.005) and figures.bias_rad == pytest.approx(2e-4)
+    assert (figures.bias_consistent, figures.rounds, figures.verified) == (True, 2, False)

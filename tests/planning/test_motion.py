@@ -161,7 +161,30 @@ def test_plans_are_reproducible_with_a_seed(tmp_path: Path) -> None:
                         "-1.2", "-1.0", "1.0", "0", "0.5", "0", "--scene", "cage", "--seed", "7",
                         "--out", str(out), "-q"], check=True, timeout=120)
         outs.append(json.loads(out.read_text())["waypoints"])
+        assert json.loads(out.read_text())["scene"] == "cage"  # (what view and render show)
     assert outs[0] == outs[1] and len(outs[0]) > 2
+
+
+def test_a_trajectory_records_the_scene_it_was_planned_in(tmp_path: Path) -> None:
+    from usar_arm import Arm
+
+    arm = Arm.from_files(Path(__file__).resolve().parents[2] / "robots/generated/KR60.urdf")
+    mine = tmp_path / "cell.yaml"
+    mine.write_text("name: cell\nobjects:\n  - {name: post, box: [0.1, 0.1, 0.5], "
+                    "xyz: [1.5, 1.5, 0.25]}\n")
+    goal = np.array([0.3, -0.5, 0.5, 0.0, 0.5, 0.0])
+    for scene, recorded in (("table", "table"), (mine, str(mine.resolve())),
+                            (load_scene("table"), None), (None, None)):
+        traj = arm.plan(joints=goal, scene=scene).trajectory
+        assert traj.scene == recorded
+        traj.save(tmp_path / "t.json")
+        assert Trajectory.load(tmp_path / "t.json").scene == recorded
+    doc = json.loads((tmp_path / "t.json").read_text())
+    assert "scene" not in doc  # (none known: the file says nothing)
+    doc["scene"] = 3
+    (tmp_path / "t.json").write_text(json.dumps(doc))
+    with pytest.raises(FileFormatError, match="expected a scene's name or path, got 3"):
+        Trajectory.load(tmp_path / "t.json")
 
 
 # ------------------------------------------------------------------ regressions (issue 8)

@@ -78,7 +78,7 @@ def test_shipped_worlds_load_by_name_and_the_arms_cell_is_unchanged() -> None:
 
 
 def test_bad_world_files_name_the_problem(tmp_path: Path) -> None:
-    with pytest.raises(FileNotFoundError, match="shipped worlds: default, rooms"):
+    with pytest.raises(FileFormatError, match="shipped world: default, rooms"):
         load_world(tmp_path / "nosuch.yaml")
     bad = tmp_path / "bad.yaml"
     bad.write_text("boxes:\n  - {center: [0, 0], half: [1, 1, 1]}\n")

@@ -26,7 +26,7 @@ from usar_arm.description.embedded import describe
 from usar_arm.description.pipeline import DescribeOptions, Description, write_description
 from usar_arm.planning.acm import adjacent_pairs
 from usar_arm.urdf.moveit import moveit_files
-from usar_arm.urdf.validate import find_check_urdf, semantic_problems
+from usar_arm.urdf.validation import find_check_urdf, semantic_problems
 
 GOLDEN = Path(__file__).resolve().parents[2] / "robots" / "generated" / "as-learnt"
 """The as-learnt KR60 and Fanuc_M16iB20 (usar-arm urdf --no-calibrate): byte-identical on every

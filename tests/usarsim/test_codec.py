@@ -210,3 +210,4 @@ def test_asta_joints_reads_an_arms_links_in_configuration_order_or_none_when_one
     assert asta.joints((1, 2)) == (0.25, -0.5)
     assert asta.joints((2,)) == (-0.5,)
     assert asta.joints((1, 3)) is None
+    assert asta.missing((1, 3, 2, 4)) == (3, 4) and asta.missing((2, 1)) == ()

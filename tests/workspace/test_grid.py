@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usar_arm.core.errors import MapTooLargeError
+from usar_arm.core.job_errors import MapTooLargeError
 from usar_arm.planning.robot import Robot
 from usar_arm.workspace.grid import (
     bytes_per_voxel,

@@ -8,18 +8,11 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.arm.cycle import CycleResult, run_cycle
-    from usar_arm.arm.facade import Arm
-    from usar_arm.arm.tour_calibration import CalibrationSettings, calibrate_arm
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.arm.cycle import CycleResult as CycleResult
+    from usar_arm.arm.cycle import run_cycle as run_cycle
+    from usar_arm.arm.facade import Arm as Arm
+    from usar_arm.arm.tour_calibration import CalibrationSettings as CalibrationSettings
+    from usar_arm.arm.tour_calibration import calibrate_arm as calibrate_arm
 
-_HOMES = {
-    "cycle": ("CycleResult", "run_cycle"),
-    "facade": ("Arm",),
-    "tour_calibration": ("CalibrationSettings", "calibrate_arm"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["Arm", "CalibrationSettings", "CycleResult", "calibrate_arm", "run_cycle"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -125,8 +125,9 @@ def run_cycle(arm: Arm, moves: list[Move], scene: str = "table",
     :meth:`Arm.execute`).
 
     Raises:
-        the planning errors of :func:`usar_arm.control.motion.plan_motion` and
-        :class:`~usar_arm.core.errors.ExecutionAbortedError`, naming the move in a note.
+        PlanningError: the planning errors of :func:`usar_arm.control.motion.plan_motion`,
+            naming the move in a note.
+        ExecutionAbortedError: as :meth:`Arm.execute`, naming the move in a note.
     """
     result = CycleResult()
     for i, move in enumerate(moves):

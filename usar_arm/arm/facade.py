@@ -15,7 +15,6 @@ Units: m, rad, s; poses are 4x4 transforms of tool0 in base_link.
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Mapping
 from dataclasses import replace
@@ -28,10 +27,11 @@ from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executo
 from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.control.tip import TipSensor, platform_sensor_name
 from usar_arm.control.tip_correction import correct_tip
-from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
+from usar_arm.control.tool_accuracy import ToolAccuracy, sensor_accuracy
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.core.errors import ConnectionLostError, InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
+from usar_arm.core.named_file import recorded
 from usar_arm.core.spatial import Array, pose_error
 from usar_arm.description.cache import cache_folder, robot_from_record
 from usar_arm.description.pipeline import DescribeOptions
@@ -41,7 +41,8 @@ from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
 from usar_arm.planning.robot import Robot, RobotOptions, robot_from_files
 from usar_arm.planning.scene import EMPTY, Scene
-from usar_arm.planning.scene_file import load_scene
+from usar_arm.planning.scene_file import BUILTIN, load_scene
+from usar_arm.urdf.discovery_file import discovery_document, wire_facts
 from usar_arm.usarsim.client import UsarClient
 
 log = logging.getLogger("usar_arm.arm.facade")
@@ -94,8 +95,9 @@ class Arm:
 
         Args:
             robot: robot class (``KR60`` = ``USARBot.KR60``).
-            host, port: a USARSim server; without ``host`` the embedded simulator is started
+            host: a USARSim server's address; without it the embedded simulator is started
                 in this process (``wire_precision`` and ``sim_speed`` configure it).
+            port: the server's TCP port.
             calibrated: use the calibrated description when this arm was calibrated before
                 (``usar-arm urdf`` or ``calibrate`` cached it); False: the as-learnt one.
         """
@@ -191,12 +193,12 @@ class Arm:
         client = self._live()
         asta = client.wait_asta(str(self.robot.actuator), after_time=newer_than,
                                 timeout=timeout)
-        values = dict(asta.values)
-        missing = [k for k in self.robot.wire_links if k not in values]
-        if missing:
+        joints = asta.joints(self.robot.wire_links)
+        if joints is None:
+            missing = list(asta.missing(self.robot.wire_links))
             raise ConnectionLostError("reading joint values",
                                       f"ASTA lacks links {missing}: {asta}")
-        return np.array([values[k] for k in self.robot.wire_links])
+        return np.array(joints)
 
     def _live(self) -> UsarClient:
         if self.client is None:
@@ -211,10 +213,10 @@ class Arm:
             key, loaded = "", EMPTY
         elif isinstance(scene, Scene):
             key, loaded = f"<scene {id(scene)}>", scene
-        else:
-            key, loaded = str(scene), None
+        else:  # (a Path is a path even when it reads like a shipped name: core/named_file.py)
+            key, loaded = f"{type(scene).__name__} {scene}", None
         if key not in self._scenes:
-            loaded = loaded or load_scene(str(scene))
+            loaded = loaded or load_scene(scene)  # type: ignore[arg-type]
             self._scenes[key] = (loaded, self.robot.collision_world(loaded))
         return self._scenes[key][1]
 
@@ -232,15 +234,20 @@ class Arm:
         """Plan and time a motion to a configuration or a tool0 pose.
 
         ``start`` defaults to the arm's current joints (live) or home (offline). Keyword
-        overrides (``speed_scale=0.3``, ``blend=True``...) change :class:`MotionOptions`.
+        overrides (``speed_scale=0.3``, ``blend=True``...) change :class:`MotionOptions`. The
+        trajectory records a scene given by name or path (``Trajectory.scene``).
         """
         opts = replace(options or MotionOptions(), motion=motion, **overrides)
         if start is None:
             start = self.joints() if self.client is not None else self.home
-        return plan_motion(self.robot, self.world(scene), np.asarray(start, float),
+        plan = plan_motion(self.robot, self.world(scene), np.asarray(start, float),
                            goal=None if joints is None else np.asarray(joints, float),
                            pose=None if pose is None else np.asarray(pose, float),
                            options=opts)
+        if scene is None or isinstance(scene, Scene):
+            return plan
+        named = recorded(scene, "scene", BUILTIN)  # (so that the trajectory's file says it)
+        return replace(plan, trajectory=replace(plan.trajectory, scene=named))
 
     # ------------------------------------------------------------------ execution
     def executor(self, options: ExecutionOptions | None = None) -> Executor:
@@ -282,22 +289,14 @@ class Arm:
         goal = report.goal
         if sensor is not None:
             reading = sensor.read()
-            _, err_m, err_rad = pose_error(target, reading.pose)
-            tip = ToolAccuracy(sensor.source, err_m, err_rad, sensor_step_m=reading.step_m)
+            tip = sensor_accuracy(sensor.source, target, reading.pose, reading.step_m)
             if tip_correction:
                 fix = correct_tip(sensor, lambda q: self._sensor_world(sensor, q),
                                   lambda pose, seed: np.array(
                                       self.robot.ik_solver().solve(pose, seed).best.q),
                                   executor.settle, lambda: executor.measure()[0], report.goal,
                                   target, joint_step=self.joint_step())
-                goal = fix.goal
-                figures = TipCorrectionFigures(
-                    fix.before_m, fix.before_rad, fix.readings,
-                    float(np.linalg.norm(fix.bias.position)),
-                    float(np.linalg.norm(fix.bias.rotation)), fix.bias.consistent, fix.rounds,
-                    fix.verified)
-                tip = replace(tip, error_m=fix.after_m, error_rad=fix.after_rad,
-                              correction=figures)
+                goal, tip = fix.goal, fix.applied_to(tip)
         else:
             q, _ = executor.measure()
             _, err_m, err_rad = pose_error(target, self.fk(q))
@@ -340,11 +339,8 @@ class Arm:
 
     def tip_step(self) -> float:
         """The resolution (m) the server printed the Tip with (0: exact or unknown)."""
-        for name, text in self.robot.files.items():
-            if name.endswith(".discovery.json"):
-                precision = json.loads(text).get("precision", {})
-                return float(precision.get("tip_resolution_m") or 0.0)
-        return 0.0
+        doc = discovery_document(self.robot.files)
+        return wire_facts(doc).tip_resolution_m if doc is not None else 0.0
 
     def tip_sensor(self) -> TipSensor | None:
         """The server's tip GroundTruth sensor of this arm (None offline or without one)."""

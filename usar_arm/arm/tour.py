@@ -157,10 +157,9 @@ class Recorder:
     def __call__(self, rec: Received) -> None:
         msg = rec.message
         if isinstance(msg, m.Asta) and msg.name == self.actuator and msg.time is not None:
-            values = dict(msg.values)
-            if all(k in values for k in self.links):
-                self.joints[msg.time] = (np.array([values[k] for k in self.links], float),
-                                         rec.step("Value"))
+            q = msg.joints(self.links)
+            if q is not None:
+                self.joints[msg.time] = (np.array(q, float), rec.step("Value"))
         elif (isinstance(msg, m.Sen) and (msg.name or "").lower() == self.tip_sensor
               and msg.time is not None and msg.location is not None
               and msg.orientation is not None):

@@ -30,7 +30,7 @@ import numpy as np
 
 from usar_arm.arm.facade import Arm
 from usar_arm.arm.tour import Progress, choose_configurations, collect
-from usar_arm.calibrate.identify import Calibration, CalibrationOptions, identify
+from usar_arm.calibrate.identification import Calibration, CalibrationOptions, identify
 from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.residuals import Residuals
 from usar_arm.calibrate.tour_readings import TourReadings, read_tour
@@ -52,6 +52,7 @@ from usar_arm.description.cache import (
     store_calibrated,
 )
 from usar_arm.description.pipeline import DescribeOptions, Description
+from usar_arm.urdf.discovery_file import wire_facts
 
 log = logging.getLogger(__name__)
 _usarsim_axes, _fold_base = usarsim_axes, fold_base  # the names the tests knew them by
@@ -167,7 +168,7 @@ def calibrate_description(desc: Description, options: DescribeOptions, poses: in
         tour = read_tour(readings, chain.joint_names,
                          [j.type is JointType.PRISMATIC for j in chain.actuated_joints],
                          chain.lower(), chain.upper())
-        tip_step = float(desc.discovery.get("precision", {}).get("tip_resolution_m") or 0.0)
+        tip_step = wire_facts(desc.discovery).tip_resolution_m
         result = fit_tour(desc.urdf, tour, tip_step, settings.options)
     else:
         with Arm.connect(robot=options.robot, host=options.host, port=options.port,

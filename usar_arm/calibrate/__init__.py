@@ -4,7 +4,7 @@ docs/calibration.md.
 
 measurements (types, file reader) · measurement_writer · parameters (the error model, applied
 to URDF text) · quantised, likelihood (interval models) · derivatives, solver (Jacobian, rank,
-Levenberg-Marquardt) · result (options, result) · identify (the fit) · bounds, plausibility
+Levenberg-Marquardt) · result (options, result) · identification (the fit) · bounds, plausibility
 (what a calibration may change; readings that cannot belong to the description) · consistency,
 changepoint (outliers, a base or tool moved mid-run, convergence, covariance) · residuals ·
 validation (held-out blocks, checked via Pinocchio) · observability (pose selection) · report
@@ -17,23 +17,14 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.calibrate.identify import identify
-    from usar_arm.calibrate.measurement_writer import write_measurements
-    from usar_arm.calibrate.measurements import Measurement, MeasurementSet, read_measurements
-    from usar_arm.calibrate.observability import select_poses
-    from usar_arm.calibrate.result import Calibration, CalibrationOptions
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.calibrate.identification import identify as identify
+    from usar_arm.calibrate.measurement_writer import write_measurements as write_measurements
+    from usar_arm.calibrate.measurements import Measurement as Measurement
+    from usar_arm.calibrate.measurements import MeasurementSet as MeasurementSet
+    from usar_arm.calibrate.measurements import read_measurements as read_measurements
+    from usar_arm.calibrate.observability import select_poses as select_poses
+    from usar_arm.calibrate.result import Calibration as Calibration
+    from usar_arm.calibrate.result import CalibrationOptions as CalibrationOptions
 
-_HOMES = {
-    "identify": ("identify",),
-    "measurement_writer": ("write_measurements",),
-    "measurements": ("Measurement", "MeasurementSet", "read_measurements"),
-    "observability": ("select_poses",),
-    "result": ("Calibration", "CalibrationOptions"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["Calibration", "CalibrationOptions", "Measurement", "MeasurementSet", "identify",
-           "read_measurements", "select_poses", "write_measurements"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -1,5 +1,5 @@
 """What a fit is asked for and what it returns: :class:`CalibrationOptions` and
-:class:`Calibration` (the fit itself is :func:`usar_arm.calibrate.identify.identify`)."""
+:class:`Calibration` (the fit itself is :func:`usar_arm.calibrate.identification.identify`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from usar_arm.core.spatial import Array
 
 @dataclass(frozen=True)
 class CalibrationOptions:
-    """How to fit (see :mod:`usar_arm.calibrate.identify`).
+    """How to fit (see :mod:`usar_arm.calibrate.identification`).
 
     Attributes:
         quantisation: ``midpoint``, ``set-membership``, ``likelihood`` or ``auto``.
@@ -54,7 +54,7 @@ class ParameterEstimate:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The result of :func:`~usar_arm.calibrate.identify.identify` (docs/calibration.md).
+    """The result of :func:`~usar_arm.calibrate.identification.identify` (docs/calibration.md).
 
     Beside the parameters: ``unidentifiable`` (names kept at their URDF values), ``rank``
     (identifiable in these readings) and ``generic_rank`` (in readings at generic

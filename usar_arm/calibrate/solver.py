@@ -1,5 +1,5 @@
 """The numerical core of the fit: the identification Jacobian, the identifiable columns, and
-Levenberg-Marquardt on the weighted residuals (see identify.py for the method)."""
+Levenberg-Marquardt on the weighted residuals (see identification.py for the method)."""
 
 from __future__ import annotations
 

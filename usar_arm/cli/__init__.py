@@ -1,5 +1,5 @@
 """The ``usar-arm`` command: argparse subcommands in the ``ros2 <verb>`` style
-(:func:`usar_arm.cli.main.main`; the executable is :mod:`usar_arm.__main__`).
+(:mod:`.main`; the executable is :mod:`usar_arm.__main__`).
 
 This package is the only place that prints, reads argv and sets exit codes. Results go to
 stdout (``--json``: one JSON object with stable keys); logs and progress go to stderr. It
@@ -12,14 +12,7 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.cli.main import main
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.cli.main import main as main
 
-_HOMES = {
-    "main": ("main",),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["main"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

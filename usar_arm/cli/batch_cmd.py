@@ -8,6 +8,7 @@ from collections import Counter
 from typing import Any
 
 from usar_arm.cli import job_args as job
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import out, progress, setup_logging, verbosity
 from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.control.motion import MotionOptions
@@ -18,8 +19,8 @@ from usar_arm.workspace.batch_file import read_problems
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "batch", help="solve many IK or plan problems from a JSON Lines file",
+    p = add_command(
+        sub, "batch",
         description="Read one problem per line (an IK pose, or a plan from joints to joints or "
                     "to a pose, each with an optional scene), solve them in chunks on the "
                     "chosen backend and write DIR/results.jsonl: one JSON object per problem, "

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from usar_arm.calibrate.bounds import Bounds
-from usar_arm.calibrate.identify import CalibrationOptions, identify
+from usar_arm.calibrate.identification import CalibrationOptions, identify
 from usar_arm.calibrate.measurements import MEASURED_IN, MeasurementSet, read_measurements
 from usar_arm.calibrate.report import calibration_dict, check_validated
 from usar_arm.calibrate.validation import held_out_note, split_held_out
@@ -30,6 +30,7 @@ from usar_arm.cli.calibration_text import (
     tool_point_line,
     warn_lost,
 )
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import (
     add_verbosity,
     out,
@@ -49,8 +50,8 @@ POSES = 14  # poses of the --robot mode's tour (bench/results/calibrate.json: ac
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "calibrate", help="identify joint frames, tool and base from measured tool poses",
+    p = add_command(
+        sub, "calibrate",
         description="Kinematic calibration. FILE mode: fit URDF's joint frames, the measured "
                     "frame's offset and the base pose to the poses in FILE (CSV or YAML, units "
                     "stated), validate on two blocks of consecutive readings (20 %, held out), "

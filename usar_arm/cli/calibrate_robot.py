@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from usar_arm.arm.tour_calibration import WireCalibration, calibrate_description
-from usar_arm.calibrate.identify import CalibrationOptions
+from usar_arm.calibrate.identification import CalibrationOptions
 from usar_arm.cli import calibration_text as text
 from usar_arm.cli.common import err, out, print_json
 from usar_arm.core.errors import EXIT_OK, InvalidInputError

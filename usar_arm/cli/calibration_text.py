@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 
 from usar_arm.calibrate.bounds import Bounds
-from usar_arm.calibrate.identify import Calibration, CalibrationOptions
+from usar_arm.calibrate.identification import Calibration, CalibrationOptions
 from usar_arm.calibrate.report import compact_names
 from usar_arm.cli.common import err
 

@@ -15,6 +15,7 @@ from typing import Any
 from usar_arm.arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
 from usar_arm.arm.facade import Arm
 from usar_arm.arm.tour_calibration import ensure_calibrated, is_calibrated
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import execution_options
 from usar_arm.control.motion import MotionOptions
@@ -29,8 +30,8 @@ TARGET_M, TARGET_RAD = 1e-3, 1e-3
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "demo", help="the main job: describe the KR60 and run a pick-and-place cycle",
+    p = add_command(
+        sub, "demo",
         description="On the embedded simulator: spawn the KR60, discover it, write its URDF, "
                     "SRDF and joint limits, then plan and execute a pick-and-place cycle in the "
                     "table scene (PTP approach, LIN down, LIN up, PTP around the tower, LIN "

@@ -10,6 +10,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.progress_bar import ProgressBar
 from usar_arm.control.drive_inputs import check_in_world, load_script, parse_waypoints
@@ -28,13 +29,10 @@ from usar_arm.core.world_file import Scenery, load_scenery
 from usar_arm.discover.platform import learn_platform
 from usar_arm.usarsim.client import UsarClient
 
-SUMMARY = ("drive a ground vehicle (P3AT, FrontAckerman) by waypoints or a script; bag, "
-           "picture, drift")
-
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "drive", help=SUMMARY,
+    p = add_command(
+        sub, "drive",
         description="Spawn a ground vehicle, drive it through --waypoints (pure pursuit) or "
                     "by a velocity --script, record its ground truth, odometry, INS, laser "
                     "scans and commands (a rosbag2 with -o), draw the run over the world "

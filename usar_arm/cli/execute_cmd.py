@@ -6,6 +6,7 @@ import argparse
 
 import numpy as np
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, setup_logging, verbosity
 from usar_arm.cli.execution_args import (
     add_execution_args,
@@ -21,8 +22,8 @@ from usar_arm.core.errors import EXIT_OK, InvalidInputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "execute", help="execute a saved trajectory (JSON from plan --out) on the arm",
+    p = add_command(
+        sub, "execute",
         description="Connect (the embedded simulator unless --host), spawn and learn the robot, "
                     "check the trajectory fits it and starts where the arm is, stream it as ACT "
                     "commands, settle, and report tracking, timing and tool0 errors.")

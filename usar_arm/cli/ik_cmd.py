@@ -6,6 +6,7 @@ import argparse
 
 import numpy as np
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.cli.units import UNITS, pose_from_args
@@ -15,8 +16,8 @@ from usar_arm.planning.scene_file import load_scene
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "ik", help="inverse kinematics: joint values that put tool0 at a pose",
+    p = add_command(
+        sub, "ik",
         description="Solve for the joint values that put tool0 at a pose in base_link: the "
                     "solution nearest --seed-q (default: the zero configuration), or every "
                     "solution with --all. Analytic (all branches, Newton-polished) for "

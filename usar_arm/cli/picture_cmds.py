@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
 from usar_arm.cli.robot_args import add_robot_args, robot_from_args
 from usar_arm.control.trajectory import Trajectory, load_with_executed
@@ -18,15 +19,16 @@ from usar_arm.planning.scene_file import load_scene
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    r = sub.add_parser(
-        "render", help="draw the arm (and a trajectory's tool path) in its scene as a PNG",
+    r = add_command(
+        sub, "render",
         description="A PNG of the arm's URDF cylinders at --joints (default: home, or the "
                     "trajectory's end), the scene's obstacles, and the tool0 path of "
                     "--trajectory with its start pose as a ghost; or, with --world, a world "
                     "file's top view. Headless (matplotlib).")
     r.add_argument("--joints", type=float, nargs="+", metavar="Q", help="configuration to draw")
     r.add_argument("--scene", default=None, metavar="FILE",
-                   help="a scene YAML file, or one of empty, table, shelf, cage")
+                   help="a scene YAML file, or one of empty, table, shelf, cage (default: "
+                        "the scene --trajectory was planned in)")
     r.add_argument("--trajectory", default=None, metavar="TRAJ.json",
                    help="draw its tool0 path (a trajectory from plan --out)")
     r.add_argument("--world", default=None, metavar="FILE|NAME",
@@ -41,8 +43,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     add_verbosity(r)
     r.set_defaults(handler=run_render)
 
-    p = sub.add_parser(
-        "plot", help="plot a trajectory's joints against their limits as a PNG",
+    p = add_command(
+        sub, "plot",
         description="Position, velocity, acceleration and jerk of every joint over time, with "
                     "dashed limit lines; executed ASTA samples are overlaid when the file has "
                     "them (execute --out, plan --execute --out).")
@@ -53,14 +55,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     add_verbosity(p)
     p.set_defaults(handler=run_plot)
 
-    v = sub.add_parser(
-        "view", help="replay a trajectory in an interactive 3D page (needs usar-arm[viz])",
+    v = add_command(
+        sub, "view",
         description="Serve a viser page (open it in a browser) that replays the trajectory on "
                     "the arm's URDF in its scene, with play/pause and a time slider, until "
                     "Ctrl-C; or write a self-contained HTML replay with --html.")
     v.add_argument("trajectory", metavar="TRAJ.json")
     v.add_argument("--scene", default=None, metavar="FILE",
-                   help="a scene YAML file, or one of empty, table, shelf, cage")
+                   help="a scene YAML file, or one of empty, table, shelf, cage (default: "
+                        "the scene the trajectory was planned in)")
     v.add_argument("--html", default=None, metavar="FILE",
                    help="write a self-contained HTML replay instead of serving")
     v.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
@@ -72,8 +75,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-a
     v.set_defaults(handler=run_view)
 
 
-def _scene(name: str | None) -> Scene | None:
-    return load_scene(name) if name else None
+def _scene(name: str | None, traj: Trajectory | None = None) -> Scene | None:
+    """The scene named on the command line, else the one the trajectory was planned in."""
+    named = name or (traj.scene if traj is not None else None)
+    return load_scene(named) if named else None
 
 
 def _check_joints(robot: Robot, traj: Trajectory, path: str) -> None:
@@ -90,8 +95,8 @@ def run_render(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--size must be at least 100 x 100 pixels, got {args.size}")
     if args.world is not None:
         return _render_world(args)
-    scene = _scene(args.scene)
     traj = Trajectory.load(args.trajectory) if args.trajectory else None
+    scene = _scene(args.scene, traj)
     robot = robot_from_args(args)
     chain = robot.chain
     if args.joints is not None:
@@ -117,10 +122,7 @@ def run_render(args: argparse.Namespace) -> int:
 def _render_world(args: argparse.Namespace) -> int:
     from usar_arm.export.world_plot import render_world  # matplotlib: only when drawing
 
-    try:
-        scenery = load_scenery(args.world)
-    except FileNotFoundError as exc:
-        raise InvalidInputError(str(exc)) from None
+    scenery = load_scenery(args.world)
     render_world(args.out, scenery, title=Path(args.world).stem, size=tuple(args.size))
     out(f"wrote {args.out} ({len(scenery.boxes)} boxes)")
     return EXIT_OK
@@ -141,7 +143,7 @@ def run_view(args: argparse.Namespace) -> int:
 
     setup_logging(verbosity(args))
     traj = Trajectory.load(args.trajectory)
-    scene = _scene(args.scene)
+    scene = _scene(args.scene, traj)
     robot = robot_from_args(args)
     _check_joints(robot, traj, args.trajectory)
     if args.html:

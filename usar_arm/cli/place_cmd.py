@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm.cli import job_args as job
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import out, progress, setup_logging, verbosity
 from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
@@ -24,8 +25,8 @@ from usar_arm.workspace.targets import load_targets
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "place", help="base placement: where the arm reaches every target, with most margin",
+    p = add_command(
+        sub, "place",
         description="Try base poses on the floor (x, y on a grid, yaw in equal steps) and rank "
                     "those from which every target pose of --targets is reachable "
                     "collision-free in --scene by the worst target's margin (manipulability "

@@ -7,6 +7,7 @@ import argparse
 import numpy as np
 
 from usar_arm.arm.facade import Arm
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import (
     add_execution_args,
@@ -57,8 +58,8 @@ def motion_options(args: argparse.Namespace, motion: str) -> MotionOptions:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "plan", help="plan a collision-free, jerk-limited motion to a pose or joint values",
+    p = add_command(
+        sub, "plan",
         description="Plan a PTP motion (joint space, OMPL + Ruckig) or a LIN motion (straight "
                     "tool0 line, IK at every step + a jerk-limited profile) for the arm the "
                     "server describes, from its current joints (read from ASTA) or "

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from usar_arm.cli import job_args as job
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import err, out, progress, setup_logging, verbosity
 from usar_arm.cli.robot_args import robot_from_args
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
@@ -22,8 +23,8 @@ from usar_arm.workspace.reach import ReachSettings
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "reach", help="reachability map: where tool0 reaches, in how many orientations",
+    p = add_command(
+        sub, "reach",
         description="Voxelise the arm's reach (its extent from the description, a rail "
                     "included) and, at every voxel centre, solve collision-free IK for a "
                     "fixed, near-uniform set of tool orientations. Writes DIR/reach.npz "

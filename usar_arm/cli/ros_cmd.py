@@ -9,6 +9,7 @@ import sys
 import threading
 from typing import TYPE_CHECKING, Any
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, err, out, setup_logging, verbosity
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 
@@ -18,9 +19,8 @@ if TYPE_CHECKING:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "ros", help="serve the arm on ROS 2: robot_description, joint_states, tf, "
-                    "FollowJointTrajectory (a ground vehicle: cmd_vel, odom, scan)",
+    p = add_command(
+        sub, "ros",
         description="Spawn ROBOT (the embedded simulator unless --host), learn it, and serve it "
                     "as a ROS 2 robot until Ctrl-C or SIGTERM (the arm then holds; exit 0): "
                     "robot_description, joint_states (one per ASTA), tf_static/tf, "

@@ -7,6 +7,7 @@ import asyncio
 import logging
 import signal
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, setup_logging, verbosity
 from usar_arm.core.errors import EXIT_INVALID_INPUT, EXIT_OK, EXIT_UNAVAILABLE, FileFormatError
 from usar_arm.sim.server import SimOptions, SimServer
@@ -16,8 +17,8 @@ log = logging.getLogger("usar_arm.sim")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "sim", help="run the embedded USARSim-compatible simulator (MuJoCo physics)",
+    p = add_command(
+        sub, "sim",
         description="Serve the USARSim UDK protocol on TCP (one robot per connection, up to 64) "
                     "with MuJoCo physics, until Ctrl-C or SIGTERM. Robot classes: USARBot.KR60, "
                     "USARBot.Fanuc_M16iB20, USARBot.P3AT, USARBot.FrontAckerman.")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.default_calibration import add_calibration_args, config_description
 from usar_arm.cli.out_folder import check_out_folder, other_files, report_other_files
@@ -17,8 +18,8 @@ from usar_arm.urdf.tesseract_package import check_package_name
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "tesseract-config", help="write a Tesseract config folder for a robot",
+    p = add_command(
+        sub, "tesseract-config",
         description="Discover ROBOT and describe it as `usar-arm urdf` does (calibrated "
                     "through its tip sensor by default: the description cache's calibration "
                     "when it holds one, else a tour; --no-calibrate: as learnt), or read "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, err, out, print_json, setup_logging, verbosity
 from usar_arm.cli.default_calibration import (
     add_calibration_args,
@@ -23,9 +24,8 @@ from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, ROS_DISTROS
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser(
-        "urdf", help="spawn a robot, learn its arm over the wire, write URDF/SRDF/limits "
-                     "(a ground vehicle: its URDF)",
+    p = add_command(
+        sub, "urdf",
         description="The successor of the 2012 usar_urdf node: spawn ROBOT on a USARSim server "
                     "(the embedded simulator unless --host), read its actuator's CONF and GEO, "
                     "and write <Robot>.urdf, <Robot>.srdf, <Robot>.joint_limits.yaml and "
@@ -48,8 +48,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_verbosity(p)
     p.set_defaults(handler=run_urdf)
 
-    m = sub.add_parser(
-        "moveit-config", help="write a complete MoveIt 2 config package for a robot",
+    m = add_command(
+        sub, "moveit-config",
         description="Discover ROBOT as `usar-arm urdf` does and write a MoveIt 2 config package "
                     "(SRDF, kinematics.yaml, joint_limits.yaml with acceleration and jerk, "
                     "pilz_cartesian_limits.yaml, ros2_controllers.yaml, moveit_controllers.yaml, "

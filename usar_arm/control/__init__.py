@@ -9,29 +9,23 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.control.ackermann import AckermannCommand, ackermann_command
-    from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
-    from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
-    from usar_arm.control.skid import WheelSpeeds, wheel_speeds
-    from usar_arm.control.timing import TimedMotion
-    from usar_arm.control.tip import TipReading, TipSensor
-    from usar_arm.control.trajectory import LimitReport, MotionLimits, Trajectory, check_limits
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.control.ackermann import AckermannCommand as AckermannCommand
+    from usar_arm.control.ackermann import ackermann_command as ackermann_command
+    from usar_arm.control.executor import ExecutionOptions as ExecutionOptions
+    from usar_arm.control.executor import ExecutionReport as ExecutionReport
+    from usar_arm.control.executor import Executor as Executor
+    from usar_arm.control.motion import MotionOptions as MotionOptions
+    from usar_arm.control.motion import MotionPlan as MotionPlan
+    from usar_arm.control.motion import plan_motion as plan_motion
+    from usar_arm.control.skid import WheelSpeeds as WheelSpeeds
+    from usar_arm.control.skid import wheel_speeds as wheel_speeds
+    from usar_arm.control.timing import TimedMotion as TimedMotion
+    from usar_arm.control.tip import TipReading as TipReading
+    from usar_arm.control.tip import TipSensor as TipSensor
+    from usar_arm.control.trajectory import LimitReport as LimitReport
+    from usar_arm.control.trajectory import MotionLimits as MotionLimits
+    from usar_arm.control.trajectory import Trajectory as Trajectory
+    from usar_arm.control.trajectory import check_limits as check_limits
 
-_HOMES = {
-    "ackermann": ("AckermannCommand", "ackermann_command"),
-    "executor": ("ExecutionOptions", "ExecutionReport", "Executor"),
-    "motion": ("MotionOptions", "MotionPlan", "plan_motion"),
-    "skid": ("WheelSpeeds", "wheel_speeds"),
-    "timing": ("TimedMotion",),
-    "tip": ("TipReading", "TipSensor"),
-    "trajectory": ("LimitReport", "MotionLimits", "Trajectory", "check_limits"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["AckermannCommand", "ExecutionOptions", "ExecutionReport", "Executor", "LimitReport",
-           "MotionLimits", "MotionOptions", "MotionPlan", "TimedMotion", "TipReading", "TipSensor",
-           "Trajectory", "WheelSpeeds", "ackermann_command", "check_limits", "plan_motion",
-           "wheel_speeds"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

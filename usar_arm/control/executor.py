@@ -132,9 +132,9 @@ class _Feedback:
     def __call__(self, rec: Received) -> None:
         msg = rec.message
         if isinstance(msg, m.Asta) and msg.name.lower() == self.actuator.lower():
-            values = dict(msg.values)
-            if all(k in values for k in self.links):
-                q = np.array([values[k] for k in self.links])
+            joints = msg.joints(self.links)
+            if joints is not None:
+                q = np.array(joints)
                 if not (np.all(np.isfinite(q)) and np.isfinite(msg.time)):
                     self.invalid = self.invalid or rec.line
                     return
@@ -158,7 +158,9 @@ class Executor:
     Args:
         client: the connection that owns the robot.
         actuator: its name (ACT/ASTA). links: USARSim link (1-based) of each joint, in order.
-        names, lower, upper: joint names and limits (targets are always clamped into them).
+        names: the joint names.
+        lower: each joint's lower limit (rad or m; targets are always clamped into the limits).
+        upper: each joint's upper limit (rad or m).
         options: rates, tolerances, bounds.
     """
 
@@ -203,15 +205,14 @@ class Executor:
             ProtocolError: the ASTA is unreadable, lacks a joint, or holds non-finite values.
         """
         asta = self.client.wait_asta(self.actuator, after_time=after, timeout=timeout)
-        values = dict(asta.values)
-        missing = [k for k in self.links if k not in values]
-        q = np.array([values.get(k, np.nan) for k in self.links])
-        if missing or not np.all(np.isfinite(q)):
+        joints = asta.joints(self.links)
+        if joints is None or not np.all(np.isfinite(joints)):
             line = self.client.latest_line("ASTA", self.actuator) or str(asta)
+            missing = list(asta.missing(self.links))
             raise ProtocolError(line, 0, f"expected a finite {{Value}} for each of links "
                                          f"{list(self.links)} of {self.actuator}" +
                                 (f"; links {missing} are missing" if missing else ""))
-        return q, asta.time
+        return np.array(joints), asta.time
 
     def hold(self, command: Array | None = None) -> None:
         """Tell the arm to stay where it is now (best effort): send ``command``, or, without

@@ -105,8 +105,14 @@ def plan_motion(robot: Robot, world: CollisionWorld, start: Array, *,
     (4x4 in base_link).
 
     Raises:
-        InvalidInputError, OutOfLimitsError, StartInCollisionError, GoalInCollisionError,
-        IKError, NoPathError, LinBlockedError, TimingError: each naming what failed.
+        InvalidInputError: a goal that is neither joints nor a pose, or both.
+        OutOfLimitsError: the start or goal outside the joint limits.
+        StartInCollisionError: the start in collision (the pairs named).
+        GoalInCollisionError: the goal in collision (the pairs named).
+        IKError: no collision-free IK solution of the goal pose.
+        NoPathError: no path within the time limit.
+        LinBlockedError: a straight line that cannot be followed (where, and why).
+        TimingError: the path could not be timed within the limits.
     """
     if (goal is None) == (pose is None):
         raise InvalidInputError("give exactly one of a goal configuration or a goal pose")

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from usar_arm.control.tip import RawReading, TipSensor
 from usar_arm.control.tip_bias import BiasEstimate, Reading, estimate_bias, interval
+from usar_arm.control.tool_accuracy import TipCorrectionFigures, ToolAccuracy
 from usar_arm.core.spatial import (
     Array,
     exp_so3,
@@ -72,6 +73,20 @@ class TipCorrection:
     bias: BiasEstimate
     rounds: int = 1
     verified: bool = True
+
+    @property
+    def figures(self) -> TipCorrectionFigures:
+        """What the correction did, as a report keeps it (no arrays)."""
+        return TipCorrectionFigures(
+            self.before_m, self.before_rad, self.readings,
+            float(np.linalg.norm(self.bias.position)), float(np.linalg.norm(self.bias.rotation)),
+            self.bias.consistent, self.rounds, self.verified)
+
+    def applied_to(self, tip: ToolAccuracy) -> ToolAccuracy:
+        """``tip`` (the sensor's measurement before the correction) with the error estimated
+        after it and the correction's figures."""
+        return replace(tip, error_m=self.after_m, error_rad=self.after_rad,
+                       correction=self.figures)
 
 
 def away_from_lock(world: Array, margin: float = LOCK_MARGIN) -> Array:

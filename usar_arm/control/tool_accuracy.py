@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from usar_arm.core.spatial import Array, pose_error
+
 
 @dataclass(frozen=True)
 class TipCorrectionFigures:
@@ -66,3 +68,11 @@ class ToolAccuracy:
         if self.true_error_m is not None:
             out.update(true_tip_error_m=self.true_error_m, true_tip_error_rad=self.true_error_rad)
         return out
+
+
+def sensor_accuracy(source: str, target: Array, measured: Array, step_m: float
+                    ) -> ToolAccuracy:
+    """tool0's error when a sensor ``source`` measured it at pose ``measured`` (4x4, m)
+    against ``target``, printing positions with ``step_m`` (m)."""
+    _, error_m, error_rad = pose_error(target, measured)
+    return ToolAccuracy(source, error_m, error_rad, sensor_step_m=step_m)

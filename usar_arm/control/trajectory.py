@@ -62,6 +62,9 @@ class Trajectory:
         limits: the limits it was timed with.
         motion: ``ptp`` or ``lin``. mode: ``stop`` (rest at every waypoint), ``blend``, ``lin``.
         info: free-form figures (planning time, path length...).
+        scene: the scene it was planned in: a shipped scene's name or a scene file's absolute
+            path (:mod:`usar_arm.core.named_file`), None when not known (a scene given as an
+            object, or none). ``usar-arm view`` and ``render`` show it.
     """
 
     joint_names: tuple[str, ...]
@@ -74,6 +77,7 @@ class Trajectory:
     motion: str = "ptp"
     mode: str = "stop"
     info: dict[str, Any] = field(default_factory=dict)
+    scene: str | None = None
 
     @property
     def duration(self) -> float:
@@ -122,7 +126,8 @@ class Trajectory:
                 "rate_hz": self.rate, "t": self.t.tolist(), "q": self.q.tolist(),
                 "qd": self.qd.tolist(), "qdd": self.qdd.tolist(),
                 "waypoints": self.waypoints.tolist(),
-                "limits": self.limits.as_dict(self.joint_names), "info": self.info}
+                "limits": self.limits.as_dict(self.joint_names), "info": self.info,
+                **({"scene": self.scene} if self.scene is not None else {})}
 
     @classmethod
     def from_json(cls, doc: Any, path: str = "<trajectory>") -> Trajectory:
@@ -174,8 +179,12 @@ class Trajectory:
         info = doc.get("info", {})
         if not isinstance(info, dict):
             raise FileFormatError(path, f"expected an object, got {_show(info)}", field="info")
+        scene = doc.get("scene")
+        if scene is not None and not isinstance(scene, str):
+            raise FileFormatError(path, f"expected a scene's name or path, got {_show(scene)}",
+                                  field="scene")
         return cls(names, t, arrays["q"], arrays["qd"], arrays["qdd"], waypoints, limits,
-                   texts["motion"], texts["mode"], dict(info))
+                   texts["motion"], texts["mode"], dict(info), scene)
 
     def save(self, path: str | Path, executed: ExecutedSamples | None = None) -> None:
         """Write the JSON file atomically (with the ASTA samples of its execution, if any,

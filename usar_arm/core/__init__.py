@@ -10,87 +10,54 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.core.errors import (
-        AllSolutionsInCollisionError,
-        CalibrationError,
-        ConnectionFailedError,
-        ConnectionLostError,
-        DescriptionError,
-        ExecutionAbortedError,
-        FileFormatError,
-        GoalInCollisionError,
-        IKError,
-        InvalidInputError,
-        JointLimitError,
-        LinBlockedError,
-        MapTooLargeError,
-        NoPathError,
-        OutOfLimitsError,
-        PlanningError,
-        ProtocolError,
-        ResponseTimeoutError,
-        RobotStructureError,
-        StartInCollisionError,
-        TimingError,
-        UnknownComponentError,
-        UnknownRobotError,
-        UnknownStartError,
-        UnreachableError,
-        UnreachableTargetError,
-        UsarArmError,
-        ValidationError,
-    )
-    from usar_arm.core.fileio import write_atomic, write_tree_atomic
-    from usar_arm.core.job_errors import (
-        ChunkFailedError,
-        ClusterUnavailableError,
-        ResumeMismatchError,
-    )
-    from usar_arm.core.model import Joint, JointLimits, JointType, KinematicChain, Link, Origin
-    from usar_arm.core.spatial import (
-        invert,
-        matrix_to_rpy,
-        rotation_angle,
-        rpy_to_matrix,
-        transform,
-        transform_from_xyz_rpy,
-    )
-    from usar_arm.core.version import __version__
-    from usar_arm.core.yamlio import load_yaml, loads_yaml
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.core.errors import AllSolutionsInCollisionError as AllSolutionsInCollisionError
+    from usar_arm.core.errors import CalibrationError as CalibrationError
+    from usar_arm.core.errors import ConnectionFailedError as ConnectionFailedError
+    from usar_arm.core.errors import ConnectionLostError as ConnectionLostError
+    from usar_arm.core.errors import DescriptionError as DescriptionError
+    from usar_arm.core.errors import ExecutionAbortedError as ExecutionAbortedError
+    from usar_arm.core.errors import FileFormatError as FileFormatError
+    from usar_arm.core.errors import GoalInCollisionError as GoalInCollisionError
+    from usar_arm.core.errors import IKError as IKError
+    from usar_arm.core.errors import InvalidInputError as InvalidInputError
+    from usar_arm.core.errors import JointLimitError as JointLimitError
+    from usar_arm.core.errors import LinBlockedError as LinBlockedError
+    from usar_arm.core.errors import NoPathError as NoPathError
+    from usar_arm.core.errors import OutOfLimitsError as OutOfLimitsError
+    from usar_arm.core.errors import PlanningError as PlanningError
+    from usar_arm.core.errors import ProtocolError as ProtocolError
+    from usar_arm.core.errors import ResponseTimeoutError as ResponseTimeoutError
+    from usar_arm.core.errors import RobotStructureError as RobotStructureError
+    from usar_arm.core.errors import StartInCollisionError as StartInCollisionError
+    from usar_arm.core.errors import TimingError as TimingError
+    from usar_arm.core.errors import UnknownComponentError as UnknownComponentError
+    from usar_arm.core.errors import UnknownRobotError as UnknownRobotError
+    from usar_arm.core.errors import UnknownStartError as UnknownStartError
+    from usar_arm.core.errors import UnreachableError as UnreachableError
+    from usar_arm.core.errors import UsarArmError as UsarArmError
+    from usar_arm.core.errors import ValidationError as ValidationError
+    from usar_arm.core.fileio import write_atomic as write_atomic
+    from usar_arm.core.fileio import write_tree_atomic as write_tree_atomic
+    from usar_arm.core.job_errors import ChunkFailedError as ChunkFailedError
+    from usar_arm.core.job_errors import ClusterUnavailableError as ClusterUnavailableError
+    from usar_arm.core.job_errors import MapTooLargeError as MapTooLargeError
+    from usar_arm.core.job_errors import ResumeMismatchError as ResumeMismatchError
+    from usar_arm.core.job_errors import UnreachableTargetError as UnreachableTargetError
+    from usar_arm.core.model import Joint as Joint
+    from usar_arm.core.model import JointLimits as JointLimits
+    from usar_arm.core.model import JointType as JointType
+    from usar_arm.core.model import KinematicChain as KinematicChain
+    from usar_arm.core.model import Link as Link
+    from usar_arm.core.model import Origin as Origin
+    from usar_arm.core.spatial import invert as invert
+    from usar_arm.core.spatial import matrix_to_rpy as matrix_to_rpy
+    from usar_arm.core.spatial import rotation_angle as rotation_angle
+    from usar_arm.core.spatial import rpy_to_matrix as rpy_to_matrix
+    from usar_arm.core.spatial import transform as transform
+    from usar_arm.core.spatial import transform_from_xyz_rpy as transform_from_xyz_rpy
+    from usar_arm.core.version import __version__ as __version__
+    from usar_arm.core.yamlio import load_yaml as load_yaml
+    from usar_arm.core.yamlio import loads_yaml as loads_yaml
 
-_HOMES = {
-    "errors": ("AllSolutionsInCollisionError", "CalibrationError", "ConnectionFailedError",
-        "ConnectionLostError",
-        "DescriptionError", "ExecutionAbortedError", "FileFormatError", "GoalInCollisionError",
-        "IKError", "InvalidInputError", "JointLimitError", "LinBlockedError", "MapTooLargeError",
-        "NoPathError", "OutOfLimitsError", "PlanningError", "ProtocolError",
-        "ResponseTimeoutError", "RobotStructureError",
-        "StartInCollisionError", "TimingError",
-        "UnknownComponentError", "UnknownRobotError", "UnknownStartError", "UnreachableError",
-        "UnreachableTargetError", "UsarArmError", "ValidationError"),
-    "job_errors": ("ChunkFailedError", "ClusterUnavailableError", "ResumeMismatchError"),
-    "fileio": ("write_atomic", "write_tree_atomic"),
-    "model": ("Joint", "JointLimits", "JointType", "KinematicChain", "Link", "Origin"),
-    "spatial": ("invert", "matrix_to_rpy", "rotation_angle", "rpy_to_matrix", "transform",
-        "transform_from_xyz_rpy"),
-    "version": ("__version__",),
-    "yamlio": ("load_yaml", "loads_yaml"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["AllSolutionsInCollisionError", "CalibrationError", "ChunkFailedError",
-           "ClusterUnavailableError", "ConnectionFailedError", "ConnectionLostError",
-           "DescriptionError", "ExecutionAbortedError", "FileFormatError", "GoalInCollisionError",
-           "IKError", "InvalidInputError", "Joint", "JointLimitError", "JointLimits", "JointType",
-           "KinematicChain", "LinBlockedError", "Link", "MapTooLargeError",
-           "NoPathError",
-           "Origin", "OutOfLimitsError", "PlanningError", "ProtocolError", "ResponseTimeoutError",
-           "ResumeMismatchError", "RobotStructureError", "StartInCollisionError", "TimingError",
-           "UnknownComponentError",
-           "UnknownRobotError", "UnknownStartError", "UnreachableError", "UnreachableTargetError",
-           "UsarArmError", "ValidationError", "__version__", "invert", "load_yaml", "loads_yaml",
-           "matrix_to_rpy", "rotation_angle", "rpy_to_matrix", "transform",
-           "transform_from_xyz_rpy", "write_atomic", "write_tree_atomic"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

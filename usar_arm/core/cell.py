@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_arm.core.errors import FileFormatError
+from usar_arm.core.named_file import resolve_name
 from usar_arm.core.shapes import Box, CylinderShape, Sphere
 from usar_arm.core.spatial import Array, transform_from_xyz_rpy
 from usar_arm.core.wc_classes import WC_CLASSES, WcClass, find_class
@@ -329,24 +330,21 @@ def read_yaml_file(path: Path, name: str) -> Any:
 
 def find_description(path_or_name: str | Path, shipped: tuple[str, ...], kind: str = "description"
                      ) -> tuple[Path, str]:
-    """The file of ``path_or_name``: the file itself, or the shipped one of that name when it
-    is in ``shipped`` and no such file exists; with the name errors should give it.
+    """The file of ``path_or_name`` by :mod:`usar_arm.core.named_file`'s rule (a bare word is a
+    shipped description, a path or a word with a suffix a file), with the name errors should
+    give it.
 
     Raises:
-        FileFormatError: neither (the shipped names listed), or an unusable file name.
+        FileFormatError: neither (what was tried), or an unusable file name.
     """
-    text = str(path_or_name)
-    path = Path(text)
-    try:
-        exists = path.exists()
-    except OSError as exc:  # e.g. a name longer than the file system allows
-        raise FileFormatError(text, f"not a usable file name: {exc.strerror or exc}") from None
-    found = shipped_path(text) if text in shipped and not exists else None
-    if found is not None:
-        return found, str(found)
-    if not exists:
-        raise FileFormatError(text, f"no such {kind} file (shipped: {', '.join(shipped)})")
-    return path, text
+    named = resolve_name(path_or_name, kind, shipped)
+    if named.shipped is not None:
+        found = shipped_path(named.shipped)
+        if found is None:
+            raise FileFormatError(named.given, f"the shipped {kind} is missing from the package")
+        return found, named.given
+    assert named.path is not None
+    return named.path, named.given
 
 
 def load_cell(path_or_name: str | Path) -> Cell:

@@ -1,6 +1,9 @@
 """The usar-arm error tree.
 
-Every failure the library reports is an exception from this module. Each carries its evidence as
+Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`,
+the exit codes) and the errors of the arm's pipeline, from the wire to an executed motion, are
+here; the errors of a ground vehicle are in :mod:`.vehicle_errors` and those of workspace jobs
+in :mod:`.job_errors`, beside the layers that raise them. Each carries its evidence as
 attributes (the offending line, the joint, the numbers, the names a user could have meant) and a
 message that says what was wrong and what was expected. Each class also names the process exit
 code the CLI uses for it, so that a script can tell failures apart without parsing text.
@@ -370,33 +373,3 @@ class CalibrationError(UsarArmError):
         if readings is not None and needed is not None:
             text += f" ({readings} readings, at least {needed} needed)"
         super().__init__(text + "; nothing was written")
-
-
-# --------------------------------------------------------------------------- workspace jobs
-
-
-class MapTooLargeError(InvalidInputError):
-    """A reachability map would not fit in this machine's memory; nothing was computed."""
-
-    def __init__(self, voxels: int, need_bytes: int, available_bytes: int,
-                 resolution_that_fits_m: float):
-        self.voxels = voxels
-        self.need_bytes = need_bytes
-        self.available_bytes = available_bytes
-        self.resolution_that_fits_m = resolution_that_fits_m
-        super().__init__(
-            f"a map of {voxels:,} voxels needs about {need_bytes / 2**30:.1f} GiB, more than "
-            f"half of the {available_bytes / 2**30:.1f} GiB available; use a resolution of at "
-            f"least {resolution_that_fits_m:g} m (or restrict the map)")
-
-
-class UnreachableTargetError(IKError):
-    """A target pose of a placement study is reachable (collision-free) from no candidate
-    base; the others may be."""
-
-    def __init__(self, target: str, candidates: int, detail: str = ""):
-        self.target = target
-        self.candidates = candidates
-        text = (f"target '{target}' is reachable collision-free from none of the {candidates} "
-                f"candidate base poses")
-        super().__init__(text + (f" ({detail})" if detail else ""))

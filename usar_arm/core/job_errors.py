@@ -1,8 +1,9 @@
-"""The errors of running a job in chunks (process pool or Ray): a chunk that failed twice, a
-cluster that cannot be used, finished chunks of another job.
+"""The errors of workspace jobs (:mod:`usar_arm.workspace`): a map too large for the machine, a
+placement target no base reaches, and running a job in chunks (process pool or Ray): a chunk
+that failed twice, a cluster that cannot be used, finished chunks of another job.
 
-Part of the error tree of :mod:`usar_arm.core.errors` (kept apart because that module is at
-the project's module size limit); each carries its evidence as attributes.
+A branch of the error tree of :mod:`usar_arm.core.errors`: the errors of the layer above the
+arm's pipeline, raised only there; each carries its evidence as attributes.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from collections.abc import Sequence
 from usar_arm.core.errors import (
     EXIT_UNAVAILABLE,
     EXIT_WORKER_FAILED,
+    IKError,
     InvalidInputError,
     UsarArmError,
 )
@@ -65,3 +67,30 @@ class ResumeMismatchError(InvalidInputError):
             f"{folder} holds finished chunks of another job ({what}; kept key {found_key}, "
             f"this job's {key}): they would give another job's answers. Run without --resume "
             "to start over, or resume with the same input and settings")
+
+
+class MapTooLargeError(InvalidInputError):
+    """A reachability map would not fit in this machine's memory; nothing was computed."""
+
+    def __init__(self, voxels: int, need_bytes: int, available_bytes: int,
+                 resolution_that_fits_m: float):
+        self.voxels = voxels
+        self.need_bytes = need_bytes
+        self.available_bytes = available_bytes
+        self.resolution_that_fits_m = resolution_that_fits_m
+        super().__init__(
+            f"a map of {voxels:,} voxels needs about {need_bytes / 2**30:.1f} GiB, more than "
+            f"half of the {available_bytes / 2**30:.1f} GiB available; use a resolution of at "
+            f"least {resolution_that_fits_m:g} m (or restrict the map)")
+
+
+class UnreachableTargetError(IKError):
+    """A target pose of a placement study is reachable (collision-free) from no candidate
+    base; the others may be."""
+
+    def __init__(self, target: str, candidates: int, detail: str = ""):
+        self.target = target
+        self.candidates = candidates
+        text = (f"target '{target}' is reachable collision-free from none of the {candidates} "
+                f"candidate base poses")
+        super().__init__(text + (f" ({detail})" if detail else ""))

@@ -1,10 +1,11 @@
 """The errors of describing and driving a ground vehicle: steering, commands, vehicle
 parameters, waypoints.
 
-Subclasses of :class:`~usar_arm.core.errors.InvalidInputError` (exit code 65) and, for a
-steering usar-arm cannot describe, of :class:`~usar_arm.core.errors.DescriptionError`; kept
-beside the error tree because ``core/errors.py`` is at the project's module size limit; like
-every error of the tree, each carries its evidence as attributes.
+A branch of the error tree of :mod:`usar_arm.core.errors`: the errors of the vehicles' own path
+(``control/vehicle_wire.py``, ``control/drive_run.py``, the world file's scenery), which the
+arm's pipeline never raises. Subclasses of :class:`~usar_arm.core.errors.InvalidInputError`
+(exit code 65) and, for a steering usar-arm cannot describe, of
+:class:`~usar_arm.core.errors.DescriptionError`; each carries its evidence as attributes.
 """
 
 from __future__ import annotations

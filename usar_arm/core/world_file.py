@@ -18,6 +18,7 @@ from typing import Any
 import yaml
 
 from usar_arm.core.errors import FileFormatError
+from usar_arm.core.named_file import resolve_name
 
 WORLDS_PACKAGE = "usar_arm.sim"
 """The package whose ``worlds/`` folder holds the shipped world files (data only: reading it
@@ -59,19 +60,18 @@ def shipped_worlds() -> tuple[str, ...]:
 
 def read_world_file(path: str | Path | None = None) -> tuple[str, dict[str, Any]]:
     """The world file's name (as given) and its YAML mapping; a shipped world by name
-    (default: ``default``).
+    (default: ``default``; a name or a path by :mod:`usar_arm.core.named_file`'s rule).
 
     Raises:
-        FileFormatError: the file is not YAML or not a mapping.
-        FileNotFoundError: no such file and no shipped world of that name.
+        FileFormatError: no such world (what was tried), or the file is not YAML or not a
+            mapping.
     """
-    name = "default" if path is None else str(path)
-    if name in shipped_worlds() and not Path(name).exists():
-        with resources.as_file(resources.files(WORLDS_PACKAGE) / "worlds" / f"{name}.yaml") as fp:
+    named = resolve_name("default" if path is None else path, "world", shipped_worlds())
+    if named.shipped is not None:
+        with resources.as_file(resources.files(WORLDS_PACKAGE) / "worlds"
+                               / f"{named.shipped}.yaml") as fp:
             return read_world_file(fp)
-    if not Path(name).is_file():
-        raise FileNotFoundError(f"no world file {name} (shipped worlds: "
-                                f"{', '.join(shipped_worlds())})")
+    name = named.given
     try:
         data = yaml.safe_load(Path(name).read_text())
     except yaml.YAMLError as exc:
@@ -85,7 +85,7 @@ def load_scenery(path: str | Path | None = None) -> Scenery:
     """The boxes and floor of a world file, or of a shipped world by name.
 
     Raises:
-        FileFormatError: the file is not a world file. FileNotFoundError: no such world.
+        FileFormatError: no such world, or the file is not a world file.
     """
     name, data = read_world_file(path)
     return Scenery(parse_boxes(data.get("boxes") or [], name), float(data.get("floor_z", 0.0)))

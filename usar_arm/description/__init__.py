@@ -15,24 +15,13 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.description.cache import robot_from_description
-    from usar_arm.description.embedded import describe, start_simulator
-    from usar_arm.description.pipeline import (
-        DescribeOptions,
-        Description,
-        describe_arm,
-        write_description,
-    )
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.description.cache import robot_from_description as robot_from_description
+    from usar_arm.description.embedded import describe as describe
+    from usar_arm.description.embedded import start_simulator as start_simulator
+    from usar_arm.description.pipeline import DescribeOptions as DescribeOptions
+    from usar_arm.description.pipeline import Description as Description
+    from usar_arm.description.pipeline import describe_arm as describe_arm
+    from usar_arm.description.pipeline import write_description as write_description
 
-_HOMES = {
-    "cache": ("robot_from_description",),
-    "embedded": ("describe", "start_simulator"),
-    "pipeline": ("DescribeOptions", "Description", "describe_arm", "write_description"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["DescribeOptions", "Description", "describe", "describe_arm", "robot_from_description",
-           "start_simulator", "write_description"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -24,17 +24,18 @@ from usar_arm.description.pipeline import (
     write_description,
 )
 from usar_arm.discover.interview import DiscoveryRecord
-from usar_arm.planning.robot import Robot, robot_from_files, wire_facts
+from usar_arm.planning.robot import Robot, robot_from_files
+from usar_arm.urdf.discovery_file import wire_facts
 
 log = logging.getLogger("usar_arm.description.cache")
 
 
 def robot_from_description(desc: Description, actuator: str | None = None) -> Robot:
     """A Robot from a freshly built description."""
-    links, tip_sensor = wire_facts(desc.discovery)
+    facts = wire_facts(desc.discovery)
     return Robot(desc.chain, desc.urdf, desc.acm.pairs(), {"home": dict(desc.home)},
-                 actuator or desc.discovery.get("robot", {}).get("actuator"),
-                 f"discovery of {desc.chain.name}", links, tip_sensor, desc.files())
+                 actuator or facts.actuator, f"discovery of {desc.chain.name}", facts.links,
+                 facts.tip_sensor, desc.files())
 
 
 def cache_dir() -> Path:

@@ -33,7 +33,7 @@ from usar_arm.discover.wire_arm import WireArm
 from usar_arm.planning.acm import AcmResult, compute_acm
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
-from usar_arm.urdf.validate import validate
+from usar_arm.urdf.validation import validate
 from usar_arm.urdf.writer import urdf_text
 
 GENERATOR = 1

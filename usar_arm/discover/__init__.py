@@ -9,23 +9,14 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.discover.build import build_chain
-    from usar_arm.discover.interview import DiscoveryRecord, discover
-    from usar_arm.discover.limits import MotionLimits, load_limits_file
-    from usar_arm.discover.naming import Naming
-    from usar_arm.discover.wire_arm import WireArm, arm_from_replies
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.discover.build import build_chain as build_chain
+    from usar_arm.discover.interview import DiscoveryRecord as DiscoveryRecord
+    from usar_arm.discover.interview import discover as discover
+    from usar_arm.discover.limits import MotionLimits as MotionLimits
+    from usar_arm.discover.limits import load_limits_file as load_limits_file
+    from usar_arm.discover.naming import Naming as Naming
+    from usar_arm.discover.wire_arm import WireArm as WireArm
+    from usar_arm.discover.wire_arm import arm_from_replies as arm_from_replies
 
-_HOMES = {
-    "build": ("build_chain",),
-    "interview": ("DiscoveryRecord", "discover"),
-    "limits": ("MotionLimits", "load_limits_file"),
-    "naming": ("Naming",),
-    "wire_arm": ("WireArm", "arm_from_replies"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["DiscoveryRecord", "MotionLimits", "Naming", "WireArm", "arm_from_replies",
-           "build_chain", "discover", "load_limits_file"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -75,8 +75,11 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
         known_classes: robot classes to name in the error if nothing spawns.
 
     Raises:
-        UnknownStartError, UnknownRobotError, UnknownComponentError, ConnectionLostError,
-        DescriptionError: each says what was wrong and what the server offers.
+        UnknownStartError: no such start position (the server's are named).
+        UnknownRobotError: no robot of that class appeared (the server's classes are named).
+        UnknownComponentError: a GETCONF/GETGEO the server answered with nothing.
+        ConnectionLostError: the server closed the connection.
+        DescriptionError: what the server said is no arm usar-arm can describe.
     """
     record, ask = spawn_robot(client, robot_class, robot_name, start, timeout, known_classes)
     robot_class = record.robot_class

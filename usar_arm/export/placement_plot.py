@@ -23,7 +23,10 @@ def placement_png(x: Array, y: Array, yaw: Array, score: Array, best: int, step:
     """A PNG of the study.
 
     Args:
-        x, y, yaw: (C,) candidate base poses (m, rad). score: (C,) the worst target's margin
+        x: (C,) candidate base positions' x (m).
+        y: (C,) their y (m).
+        yaw: (C,) their headings (rad).
+        score: (C,) the worst target's margin
             in [0, 1], negative where some target is unreachable. best: the best candidate's
             index. step: m between positions. targets: (name, 4x4 pose) in the cell.
     """

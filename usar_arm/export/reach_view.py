@@ -12,7 +12,14 @@ from matplotlib import colormaps
 from numpy.typing import NDArray
 
 from usar_arm.core.spatial import Array
-from usar_arm.export.view import ReplayServer, _add_obstacles, _load_urdf, _quiet, _viser
+from usar_arm.export.viser_page import (
+    ReplayServer,
+    add_ground,
+    add_obstacles,
+    load_urdf,
+    load_viser,
+    quiet,
+)
 from usar_arm.planning.scene import Scene
 
 log = logging.getLogger("usar_arm.export.view")
@@ -36,16 +43,14 @@ def serve_reach(urdf_text: str, index: NDArray[np.floating[Any]], origin: Array,
         index: (nx, ny, nz) reachability index. origin: (3,) m, the centre of voxel
             (0, 0, 0). resolution: m.
     """
-    viser = _viser()
-    with _quiet():
+    viser = load_viser()
+    with quiet():
         server = viser.ViserServer(host=host, port=port, verbose=False)
     try:
-        server.scene.set_up_direction("+z")
-        server.scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25,
-                              section_size=1.0, position=(0.0, 0.0, 0.001))
+        add_ground(server)
         if scene is not None:
-            _add_obstacles(server, scene)
-        viser.extras.ViserUrdf(server, _load_urdf(urdf_text), root_node_name="/arm")
+            add_obstacles(server, scene)
+        viser.extras.ViserUrdf(server, load_urdf(urdf_text), root_node_name="/arm")
         points, colours = _cloud(index, origin, resolution, 0.0)
         cloud: dict[str, Any] = {"handle": server.scene.add_point_cloud(
             "/reach", points, colours, point_size=resolution * 0.5)}
@@ -64,7 +69,7 @@ def serve_reach(urdf_text: str, index: NDArray[np.floating[Any]], origin: Array,
         server.initial_camera.look_at = (0.0, 0.0, 0.8)
         server.initial_camera.position = (4.0, -5.0, 3.0)
     except BaseException:
-        with _quiet():
+        with quiet():
             server.stop()
         raise
     handle = ReplayServer(f"http://{host}:{server.get_port()}", server)

@@ -5,19 +5,15 @@
 viewable offline. The arm comes from its URDF text (yourdfpy), obstacles from a
 :class:`~usar_arm.planning.scene.Scene`; lengths in m, times in s.
 
-viser is imported lazily, so the rest of the package works without it. viser prints a banner when
-a server starts and a line when it stops, whatever its ``verbose`` flag: :func:`export_html`, which
-only starts a server to record the scene, silences both (the library never prints).
+viser is imported lazily (:mod:`.viser_page`), so the rest of the package works without it.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import logging
-import threading
+import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,34 +22,20 @@ import numpy as np
 from usar_arm.control.trajectory import Trajectory
 from usar_arm.core.errors import InvalidInputError
 from usar_arm.core.fileio import write_atomic
-from usar_arm.core.spatial import Array, quat_from_matrix
-from usar_arm.planning.scene import Box, CylinderShape, Scene, Sphere
+from usar_arm.core.spatial import Array
+from usar_arm.export.viser_page import (
+    ReplayServer,
+    add_ground,
+    add_obstacles,
+    load_urdf,
+    load_viser,
+    quiet,
+)
+from usar_arm.planning.scene import Scene
 
 log = logging.getLogger("usar_arm.export.view")
 
-OBSTACLE_RGB = (150, 160, 175)
-OBSTACLE_OPACITY = 0.4
 PATH_RGB = (31, 79, 191)
-
-
-def _viser() -> Any:
-    """The viser module, or an error that says how to install it."""
-    try:
-        import viser
-        import viser.extras
-    except ImportError as exc:
-        raise InvalidInputError(f"the 3D viewer needs viser ({exc.msg}); install with "
-                                "pip install 'usar-arm[viz]'") from None
-    return viser
-
-
-def _load_urdf(urdf_text: str) -> Any:
-    from usar_arm.urdf.description_reader import viewer_urdf
-
-    try:
-        return viewer_urdf(urdf_text)
-    except ValueError as exc:
-        raise InvalidInputError(f"cannot read the URDF for the viewer: {exc}") from None
 
 
 @dataclass
@@ -90,37 +72,16 @@ def _tool_path(urdf: Any, replay: _Replay, frame: str = "tool0", points: int = 2
     return np.array(out)
 
 
-def _add_obstacles(server: Any, scene: Scene) -> None:
-    from usar_arm.urdf.meshes import cylinder_mesh
-
-    for obj in scene.objects:
-        name, s = f"/scene/{obj.name}", obj.shape
-        pose = {"wxyz": quat_from_matrix(obj.pose[:3, :3]), "position": obj.pose[:3, 3]}
-        look = {"color": OBSTACLE_RGB, "opacity": OBSTACLE_OPACITY}
-        if isinstance(s, Box):
-            server.scene.add_box(name, dimensions=s.size, **look, **pose)
-        elif isinstance(s, Sphere):
-            server.scene.add_icosphere(name, radius=s.radius, **look, **pose)
-        else:
-            vertices, faces = (cylinder_mesh(s.radius, s.length) if isinstance(s, CylinderShape)
-                               else (s.vertices, s.faces))
-            server.scene.add_mesh_simple(name, np.asarray(vertices, np.float32),
-                                         np.asarray(faces, np.uint32), flat_shading=True,
-                                         side="double", **look, **pose)
-
-
 def _build(server: Any, urdf_text: str, trajectory: Trajectory, scene: Scene | None) -> _Replay:
     """Put the arm, the obstacles, the ground grid, the tool path and a camera in the scene."""
-    viser = _viser()
-    urdf = _load_urdf(urdf_text)
+    viser = load_viser()
+    urdf = load_urdf(urdf_text)
     replay = _Replay(None, trajectory, _columns(urdf, trajectory))
     path = _tool_path(urdf, replay)
-    server.scene.set_up_direction("+z")
-    server.scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25, section_size=1.0,
-                          position=(0.0, 0.0, 0.001))
+    add_ground(server)
     server.scene.add_frame("/base_link_axes", axes_length=0.25, axes_radius=0.008)
     if scene is not None:
-        _add_obstacles(server, scene)
+        add_obstacles(server, scene)
     if len(path) > 1:
         server.scene.add_spline_catmull_rom("/tool0_path", path, color=PATH_RGB,
                                             thickness=0.012)
@@ -132,45 +93,14 @@ def _build(server: Any, urdf_text: str, trajectory: Trajectory, scene: Scene | N
     return replay
 
 
-@contextlib.contextmanager
-def _quiet() -> Any:
-    """Silence viser's unconditional banner (it writes to sys.stdout via rich)."""
-    with contextlib.redirect_stdout(io.StringIO()):
-        yield
+TIME_STEP = 0.01
+"""The time slider's step (s). Its box is a few digits wide: the slider's value and its end
+are kept to this step, so that the box shows them whole (a time of 0.23075 s showed 0.2307)."""
 
 
-@dataclass
-class ReplayServer:
-    """A running replay page. ``url`` to open; :meth:`stop` ends it; :meth:`wait` blocks."""
-
-    url: str
-    server: Any
-    _stop: threading.Event = field(default_factory=threading.Event)
-    _thread: threading.Thread | None = None
-
-    def stop(self) -> None:
-        """Stop the player thread and the web server (frees the port); safe to call twice."""
-        if self._stop.is_set():
-            return
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-        with _quiet():
-            self.server.stop()
-
-    def wait(self) -> None:
-        """Serve until :meth:`stop` is called from another thread or Ctrl-C."""
-        try:
-            while not self._stop.wait(0.5):
-                pass
-        except KeyboardInterrupt:
-            self.stop()
-
-    def __enter__(self) -> ReplayServer:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
+def time_box(seconds: float) -> float:
+    """The time slider's end for a motion of ``seconds``: rounded up to :data:`TIME_STEP`."""
+    return max(TIME_STEP, round(math.ceil(round(seconds / TIME_STEP, 6)) * TIME_STEP, 2))
 
 
 def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = None,
@@ -185,8 +115,8 @@ def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = N
     Returns:
         a :class:`ReplayServer` (``url``, ``stop()``, ``wait()``; also a context manager).
     """
-    viser = _viser()
-    with _quiet():
+    viser = load_viser()
+    with quiet():
         server = viser.ViserServer(host=host, port=port, verbose=False)
     try:
         replay = _build(server, urdf_text, trajectory, scene)
@@ -197,30 +127,29 @@ def serve_replay(urdf_text: str, trajectory: Trajectory, scene: Scene | None = N
         playing = gui.add_checkbox("Play", initial_value=True)
         looping = gui.add_checkbox("Loop", initial_value=loop)
         speed = gui.add_slider("Speed (x)", min=0.1, max=2.0, step=0.1, initial_value=1.0)
-        slider = gui.add_slider("Time (s)", min=0.0, max=max(duration, 1e-3), step=0.01,
+        slider = gui.add_slider("Time (s)", min=0.0, max=time_box(duration), step=TIME_STEP,
                                 initial_value=0.0)
     except BaseException:
-        with _quiet():
+        with quiet():
             server.stop()
         raise
     slider.on_update(lambda _event: replay.show(float(slider.value)))
     handle = ReplayServer(f"http://{host}:{server.get_port()}", server)
 
-    def play() -> None:
-        last = time.perf_counter()
-        while not handle._stop.wait(1.0 / fps):
-            now = time.perf_counter()
-            step, last = (now - last) * float(speed.value), now
-            if not playing.value:
-                continue
-            t = float(slider.value) + step
-            if t > duration:
-                t = 0.0 if looping.value else duration
-                playing.value = bool(looping.value)
-            slider.value = t
+    clock = [time.perf_counter()]  # (the wall time of the last step, s)
 
-    handle._thread = threading.Thread(target=play, name="usar-arm-replay", daemon=True)
-    handle._thread.start()
+    def play() -> None:
+        now = time.perf_counter()
+        step, clock[0] = (now - clock[0]) * float(speed.value), now
+        if not playing.value:
+            return
+        t = float(slider.value) + step
+        if t > duration:
+            t = 0.0 if looping.value else duration
+            playing.value = bool(looping.value)
+        slider.value = round(t, 2)  # (to TIME_STEP: the box shows it whole)
+
+    handle.every(1.0 / fps, play, "usar-arm-replay")
     log.info("replay served at %s", handle.url)
     return handle
 
@@ -237,8 +166,8 @@ def export_html(path: str | Path, urdf_text: str, trajectory: Trajectory,
     """
     if fps <= 0:
         raise InvalidInputError(f"fps must be positive, got {fps}")
-    viser = _viser()
-    with _quiet():
+    viser = load_viser()
+    with quiet():
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
         try:
             replay = _build(server, urdf_text, trajectory, scene)

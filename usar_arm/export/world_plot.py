@@ -55,6 +55,7 @@ def render_world(path: str | Path, scenery: Scenery, title: str = "world",
     ax = fig.add_subplot()
     draw_world(ax, scenery)
     ax.set_title(f"{title}: top view (map frame, REP-103)")
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    if ax.get_legend_handles_labels()[0]:  # (a world without boxes has nothing to label)
+        ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
     fig.tight_layout()
     save_png(fig, path)

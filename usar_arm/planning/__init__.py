@@ -9,36 +9,33 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.planning.collision import CollisionWorld, Contact
-    from usar_arm.planning.compiled import warm_up
-    from usar_arm.planning.ik import BatchIKResult, IKOptions, IKResult, IKSolution, IKSolver
-    from usar_arm.planning.kinematics import KinematicModel
-    from usar_arm.planning.lin import LinOptions, LinPath, plan_lin
-    from usar_arm.planning.ompl_adapter import OmplOptions
-    from usar_arm.planning.ptp import PtpPlan, plan_to_joints, plan_to_pose
-    from usar_arm.planning.robot import Robot, robot_from_files, robot_from_texts
-    from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, SceneObject, Sphere
-    from usar_arm.planning.scene_file import load_scene, parse_scene
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.planning.collision import CollisionWorld as CollisionWorld
+    from usar_arm.planning.collision import Contact as Contact
+    from usar_arm.planning.compiled import warm_up as warm_up
+    from usar_arm.planning.ik import BatchIKResult as BatchIKResult
+    from usar_arm.planning.ik import IKOptions as IKOptions
+    from usar_arm.planning.ik import IKResult as IKResult
+    from usar_arm.planning.ik import IKSolution as IKSolution
+    from usar_arm.planning.ik import IKSolver as IKSolver
+    from usar_arm.planning.kinematics import KinematicModel as KinematicModel
+    from usar_arm.planning.lin import LinOptions as LinOptions
+    from usar_arm.planning.lin import LinPath as LinPath
+    from usar_arm.planning.lin import plan_lin as plan_lin
+    from usar_arm.planning.ompl_adapter import OmplOptions as OmplOptions
+    from usar_arm.planning.ptp import PtpPlan as PtpPlan
+    from usar_arm.planning.ptp import plan_to_joints as plan_to_joints
+    from usar_arm.planning.ptp import plan_to_pose as plan_to_pose
+    from usar_arm.planning.robot import Robot as Robot
+    from usar_arm.planning.robot import robot_from_files as robot_from_files
+    from usar_arm.planning.robot import robot_from_texts as robot_from_texts
+    from usar_arm.planning.scene import Box as Box
+    from usar_arm.planning.scene import CylinderShape as CylinderShape
+    from usar_arm.planning.scene import Mesh as Mesh
+    from usar_arm.planning.scene import Scene as Scene
+    from usar_arm.planning.scene import SceneObject as SceneObject
+    from usar_arm.planning.scene import Sphere as Sphere
+    from usar_arm.planning.scene_file import load_scene as load_scene
+    from usar_arm.planning.scene_file import parse_scene as parse_scene
 
-_HOMES = {
-    "collision": ("CollisionWorld", "Contact"),
-    "compiled": ("warm_up",),
-    "ik": ("BatchIKResult", "IKOptions", "IKResult", "IKSolution", "IKSolver"),
-    "kinematics": ("KinematicModel",),
-    "lin": ("LinOptions", "LinPath", "plan_lin"),
-    "ompl_adapter": ("OmplOptions",),
-    "ptp": ("PtpPlan", "plan_to_joints", "plan_to_pose"),
-    "robot": ("Robot", "robot_from_files", "robot_from_texts"),
-    "scene": ("Box", "CylinderShape", "Mesh", "Scene", "SceneObject", "Sphere"),
-    "scene_file": ("load_scene", "parse_scene"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["BatchIKResult", "Box", "CollisionWorld", "Contact", "CylinderShape", "IKOptions",
-           "IKResult", "IKSolution", "IKSolver", "KinematicModel", "LinOptions", "LinPath", "Mesh",
-           "OmplOptions", "PtpPlan", "Robot", "Scene", "SceneObject", "Sphere", "load_scene",
-           "parse_scene", "plan_lin", "plan_to_joints", "plan_to_pose", "robot_from_files",
-           "robot_from_texts", "warm_up"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

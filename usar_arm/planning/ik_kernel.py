@@ -6,10 +6,10 @@ distance to the seed and polishes them in that order by Newton steps on the prod
 exponentials of the same URDF (:mod:`.poe`), returning the first that reaches the tolerance
 inside the limits: the branch :meth:`IKSolver._solve_analytic <.ik.IKSolver>` would choose.
 
-Whatever needs judgement it hands back (status :data:`FALLBACK`) to the Python path: a wrist near
-its singularity (q5 ~ 0, where the Python path tries several splits of q4 + q6), a solution a
-hair outside a limit (which the Python path retries on the limit), or no branch at all (which
-the Python path turns into a numeric search or a typed error).
+Whatever needs judgement it hands back (status :data:`.ik_kernel.FALLBACK`) to the Python
+path: a wrist near its singularity (q5 ~ 0, where the Python path tries several splits of
+q4 + q6), a solution a hair outside a limit (which the Python path retries on the limit), or no
+branch at all (which the Python path turns into a numeric search or a typed error).
 
 The arm's constants travel in one float vector built by :func:`pack` (indices ``C_*``).
 """
@@ -57,7 +57,7 @@ def pack(arm: OrthoParallelArm) -> Array:
 
 
 @kernel
-def _rot(c: Array, w: int, angle: float, v: Array, out: Array) -> None:
+def rodrigues(c: Array, w: int, angle: float, v: Array, out: Array) -> None:
     """Rodrigues: ``v`` rotated by ``angle`` about the unit axis at ``c[w:w+3]`` into ``out``."""
     w0, w1, w2 = c[w], c[w + 1], c[w + 2]
     co, si = math.cos(angle), math.sin(angle)
@@ -69,7 +69,7 @@ def _rot(c: Array, w: int, angle: float, v: Array, out: Array) -> None:
 
 
 @kernel
-def _sp1(c: Array, w: int, p: Array, q: Array) -> float:
+def subproblem1(c: Array, w: int, p: Array, q: Array) -> float:
     """Paden-Kahan subproblem 1: the angle about the unit axis ``c[w:w+3]`` taking p to q."""
     w0, w1, w2 = c[w], c[w + 1], c[w + 2]
     pw = w0 * p[0] + w1 * p[1] + w2 * p[2]
@@ -81,7 +81,7 @@ def _sp1(c: Array, w: int, p: Array, q: Array) -> float:
 
 
 @kernel
-def _wrap(angle: float) -> float:
+def wrap(angle: float) -> float:
     return (angle + math.pi) % TWO_PI - math.pi
 
 
@@ -121,7 +121,7 @@ def branches(rot: Array, pos: Array, c: Array, out: Array) -> int:
     den = c45 * c45 - 1.0
     for sign1 in (1.0, -1.0):
         q1 = base + sign1 * spread
-        _rot(c, C_W, -q1, d, back)
+        rodrigues(c, C_W, -q1, d, back)
         x = (c[C_EA] * back[0] + c[C_EA + 1] * back[1] + c[C_EA + 2] * back[2]
              + c[C_P1_2D])
         y = (c[C_EB] * back[0] + c[C_EB + 1] * back[1] + c[C_EB + 2] * back[2]
@@ -137,12 +137,12 @@ def branches(rot: Array, pos: Array, c: Array, out: Array) -> int:
             ex = c[C_P3P2] + c3 * c[C_E] - s3 * c[C_E + 1]
             ey = c[C_P3P2 + 1] + s3 * c[C_E] + c3 * c[C_E + 1]
             q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-            q1w, q2w, q3w = _wrap(q1), _wrap(q2), _wrap(c[C_S3] * t3)
+            q1w, q2w, q3w = wrap(q1), wrap(q2), wrap(c[C_S3] * t3)
             theta = q2w + c[C_S3] * q3w
-            _rot(c, C_W, -q1w, t6, tmp)
-            _rot(c, C_U, -theta, tmp, target)
-            _rot(c, C_W, -q1w, tv, tmp)
-            _rot(c, C_U, -theta, tmp, rv)
+            rodrigues(c, C_W, -q1w, t6, tmp)
+            rodrigues(c, C_U, -theta, tmp, target)
+            rodrigues(c, C_W, -q1w, tv, tmp)
+            rodrigues(c, C_U, -theta, tmp, rv)
             w4, w5 = C_W + 9, C_W + 12
             t4 = c[w4] * target[0] + c[w4 + 1] * target[1] + c[w4 + 2] * target[2]
             alpha = (c45 * w5w6 - t4) / den
@@ -153,13 +153,13 @@ def branches(rot: Array, pos: Array, c: Array, out: Array) -> int:
                 g = 0.0 if n_g == 1 else (math.sqrt(g2) if k == 0 else -math.sqrt(g2))
                 for i in range(3):
                     z[i] = alpha * c[w4 + i] + beta * c[w5 + i] + g * c[C_W4XW5 + i]
-                q5 = _sp1(c, w5, c[C_W + 15:C_W + 18], z)
-                q4 = _sp1(c, w4, z, target)
-                _rot(c, w4, -q4, rv, tmp)
-                _rot(c, w5, -q5, tmp, mv6)
-                q6 = _sp1(c, C_W + 15, c[C_V:C_V + 3], mv6)
+                q5 = subproblem1(c, w5, c[C_W + 15:C_W + 18], z)
+                q4 = subproblem1(c, w4, z, target)
+                rodrigues(c, w4, -q4, rv, tmp)
+                rodrigues(c, w5, -q5, tmp, mv6)
+                q6 = subproblem1(c, C_W + 15, c[C_V:C_V + 3], mv6)
                 out[count, 0], out[count, 1], out[count, 2] = q1w, q2w, q3w
-                out[count, 3], out[count, 4], out[count, 5] = _wrap(q4), _wrap(q5), _wrap(q6)
+                out[count, 3], out[count, 4], out[count, 5] = wrap(q4), wrap(q5), wrap(q6)
                 count += 1
     return count
 
@@ -194,7 +194,7 @@ def _excess(q: Array, lo: Array, hi: Array) -> float:
 
 
 @kernel
-def _pose_and_jacobian(q: Array, axes: Array, points: Array, rev: Array, tool: Array,
+def pose_and_jacobian(q: Array, axes: Array, points: Array, rev: Array, tool: Array,
                        rot: Array, pos: Array, jac: Array) -> None:
     """The tool's pose (rot, pos) and its Jacobian (6, n; linear rows first, world axes) by
     the product of exponentials (as :class:`.poe.PoeModel`)."""
@@ -257,7 +257,7 @@ def pose_error(q: Array, target_rot: Array, target_pos: Array, axes: Array, poin
     ``jac``; returns the position (m) and rotation (rad) errors."""
     rot = np.empty((3, 3))
     pos = np.empty(3)
-    _pose_and_jacobian(q, axes, points, rev, tool, rot, pos, jac)
+    pose_and_jacobian(q, axes, points, rev, tool, rot, pos, jac)
     for a in range(3):
         err[a] = target_pos[a] - pos[a]
     m = np.empty((3, 3))
@@ -277,7 +277,7 @@ def pose_error(q: Array, target_rot: Array, target_pos: Array, axes: Array, poin
 
 
 @kernel
-def _solve6(a: Array, b: Array, x: Array) -> bool:
+def solve6(a: Array, b: Array, x: Array) -> bool:
     """x = a^-1 b for a small square system (n = len(b)) by Gaussian elimination with partial
     pivoting (a and b are scratch: overwritten); False when a pivot vanishes (singular)."""
     n = b.shape[0]
@@ -306,7 +306,7 @@ def _solve6(a: Array, b: Array, x: Array) -> bool:
 
 
 @inline_kernel
-def _take_step(q: Array, step: Array, max_step: float) -> None:
+def take_step(q: Array, step: Array, max_step: float) -> None:
     """``q += step`` (in place), the step scaled down so that no joint moves more than
     ``max_step`` (rad or m)."""
     biggest = 0.0
@@ -339,7 +339,7 @@ def polish(q: Array, target_rot: Array, target_pos: Array, axes: Array, points: 
             rhs[i] = err[i]
             for j in range(6):
                 a[i, j] = jac[i, j]
-        if not _solve6(a, rhs, step):
+        if not solve6(a, rhs, step):
             for i in range(6):  # J^T (J J^T + 1e-6 I)^-1 e
                 rhs[i] = err[i]
                 for j in range(6):
@@ -347,13 +347,13 @@ def polish(q: Array, target_rot: Array, target_pos: Array, axes: Array, points: 
                     for k in range(n):
                         s += jac[i, k] * jac[j, k]
                     a[i, j] = s + (1e-6 if i == j else 0.0)
-            _solve6(a, rhs, y)
+            solve6(a, rhs, y)
             for k in range(n):
                 s = 0.0
                 for i in range(6):
                     s += jac[i, k] * y[i]
                 step[k] = s
-        _take_step(q, step, max_step)
+        take_step(q, step, max_step)
     pe, re = pose_error(q, target_rot, target_pos, axes, points, rev, tool, err, jac)
     return (pe < tol_p and re < tol_r), pe, re
 

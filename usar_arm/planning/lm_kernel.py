@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.ik_kernel import _solve6, _take_step, pose_error
+from usar_arm.planning.ik_kernel import pose_error, solve6, take_step
 from usar_arm.planning.jit import kernel
 
 
@@ -40,9 +40,9 @@ def levenberg_marquardt(q: Array, target_rot: Array, target_pos: Array, axes: Ar
                 for i in range(6):
                     s += jac[i, a] * jac[i, b]
                 h[a, b] = s + (lam if a == b else 0.0)
-        if not _solve6(h, g, step):
+        if not solve6(h, g, step):
             return False, pe, re
-        _take_step(q, step, max_step)
+        take_step(q, step, max_step)
     pe, re = pose_error(q, target_rot, target_pos, axes, points, rev, tool, err, jac)
     return False, pe, re
 

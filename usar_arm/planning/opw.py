@@ -26,52 +26,26 @@ from dataclasses import dataclass
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.planning.screw import (
+    V,
+    closest_point,
+    cross,
+    dot,
+    parallel_deviation,
+    plane_basis,
+    require,
+    rodrigues,
+    six_axes,
+    sub,
+    subproblem1,
+    v3,
+    wrap,
+)
 from usar_arm.urdf.opw_fit import OpwLengths
-
-V = tuple[float, float, float]
-TWO_PI = 2.0 * math.pi
 
 
 class NotOrthoParallel(ValueError):
     """The arm is not in the ortho-parallel/spherical-wrist class; the reason says why."""
-
-
-def _v3(x: Array) -> V:
-    """A 3-vector as a tuple of floats."""
-    return (float(x[0]), float(x[1]), float(x[2]))
-
-
-def _dot(a: V, b: V) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a: V, b: V) -> V:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _sub(a: V, b: V) -> V:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _rot(w: V, angle: float, v: V) -> V:
-    """Rodrigues: v rotated by ``angle`` about unit axis ``w``."""
-    c, s = math.cos(angle), math.sin(angle)
-    k = _dot(w, v) * (1.0 - c)
-    x = _cross(w, v)
-    return (v[0] * c + x[0] * s + w[0] * k, v[1] * c + x[1] * s + w[1] * k,
-            v[2] * c + x[2] * s + w[2] * k)
-
-
-def _sp1(w: V, p: V, q: V) -> float:
-    """Paden-Kahan subproblem 1: the angle about unit axis ``w`` taking ``p`` to ``q``."""
-    pw, qw = _dot(w, p), _dot(w, q)
-    pp = (p[0] - w[0] * pw, p[1] - w[1] * pw, p[2] - w[2] * pw)
-    qq = (q[0] - w[0] * qw, q[1] - w[1] * qw, q[2] - w[2] * qw)
-    return math.atan2(_dot(w, _cross(pp, qq)), _dot(pp, qq))
-
-
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % TWO_PI - math.pi
 
 
 @dataclass(frozen=True)
@@ -98,19 +72,14 @@ class OrthoParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w = [_v3(a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
-        p = [_v3(pt) for pt in np.asarray(points, float)]
-        if len(w) != 6:
-            raise NotOrthoParallel(f"needs 6 revolute joints, has {len(w)}")
-        checks = [("joint 1 perpendicular to joint 2", abs(_dot(w[0], w[1]))),
-                  ("joint 2 parallel to joint 3", math.sqrt(max(0.0, 1 - _dot(w[1], w[2]) ** 2))),
-                  ("joint 3 perpendicular to joint 4", abs(_dot(w[2], w[3]))),
-                  ("joint 4 perpendicular to joint 5", abs(_dot(w[3], w[4]))),
-                  ("joint 5 perpendicular to joint 6", abs(_dot(w[4], w[5])))]
-        for what, dev in checks:
-            if dev > tolerance:
-                raise NotOrthoParallel(f"{what}: off by {dev:.4f}")
-        wrist, miss = _closest_point(np.array(w[3:]), np.array(p[3:]))
+        w, p = six_axes(axes, points, NotOrthoParallel)
+        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
+                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
+                 ("joint 3 perpendicular to joint 4", abs(dot(w[2], w[3]))),
+                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
+                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
+                tolerance, NotOrthoParallel)
+        wrist, miss = closest_point(np.array(w[3:]), np.array(p[3:]))
         if miss > max(tolerance, 0.05):
             raise NotOrthoParallel(f"wrist axes miss a common point by {miss:.4f} m")
         self.w = w
@@ -125,14 +94,10 @@ class OrthoParallelArm:
         self._rm_t = rm.T
         self._tool_to_wrist = rm.T @ (wrist - pm)  # wrist centre in the tool frame
         self.u: V = w[1]
-        self.s3 = 1.0 if _dot(w[2], self.u) > 0 else -1.0
+        self.s3 = 1.0 if dot(w[2], self.u) > 0 else -1.0
         # Basis of the plane normal to u with ea x eb = u.
-        ref = (1.0, 0.0, 0.0) if abs(self.u[0]) < 0.9 else (0.0, 1.0, 0.0)
-        ea = _cross(ref, self.u)
-        n = math.sqrt(_dot(ea, ea))
-        self.ea: V = (ea[0] / n, ea[1] / n, ea[2] / n)
-        self.eb: V = _cross(self.u, self.ea)
-        self.lateral = _dot(self.u, _sub(self.W0, p[0]))
+        self.ea, self.eb = plane_basis(self.u)
+        self.lateral = dot(self.u, sub(self.W0, p[0]))
         p2, p3, w0 = self._2d(p[1]), self._2d(p[2]), self._2d(self.W0)
         self.p2, self.p3 = p2, p3
         c = (p3[0] - p2[0], p3[1] - p2[1])
@@ -142,30 +107,30 @@ class OrthoParallelArm:
         self.K = c[0] * e[0] + c[1] * e[1]
         self.J = c[0] * (-e[1]) + c[1] * e[0]
         # Constants of the per-query maths.
-        self._tw = _v3(self._tool_to_wrist)
-        self._w1xu = _cross(w[0], self.u)
+        self._tw = v3(self._tool_to_wrist)
+        self._w1xu = cross(w[0], self.u)
         self._p1_2d = self._2d(p[0])
         self._p3p2 = (p3[0] - p2[0], p3[1] - p2[1])
         self._mag = math.hypot(self.K, self.J)
         self._phase = math.atan2(self.J, self.K)
         self._reach = math.sqrt(self.L2sq + self.L3sq)
-        v = _cross(w[5], (1.0, 0.0, 0.0))
-        if _dot(v, v) < 1e-6:
-            v = _cross(w[5], (0.0, 1.0, 0.0))
-        nv = math.sqrt(_dot(v, v))
+        v = cross(w[5], (1.0, 0.0, 0.0))
+        if dot(v, v) < 1e-6:
+            v = cross(w[5], (0.0, 1.0, 0.0))
+        nv = math.sqrt(dot(v, v))
         self._v: V = (v[0] / nv, v[1] / nv, v[2] / nv)
-        self._m6 = _v3(self._rm_t @ np.array(w[5]))
-        self._mv = _v3(self._rm_t @ np.array(self._v))
-        self._c45 = _dot(w[3], w[4])
-        self._w5w6 = _dot(w[4], w[5])
-        self._w4xw5 = _cross(w[3], w[4])
-        self._cr2 = _dot(self._w4xw5, self._w4xw5)
-        self.wrist_coupling = 1.0 if _dot(w[3], w[5]) > 0 else -1.0
+        self._m6 = v3(self._rm_t @ np.array(w[5]))
+        self._mv = v3(self._rm_t @ np.array(self._v))
+        self._c45 = dot(w[3], w[4])
+        self._w5w6 = dot(w[4], w[5])
+        self._w4xw5 = cross(w[3], w[4])
+        self._cr2 = dot(self._w4xw5, self._w4xw5)
+        self.wrist_coupling = 1.0 if dot(w[3], w[5]) > 0 else -1.0
         """At q5 = 0 joints 4 and 6 turn about one line: only q4 + coupling * q6 matters."""
 
 
     def _2d(self, x: V) -> tuple[float, float]:
-        return (_dot(self.ea, x), _dot(self.eb, x))
+        return (dot(self.ea, x), dot(self.eb, x))
 
     def parameters(self) -> OpwParameters:
         """The classical OPW parameters, measured from the foot of joint 1's axis.
@@ -177,14 +142,14 @@ class OrthoParallelArm:
         ``wrist_offset`` > 0.
         """
         w1, p1, u = self.w[0], self.p[0], self.u
-        foot = _sub(p1, tuple(_dot(w1, p1) * x for x in w1))  # type: ignore[arg-type]
-        across = _cross(u, w1)
-        rel2 = _sub(self.p[1], foot)
-        fore = _sub(self.W0, self.p[2])
-        sign = 1.0 if _dot(across, _sub(self.W0, foot)) >= 0 else -1.0
+        foot = sub(p1, tuple(dot(w1, p1) * x for x in w1))  # type: ignore[arg-type]
+        across = cross(u, w1)
+        rel2 = sub(self.p[1], foot)
+        fore = sub(self.W0, self.p[2])
+        sign = 1.0 if dot(across, sub(self.W0, foot)) >= 0 else -1.0
         return OpwParameters(
-            a1=sign * _dot(across, rel2), a2=-_dot(w1, fore), b=self.lateral,
-            c1=_dot(w1, rel2), c2=math.sqrt(self.L2sq), c3=sign * _dot(across, fore),
+            a1=sign * dot(across, rel2), a2=-dot(w1, fore), b=self.lateral,
+            c1=dot(w1, rel2), c2=math.sqrt(self.L2sq), c3=sign * dot(across, fore),
             c4=float(np.linalg.norm(self._tool_to_wrist)), wrist_offset=self.wrist_offset)
 
     def arm_branches(self, rot: Array | list[list[float]], pos: Array
@@ -197,10 +162,10 @@ class OrthoParallelArm:
         wz = r[2][0] * tw[0] + r[2][1] * tw[1] + r[2][2] * tw[2] + float(pos[2])
         w1, p1, u = self.w[0], self.p[0], self.u
         d = (wx - p1[0], wy - p1[1], wz - p1[2])
-        h = _dot(w1, d)
+        h = dot(w1, d)
         dh = (d[0] - h * w1[0], d[1] - h * w1[1], d[2] - h * w1[2])
-        a = _dot(u, dh)
-        b = _dot(self._w1xu, dh)
+        a = dot(u, dh)
+        b = dot(self._w1xu, dh)
         rad = math.hypot(a, b)
         if rad < 1e-12 or abs(self.lateral) > rad + self.slack:
             return []
@@ -209,9 +174,9 @@ class OrthoParallelArm:
         out = []
         mag = self._mag
         for q1 in (base + spread, base - spread):
-            back = _rot(w1, -q1, d)
-            x = _dot(self.ea, back) + self._p1_2d[0]
-            y = _dot(self.eb, back) + self._p1_2d[1]
+            back = rodrigues(w1, -q1, d)
+            x = dot(self.ea, back) + self._p1_2d[0]
+            y = dot(self.eb, back) + self._p1_2d[1]
             dx, dy = x - self.p2[0], y - self.p2[1]
             rhs = (dx * dx + dy * dy - self.L2sq - self.L3sq) / 2.0
             if mag < 1e-12 or abs(rhs) > mag + self.slack * self._reach:
@@ -222,7 +187,7 @@ class OrthoParallelArm:
                 ex = self._p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
                 ey = self._p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
                 q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-                out.append((_wrap(q1), _wrap(q2), _wrap(self.s3 * t3)))
+                out.append((wrap(q1), wrap(q2), wrap(self.s3 * t3)))
         return out
 
     def wrist_branches(self, rot: Array | list[list[float]], q1: float, q2: float, q3: float
@@ -243,12 +208,12 @@ class OrthoParallelArm:
               r[2][0] * mv[0] + r[2][1] * mv[1] + r[2][2] * mv[2])
         theta = q2 + self.s3 * q3
         w1, u = self.w[0], self.u
-        target = _rot(u, -theta, _rot(w1, -q1, t6))
-        rv = _rot(u, -theta, _rot(w1, -q1, tv))
+        target = rodrigues(u, -theta, rodrigues(w1, -q1, t6))
+        rv = rodrigues(u, -theta, rodrigues(w1, -q1, tv))
         w4, w5, w6 = self.w[3], self.w[4], self.w[5]
         c = self._c45
         den = c * c - 1.0
-        t4 = _dot(w4, target)
+        t4 = dot(w4, target)
         alpha = (c * self._w5w6 - t4) / den
         beta = (c * t4 - self._w5w6) / den
         cr = self._w4xw5
@@ -258,11 +223,11 @@ class OrthoParallelArm:
         for g in gammas:
             z = (alpha * w4[0] + beta * w5[0] + g * cr[0], alpha * w4[1] + beta * w5[1]
                  + g * cr[1], alpha * w4[2] + beta * w5[2] + g * cr[2])
-            q5 = _sp1(w5, w6, z)
-            q4 = _sp1(w4, z, target)
-            mv6 = _rot(w5, -q5, _rot(w4, -q4, rv))
-            q6 = _sp1(w6, self._v, mv6)
-            out.append((_wrap(q4), _wrap(q5), _wrap(q6)))
+            q5 = subproblem1(w5, w6, z)
+            q4 = subproblem1(w4, z, target)
+            mv6 = rodrigues(w5, -q5, rodrigues(w4, -q4, rv))
+            q6 = subproblem1(w6, self._v, mv6)
+            out.append((wrap(q4), wrap(q5), wrap(q6)))
         return out
 
     def solve(self, rot: Array, pos: Array) -> list[list[float]]:
@@ -271,16 +236,3 @@ class OrthoParallelArm:
         return [[*arm, *wrist] for arm in self.arm_branches(r, pos)
                 for wrist in self.wrist_branches(r, *arm)]
 
-
-def _closest_point(axes: Array, points: Array) -> tuple[Array, float]:
-    """The point nearest (least squares) to several lines, and the largest distance to one."""
-    a = np.zeros((3, 3))
-    rhs = np.zeros(3)
-    for w, p in zip(axes, points, strict=True):
-        proj = np.eye(3) - np.outer(w, w)
-        a += proj
-        rhs += proj @ p
-    x = np.asarray(np.linalg.lstsq(a, rhs, rcond=None)[0], dtype=np.float64)
-    miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - p)))
-               for w, p in zip(axes, points, strict=True))
-    return x, miss

@@ -72,7 +72,10 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     call's start), the whole path is planned again so.
 
     Raises:
-        OutOfLimitsError, StartInCollisionError, GoalInCollisionError, NoPathError.
+        OutOfLimitsError: the start or goal outside the joint limits.
+        StartInCollisionError: the start in collision.
+        GoalInCollisionError: the goal in collision.
+        NoPathError: no path within the time limit.
     """
     begin = time.perf_counter()
     start, goal = np.asarray(start, float), np.asarray(goal, float)
@@ -156,8 +159,9 @@ def plan_to_pose(world: CollisionWorld, ik: IKSolver, start: Array, target: Arra
     trying the others when one cannot be reached.
 
     Raises:
-        IKError (unreachable, limits, every solution in collision), StartInCollisionError,
-        NoPathError (every solution tried).
+        IKError: unreachable, beyond the limits, or every solution in collision.
+        StartInCollisionError: the start in collision.
+        NoPathError: no path to any solution tried.
     """
     begin = time.perf_counter()
     start = np.asarray(start, float)

@@ -4,7 +4,6 @@ arm becomes one through :func:`usar_arm.description.cache.robot_from_record`."""
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -19,6 +18,7 @@ from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.planning.scene import EMPTY, Mesh, Scene
 from usar_arm.planning.scene_file import validate_allow
 from usar_arm.urdf.description_reader import ReadOptions, read_urdf
+from usar_arm.urdf.discovery_file import discovery_document, wire_facts
 from usar_arm.urdf.group import GroupChoice, cut_chain
 from usar_arm.urdf.joint_limits import apply_joint_limits_text
 from usar_arm.urdf.kinematic_text import kinematic_urdf
@@ -139,13 +139,6 @@ class Robot:
         return [values[j] for j in self.chain.joint_names]
 
 
-def wire_facts(discovery: dict) -> tuple[tuple[int, ...], str | None]:
-    """The USARSim link number of each joint and the tip sensor's name, from discovery.json."""
-    chain = discovery.get("chain", {})
-    links = tuple(int(j["usarsim_link"]) for j in chain.get("joints", []))
-    return links, chain.get("tip_sensor")
-
-
 def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
                      joint_limits: str | Path | None = None,
                      options: RobotOptions | None = None) -> Robot:
@@ -207,12 +200,11 @@ def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
         chain = apply_joint_limits_text(chain, files[f"{stem}.joint_limits.yaml"],
                                         f"{stem}.joint_limits.yaml")
     actuator, links, tip_sensor = None, tuple(range(1, chain.dof + 1)), None
-    if f"{stem}.discovery.json" in files:
-        doc = json.loads(files[f"{stem}.discovery.json"])
-        roles = doc.get("chain", {}).get("frames", {})
+    doc = discovery_document(files, stem)
+    if doc is not None:
+        facts = wire_facts(doc)
         chain = KinematicChain(chain.name, chain.links, chain.joints,
-                               {**chain.frames, **roles}, chain.notes)
-        actuator = doc.get("robot", {}).get("actuator")
-        links, tip_sensor = wire_facts(doc)
+                               {**chain.frames, **facts.frames}, chain.notes)
+        actuator, links, tip_sensor = facts.actuator, facts.links, facts.tip_sensor
     return Robot(chain, text, disabled, states, actuator, where, links, tip_sensor,
                  dict(files), kinematic_urdf(chain), options)

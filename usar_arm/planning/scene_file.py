@@ -58,7 +58,11 @@ def parse_scene(data: Any, path: str, base: Path) -> Scene:
 
 def load_scene(path_or_name: str | Path) -> Scene:
     """A scene from a YAML file, or one of the shipped scenes by name (empty, table, shelf,
-    cage)."""
+    cage; a name or a path by :mod:`usar_arm.core.named_file`'s rule).
+
+    Raises:
+        FileFormatError: no such scene (what was tried), or the file is not a scene.
+    """
     path, name = find_description(path_or_name, BUILTIN, "scene")
     return parse_scene(read_yaml_file(path, name), name, path.parent)
 

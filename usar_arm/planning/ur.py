@@ -31,17 +31,22 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.opw import (
-    NotOrthoParallel,
+from usar_arm.planning.opw import NotOrthoParallel
+from usar_arm.planning.screw import (
     V,
-    _closest_point,
-    _cross,
-    _dot,
-    _rot,
-    _sp1,
-    _sub,
-    _v3,
-    _wrap,
+    closest_point,
+    cross,
+    dot,
+    parallel_deviation,
+    plane_basis,
+    require,
+    rodrigues,
+    six_axes,
+    sub,
+    subproblem1,
+    unit,
+    v3,
+    wrap,
 )
 
 Matrix = Array | list[list[float]]
@@ -55,11 +60,6 @@ moves the position (theta turns p56 about axis 4); 1e-8 balances the two, a few 
 
 class NotThreeParallel(NotOrthoParallel):
     """The arm does not have the three-parallel-axes structure of a UR; the reason says why."""
-
-
-def _unit(x: V) -> V:
-    n = math.sqrt(_dot(x, x))
-    return (x[0] / n, x[1] / n, x[2] / n)
 
 
 def _mat(m: Matrix, v: V) -> V:
@@ -91,20 +91,14 @@ class ThreeParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w = [_v3(a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
-        p = [_v3(pt) for pt in np.asarray(points, float)]
-        if len(w) != 6:
-            raise NotThreeParallel(f"needs 6 revolute joints, has {len(w)}")
-        par = [math.sqrt(max(0.0, 1.0 - _dot(w[i], w[i + 1]) ** 2)) for i in range(5)]
-        checks = [("joint 1 perpendicular to joint 2", abs(_dot(w[0], w[1]))),
-                  ("joint 2 parallel to joint 3", par[1]),
-                  ("joint 3 parallel to joint 4", par[2]),
-                  ("joint 4 perpendicular to joint 5", abs(_dot(w[3], w[4]))),
-                  ("joint 5 perpendicular to joint 6", abs(_dot(w[4], w[5])))]
-        for what, dev in checks:
-            if dev > tolerance:
-                raise NotThreeParallel(f"{what}: off by {dev:.4f}")
-        meet, miss = _closest_point(np.array(w[4:]), np.array(p[4:]))  # (half their gap)
+        w, p = six_axes(axes, points, NotThreeParallel)
+        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
+                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
+                 ("joint 3 parallel to joint 4", parallel_deviation(w[2], w[3])),
+                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
+                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
+                tolerance, NotThreeParallel)
+        meet, miss = closest_point(np.array(w[4:]), np.array(p[4:]))  # (half their gap)
         if 2.0 * miss > max(tolerance, 0.05):
             raise NotThreeParallel(f"axes 5 and 6 miss each other by {2 * miss:.4f} m")
         self.w, self.p = w, p
@@ -112,20 +106,20 @@ class ThreeParallelArm:
         self.slack = 2.0 * miss + 1e-9
         """How far (m) beyond the model's reach a target may be and still get a (clamped)
         branch: axes 5 and 6 missing each other on the real arm can put it there."""
-        self.p56: V = _v3(meet)
+        self.p56: V = v3(meet)
         self.rm = [[float(v) for v in row] for row in self.tool[:3, :3]]
-        self.t56: V = _v3(self.tool[:3, :3].T @ (meet - self.tool[:3, 3]))
-        self.m6: V = _v3(self.tool[:3, :3].T @ np.array(w[5]))
+        self.t56: V = v3(self.tool[:3, :3].T @ (meet - self.tool[:3, 3]))
+        self.m6: V = v3(self.tool[:3, :3].T @ np.array(w[5]))
         u = w[1]
         self.u: V = u
-        self.s3 = 1.0 if _dot(w[2], u) > 0 else -1.0
-        self.s4 = 1.0 if _dot(w[3], u) > 0 else -1.0
-        self.w1xu: V = _cross(w[0], u)
-        self.lateral = _dot(u, _sub(self.p56, p[0]))
+        self.s3 = 1.0 if dot(w[2], u) > 0 else -1.0
+        self.s4 = 1.0 if dot(w[3], u) > 0 else -1.0
+        self.w1xu: V = cross(w[0], u)
+        self.lateral = dot(u, sub(self.p56, p[0]))
         # q5: (A - D) cos q5 + B sin q5 = k - D, from u . Rot(w5, q5) w6 = k; M = |(A - D, B)|.
-        a5 = _dot(u, w[5])
-        b5 = _dot(u, _cross(w[4], w[5]))
-        d5 = _dot(u, w[4]) * _dot(w[4], w[5])
+        a5 = dot(u, w[5])
+        b5 = dot(u, cross(w[4], w[5]))
+        d5 = dot(u, w[4]) * dot(w[4], w[5])
         self.mag5 = math.hypot(a5 - d5, b5)
         self.phase5 = math.atan2(b5, a5 - d5)
         m2m1 = self.mag5 ** 2 - 1.0
@@ -133,13 +127,11 @@ class ThreeParallelArm:
         self.m2m1 = 0.0 if abs(m2m1) < 1e-12 else m2m1
         """D and M^2 - 1, zero on an arm in the class to 1e-12: then sin(q5 - phase) comes
         from |u x w6'| without cancellation, exact near the wrist singularity."""
-        self.x: V = _unit(_sub(w[4], tuple(_dot(w[4], u) * c for c in u)))  # type: ignore[arg-type]
+        self.x: V = unit(sub(w[4], tuple(dot(w[4], u) * c for c in u)))  # type: ignore[arg-type]
         """A unit vector normal to u (w5's part normal to u): turned to find theta."""
-        self.r4: V = _sub(self.p56, p[3])
+        self.r4: V = sub(self.p56, p[3])
         # The planar two-link problem in the plane normal to u (basis ea x eb = u).
-        ref = (1.0, 0.0, 0.0) if abs(u[0]) < 0.9 else (0.0, 1.0, 0.0)
-        self.ea: V = _unit(_cross(ref, u))
-        self.eb: V = _cross(u, self.ea)
+        self.ea, self.eb = plane_basis(u)
         p2, p3, p4 = self._2d(p[1]), self._2d(p[2]), self._2d(p[3])
         self.p2 = p2
         c = (p3[0] - p2[0], p3[1] - p2[1])
@@ -151,7 +143,7 @@ class ThreeParallelArm:
         self.reach = math.sqrt(self.l2sq + self.l3sq)
 
     def _2d(self, x: V) -> tuple[float, float]:
-        return (_dot(self.ea, x), _dot(self.eb, x))
+        return (dot(self.ea, x), dot(self.eb, x))
 
     def shoulder(self, r: Matrix, pos: Array) -> tuple[V, list[float]]:
         """P56 - p1 (m) and the q1 (rad, up to 2) keeping P56's offset along u."""
@@ -159,9 +151,9 @@ class ThreeParallelArm:
         t, p1 = _mat(r, self.t56), self.p[0]
         d = (t[0] + float(pos[0]) - p1[0], t[1] + float(pos[1]) - p1[1],
              t[2] + float(pos[2]) - p1[2])
-        h = _dot(w1, d)
+        h = dot(w1, d)
         dh = (d[0] - h * w1[0], d[1] - h * w1[1], d[2] - h * w1[2])
-        a, b = _dot(u, dh), _dot(self.w1xu, dh)
+        a, b = dot(u, dh), dot(self.w1xu, dh)
         rad = math.sqrt(a * a + b * b)
         if rad < 1e-12 or abs(self.lateral) > rad + self.slack:
             return d, []
@@ -173,30 +165,31 @@ class ThreeParallelArm:
         """(q5, q6, theta) (rad) of each wrist branch (up to 2) for shoulder angle q1; q6 is
         ``q6_free`` at the wrist singularity."""
         w1, w5, w6, u = self.w[0], self.w[4], self.w[5], self.u
-        n = _rot(w1, -q1, _mat(r, self.m6))
-        k = _dot(u, n)
+        n = rodrigues(w1, -q1, _mat(r, self.m6))
+        k = dot(u, n)
         s2 = (n[0] - k * u[0]) ** 2 + (n[1] - k * u[1]) ** 2 + (n[2] - k * u[2]) ** 2
         # M^2 sin^2(q5 - phase) = M^2 - (k - D)^2, with 1 - k^2 = |u x w6'|^2 = s2:
         sin2 = s2 + self.m2m1 + 2.0 * k * self.d5 - self.d5 * self.d5
         if self.mag5 < 1e-12 or sin2 < -2e-9:
             return []
         spread = math.atan2(math.sqrt(max(0.0, sin2)), k - self.d5)
-        v = _mat(self.rm, _mat_t(r, _rot(w1, q1, u)))  # R_w^T R1 u
+        v = _mat(self.rm, _mat_t(r, rodrigues(w1, q1, u)))  # R_w^T R1 u
         out = []
         for q5 in (self.phase5 + spread, self.phase5 - spread):
-            g = _rot(w5, -q5, u)
-            gw = _dot(w6, g)
+            g = rodrigues(w5, -q5, u)
+            gw = dot(w6, g)
             gn = (g[0] - gw * w6[0], g[1] - gw * w6[1], g[2] - gw * w6[2])
-            q6 = q6_free if _dot(gn, gn) < SINGULAR_WRIST ** 2 else _sp1(w6, v, g)
-            y = _rot(w1, -q1, _mat(r, _mat_t(self.rm, _rot(w6, -q6, _rot(w5, -q5, self.x)))))
-            out.append((q5, q6, _sp1(u, self.x, y)))
+            q6 = q6_free if dot(gn, gn) < SINGULAR_WRIST ** 2 else subproblem1(w6, v, g)
+            turned = rodrigues(w6, -q6, rodrigues(w5, -q5, self.x))
+            y = rodrigues(w1, -q1, _mat(r, _mat_t(self.rm, turned)))
+            out.append((q5, q6, subproblem1(u, self.x, y)))
         return out
 
     def elbow(self, d: V, q1: float, theta: float) -> list[tuple[float, float]]:
         """(q2, q3) (rad, up to 2) placing joint 4's point for shoulder q1 and total turn
         theta about u; ``d`` = P56 - p1 (m)."""
-        back = _rot(self.w[0], -q1, d)
-        turned = _rot(self.u, theta, self.r4)
+        back = rodrigues(self.w[0], -q1, d)
+        turned = rodrigues(self.u, theta, self.r4)
         p1 = self.p[0]
         x, y = self._2d((back[0] - turned[0] + p1[0], back[1] - turned[1] + p1[1],
                          back[2] - turned[2] + p1[2]))
@@ -224,5 +217,5 @@ class ThreeParallelArm:
             for q5, q6, theta in self.wrist(r, q1, q6_free):
                 for q2, q3 in self.elbow(d, q1, theta):
                     q4 = self.s4 * (theta - q2 - self.s3 * q3)
-                    out.append([_wrap(v) for v in (q1, q2, q3, q4, q5, q6)])
+                    out.append([wrap(v) for v in (q1, q2, q3, q4, q5, q6)])
         return out

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.ik_kernel import _rot, _sp1, _wrap, pick_nearest
+from usar_arm.planning.ik_kernel import pick_nearest, rodrigues, subproblem1, wrap
 from usar_arm.planning.jit import kernel
 from usar_arm.planning.ur import SINGULAR_WRIST, ThreeParallelArm
 
@@ -94,7 +94,7 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
     count = 0
     for sign1 in (1.0, -1.0):
         q1 = base + sign1 * spread
-        _rot(c, C_W, -q1, w6t, tmp)
+        rodrigues(c, C_W, -q1, w6t, tmp)
         k = _dot(c, C_U, tmp)
         s2 = 0.0
         for i in range(3):
@@ -103,25 +103,25 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
         if mag5 < 1e-12 or sin2 < -2e-9:
             continue
         spread5 = math.atan2(math.sqrt(max(0.0, sin2)), k - c[C_D5])
-        _rot(c, C_W, q1, c[C_U:C_U + 3], tmp)
+        rodrigues(c, C_W, q1, c[C_U:C_U + 3], tmp)
         _mul(rot, tmp, True, tmp2)
         _mul(rm, tmp2, False, v)  # R_w^T R1 u
-        _rot(c, C_W, -q1, d, back)
+        rodrigues(c, C_W, -q1, d, back)
         for sign5 in (1.0, -1.0):
             q5 = c[C_PHASE5] + sign5 * spread5
-            _rot(c, C_W5, -q5, c[C_U:C_U + 3], g)
+            rodrigues(c, C_W5, -q5, c[C_U:C_U + 3], g)
             gw = _dot(c, C_W6, g)
             gn = 0.0
             for i in range(3):
                 gn += (g[i] - gw * c[C_W6 + i]) ** 2
-            q6 = q6_free if gn < SINGULAR_WRIST ** 2 else _sp1(c, C_W6, v, g)
-            _rot(c, C_W5, -q5, c[C_X:C_X + 3], tmp)
-            _rot(c, C_W6, -q6, tmp, tmp2)
+            q6 = q6_free if gn < SINGULAR_WRIST ** 2 else subproblem1(c, C_W6, v, g)
+            rodrigues(c, C_W5, -q5, c[C_X:C_X + 3], tmp)
+            rodrigues(c, C_W6, -q6, tmp, tmp2)
             _mul(rm, tmp2, True, tmp)
             _mul(rot, tmp, False, tmp2)
-            _rot(c, C_W, -q1, tmp2, y)
-            theta = _sp1(c, C_U, c[C_X:C_X + 3], y)
-            _rot(c, C_U, theta, c[C_R4:C_R4 + 3], turned)
+            rodrigues(c, C_W, -q1, tmp2, y)
+            theta = subproblem1(c, C_U, c[C_X:C_X + 3], y)
+            rodrigues(c, C_U, theta, c[C_R4:C_R4 + 3], turned)
             for i in range(3):
                 tmp[i] = back[i] - turned[i] + c[C_P + i]
             dx, dy = _dot(c, C_EA, tmp) - c[C_P2], _dot(c, C_EB, tmp) - c[C_P2 + 1]
@@ -137,8 +137,8 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
                 q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
                 q3 = c[C_S3] * t3
                 q4 = c[C_S4] * (theta - q2 - c[C_S3] * q3)
-                out[count, 0], out[count, 1], out[count, 2] = _wrap(q1), _wrap(q2), _wrap(q3)
-                out[count, 3], out[count, 4], out[count, 5] = _wrap(q4), _wrap(q5), _wrap(q6)
+                out[count, 0], out[count, 1], out[count, 2] = wrap(q1), wrap(q2), wrap(q3)
+                out[count, 3], out[count, 4], out[count, 5] = wrap(q4), wrap(q5), wrap(q6)
                 count += 1
     return count
 

@@ -19,23 +19,17 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.ros.build import BuiltInterfaces, RosSetupError, setup
-    from usar_arm.ros.frames import TransformTree
-    from usar_arm.ros.goals import CheckedGoal, GoalRejected, TrajectoryGoal, check_goal
-    from usar_arm.ros.runner import GoalRunner
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.ros.build import BuiltInterfaces as BuiltInterfaces
+    from usar_arm.ros.build import RosSetupError as RosSetupError
+    from usar_arm.ros.build import setup as setup
+    from usar_arm.ros.frames import TransformTree as TransformTree
+    from usar_arm.ros.goals import CheckedGoal as CheckedGoal
+    from usar_arm.ros.goals import GoalRejected as GoalRejected
+    from usar_arm.ros.goals import TrajectoryGoal as TrajectoryGoal
+    from usar_arm.ros.goals import check_goal as check_goal
+    from usar_arm.ros.runner import GoalRunner as GoalRunner
 
-_HOMES = {
-    "build": ("BuiltInterfaces", "RosSetupError", "setup"),
-    "frames": ("TransformTree",),
-    "goals": ("CheckedGoal", "GoalRejected", "TrajectoryGoal", "check_goal"),
-    "runner": ("GoalRunner",),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy). The node itself
-(:mod:`.node`, :mod:`.platform_node`) is run by ``usar-arm ros``; none of these names imports
-rclpy."""
-
-__all__ = ["BuiltInterfaces", "CheckedGoal", "GoalRejected", "GoalRunner", "RosSetupError",
-           "TrajectoryGoal", "TransformTree", "check_goal", "setup"]
-
-__getattr__ = exports(__name__, _HOMES)
+# The nodes themselves (.node, .platform_node) are run by `usar-arm ros`; none of these names
+# imports rclpy.
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

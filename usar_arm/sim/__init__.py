@@ -9,16 +9,12 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.sim.robot_spec import RobotSpec, builtin_robots, load_robot
-    from usar_arm.sim.server import SimOptions, SimServer, wait_for_port
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.sim.robot_spec import RobotSpec as RobotSpec
+    from usar_arm.sim.robot_spec import builtin_robots as builtin_robots
+    from usar_arm.sim.robot_spec import load_robot as load_robot
+    from usar_arm.sim.server import SimOptions as SimOptions
+    from usar_arm.sim.server import SimServer as SimServer
+    from usar_arm.sim.server import wait_for_port as wait_for_port
 
-_HOMES = {
-    "robot_spec": ("RobotSpec", "builtin_robots", "load_robot"),
-    "server": ("SimOptions", "SimServer", "wait_for_port"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["RobotSpec", "SimOptions", "SimServer", "builtin_robots", "load_robot", "wait_for_port"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -49,8 +49,8 @@ def load_world(path: str | Path | None = None) -> WorldSpec:
     """Load a world file, or a shipped world by name (default: ``default``, the arms' cell).
 
     Raises:
-        FileFormatError: the file is not a world file.
-        FileNotFoundError: no such file and no shipped world of that name.
+        FileFormatError: no such file and no shipped world of that name (what was tried), or
+            the file is not a world file.
     """
     p, data = read_world_file(path)
     poses = []

@@ -24,7 +24,7 @@ from usar_arm.core.platform import (
     PlatformFrames,
     Wheel,
 )
-from usar_arm.urdf.validate import structural_problems
+from usar_arm.urdf.validation import structural_problems
 from usar_arm.urdf.writer import comment_block, num, nums
 
 HALF_PI = 1.5707963267948966

@@ -8,32 +8,20 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.usarsim.client import UsarClient
-    from usar_arm.usarsim.codec import format_message, parse_line
-    from usar_arm.usarsim.messages import (
-        Act,
-        Asta,
-        Conf,
-        GameInfo,
-        Geo,
-        GetConf,
-        GetGeo,
-        GetStartPoses,
-        Init,
-        Sen,
-        Sta,
-    )
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.usarsim.client import UsarClient as UsarClient
+    from usar_arm.usarsim.codec import format_message as format_message
+    from usar_arm.usarsim.codec import parse_line as parse_line
+    from usar_arm.usarsim.messages import Act as Act
+    from usar_arm.usarsim.messages import Asta as Asta
+    from usar_arm.usarsim.messages import Conf as Conf
+    from usar_arm.usarsim.messages import GameInfo as GameInfo
+    from usar_arm.usarsim.messages import Geo as Geo
+    from usar_arm.usarsim.messages import GetConf as GetConf
+    from usar_arm.usarsim.messages import GetGeo as GetGeo
+    from usar_arm.usarsim.messages import GetStartPoses as GetStartPoses
+    from usar_arm.usarsim.messages import Init as Init
+    from usar_arm.usarsim.messages import Sen as Sen
+    from usar_arm.usarsim.messages import Sta as Sta
 
-_HOMES = {
-    "client": ("UsarClient",),
-    "codec": ("format_message", "parse_line"),
-    "messages": ("Act", "Asta", "Conf", "GameInfo", "Geo", "GetConf", "GetGeo", "GetStartPoses",
-        "Init", "Sen", "Sta"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["Act", "Asta", "Conf", "GameInfo", "Geo", "GetConf", "GetGeo", "GetStartPoses", "Init",
-           "Sen", "Sta", "UsarClient", "format_message", "parse_line"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -41,7 +41,8 @@ class UsarClient(Exchange):
     """A connection to one USARSim server (one robot per connection).
 
     Args:
-        host, port: the server (UDK default port 3000).
+        host: the server's address.
+        port: its TCP port (UDK's default is 3000).
         timeout: default seconds to wait for any reply.
         connect_timeout: seconds to wait for the TCP connection and the NFO greeting (default:
             ``timeout``).

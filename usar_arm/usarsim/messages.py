@@ -265,6 +265,12 @@ class Asta:
             return None
         return tuple(values[k] for k in links)
 
+    def missing(self, links: tuple[int, ...]) -> tuple[int, ...]:
+        """The links of ``links`` (1-based) that the line holds no value for, in that order:
+        why :meth:`joints` gave None."""
+        have = {k for k, _ in self.values}
+        return tuple(k for k in links if k not in have)
+
 
 @dataclass(frozen=True)
 class Sta:

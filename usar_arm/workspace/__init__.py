@@ -30,30 +30,20 @@ from typing import TYPE_CHECKING
 
 from usar_arm.core.lazy import exports
 
-if TYPE_CHECKING:
-    from usar_arm.workspace.engine import InProcess, RunStats
-    from usar_arm.workspace.grid import ReachBound, VoxelGrid, reach_bound
-    from usar_arm.workspace.orientations import OrientationSet, orientation_set
-    from usar_arm.workspace.placement import PlaceSettings
-    from usar_arm.workspace.pool import ProcessBackend
-    from usar_arm.workspace.reach import ReachPlan, ReachSettings
-    from usar_arm.workspace.reach_map import ReachMap
-    from usar_arm.workspace.targets import Target, load_targets
+if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.workspace.engine import InProcess as InProcess
+    from usar_arm.workspace.engine import RunStats as RunStats
+    from usar_arm.workspace.grid import ReachBound as ReachBound
+    from usar_arm.workspace.grid import VoxelGrid as VoxelGrid
+    from usar_arm.workspace.grid import reach_bound as reach_bound
+    from usar_arm.workspace.orientations import OrientationSet as OrientationSet
+    from usar_arm.workspace.orientations import orientation_set as orientation_set
+    from usar_arm.workspace.placement import PlaceSettings as PlaceSettings
+    from usar_arm.workspace.pool import ProcessBackend as ProcessBackend
+    from usar_arm.workspace.reach import ReachPlan as ReachPlan
+    from usar_arm.workspace.reach import ReachSettings as ReachSettings
+    from usar_arm.workspace.reach_map import ReachMap as ReachMap
+    from usar_arm.workspace.targets import Target as Target
+    from usar_arm.workspace.targets import load_targets as load_targets
 
-_HOMES = {
-    "engine": ("InProcess", "RunStats"),
-    "grid": ("ReachBound", "VoxelGrid", "reach_bound"),
-    "orientations": ("OrientationSet", "orientation_set"),
-    "placement": ("PlaceSettings",),
-    "pool": ("ProcessBackend",),
-    "reach": ("ReachPlan", "ReachSettings"),
-    "reach_map": ("ReachMap",),
-    "targets": ("Target", "load_targets"),
-}
-"""The module of each public name, imported on first use (usar_arm.core.lazy)."""
-
-__all__ = ["InProcess", "OrientationSet", "PlaceSettings", "ProcessBackend", "ReachBound",
-           "ReachMap", "ReachPlan", "ReachSettings", "RunStats", "Target", "VoxelGrid",
-           "load_targets", "orientation_set", "reach_bound"]
-
-__getattr__ = exports(__name__, _HOMES)
+__getattr__, __dir__, __all__ = exports(__name__, __file__)

@@ -57,7 +57,7 @@ def _step(jac: Array, err: Array, rows: int, weight: float, n: int, dq: Array) -
             for i in range(n):
                 s += jac[r, i] * jac[c, i]
             a[r, c] = s * wr * wc + (DAMPING if r == c else 0.0)
-    if not ik_kernel._solve6(a, b, x):
+    if not ik_kernel.solve6(a, b, x):
         return False
     for i in range(n):
         s = 0.0
@@ -110,7 +110,7 @@ def into_cells(targets: Array, centres: Array, half: float, seeds: Array, lo: Ar
             best = math.inf
             stalled = 0
             for it in range(iterations):
-                ik_kernel._pose_and_jacobian(q, axes, points, rev, tool, rot, pos, jac)
+                ik_kernel.pose_and_jacobian(q, axes, points, rev, tool, rot, pos, jac)
                 if it == 0:
                     for a in range(3):
                         for b in range(3):
@@ -151,7 +151,7 @@ def tool_poses(qs: Array, axes: Array, points: Array, rev: Array, tool: Array, r
     pos = np.empty(3)
     jac = np.empty((6, n))
     for k in range(qs.shape[0]):
-        ik_kernel._pose_and_jacobian(qs[k], axes, points, rev, tool, rot, pos, jac)
+        ik_kernel.pose_and_jacobian(qs[k], axes, points, rev, tool, rot, pos, jac)
         for a in range(3):
             pos_out[k, a] = pos[a]
             for b in range(3):
@@ -173,7 +173,7 @@ def landings(qs: Array, axes: Array, points: Array, rev: Array, tool: Array, ori
     count = 0
     for k in range(qs.shape[0]):
         cell_out[k] = -1
-        ik_kernel._pose_and_jacobian(qs[k], axes, points, rev, tool, rot, pos, jac)
+        ik_kernel.pose_and_jacobian(qs[k], axes, points, rev, tool, rot, pos, jac)
         flat = 0
         inside = True
         for a in range(3):

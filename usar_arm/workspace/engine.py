@@ -10,7 +10,7 @@ the backend and worker count.
 
 Finished chunks go to a :class:`ChunkStore` (one file each, written atomically), so an
 interrupted run keeps them and ``resume`` continues; a chunk whose worker dies or raises is
-retried once, then the run stops with :class:`~usar_arm.core.errors.ChunkFailedError`.
+retried once, then the run stops with :class:`~usar_arm.core.job_errors.ChunkFailedError`.
 """
 
 from __future__ import annotations

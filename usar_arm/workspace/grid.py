@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.core.errors import MapTooLargeError
+from usar_arm.core.job_errors import MapTooLargeError
 from usar_arm.core.model import Joint, JointType, KinematicChain
 from usar_arm.core.spatial import Array
 

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm.core.errors import IKError, UnreachableTargetError
-from usar_arm.core.job_errors import ClusterUnavailableError
+from usar_arm.core.errors import IKError
+from usar_arm.core.job_errors import ClusterUnavailableError, UnreachableTargetError
 from usar_arm.core.spatial import Array
 from usar_arm.core.version import __version__
 from usar_arm.planning.robot import Robot, robot_from_texts

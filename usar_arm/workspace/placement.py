@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from usar_arm.core.errors import UnreachableTargetError
+from usar_arm.core.job_errors import UnreachableTargetError
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array, invert, rot_z, transform
 from usar_arm.planning.collision import CollisionWorld

@@ -7,7 +7,7 @@ simulator: forking a threaded process can deadlock the child). It builds the job
 once and then runs one chunk at a time, sent over its own pipe. The parent watches every pipe
 and every process at once (:func:`multiprocessing.connection.wait`), so it always knows which
 chunk a worker was running when it died: that chunk is retried once on a fresh worker, and a
-second failure stops the run (:class:`~usar_arm.core.errors.ChunkFailedError`). Workers ignore
+second failure stops the run (:class:`~usar_arm.core.job_errors.ChunkFailedError`). Workers ignore
 Ctrl-C; the parent terminates them when it is interrupted, or when it stops for any other
 reason.
 """
@@ -139,11 +139,12 @@ class ProcessBackend:
         """Nothing left running between runs."""
 
     def describe(self) -> str:
-        """:meth:`Backend.describe`: one line, what runs the chunks."""
+        """:meth:`.engine.Backend.describe`: one line, what runs the chunks."""
         return f"{self.workers} local worker process{'es' if self.workers > 1 else ''}"
 
     def run(self, job: Job, todo: Sequence[int]) -> Iterator[tuple[int, Result]]:
-        """:meth:`Backend.run`: every chunk of ``todo`` with its result, as each finishes."""
+        """:meth:`.engine.Backend.run`: every chunk of ``todo`` with its result, as each
+        finishes."""
         context = mp.get_context(start_method(self.start_method))
         queue = deque(todo)
         failures: dict[int, list[str]] = {}

@@ -1,6 +1,6 @@
 """The fit: Levenberg-Marquardt on the pose residuals, reduced to the identifiable parameters.
 
-0. Plausibility (:mod:`.plausibility`): every reading within :attr:`Bounds.reading_m` /
+0. Plausibility (:mod:`.plausibility`): every reading within :attr:`.bounds.Bounds.reading_m` /
    ``reading_rad`` of the nominal description, else an error naming the likely mistake.
 1. Scale: every residual by its own 1-sigma (noise and truncation), every Jacobian column to
    unit norm. 2. Rank: QR with column pivoting of that scaled identification Jacobian gives the
