@@ -13,9 +13,20 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
-from usar_arm.core.errors import ConnectionLostError, DescriptionError, UnknownStartError
+from usar_arm.core.errors import (
+    ConnectionLostError,
+    DescriptionError,
+    ResponseTimeoutError,
+    UnknownStartError,
+)
+from usar_arm.discover.effectors import (
+    EFFECTOR_TYPES,
+    WireEffector,
+    effector_from_replies,
+    mount_order,
+)
 from usar_arm.discover.wire_arm import WireArm, arm_from_replies
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
@@ -43,7 +54,9 @@ class DiscoveryRecord:
         host, port: the server. robot_class: e.g. ``USARBot.KR60``. start: the start position.
         exchanges: each request and the raw reply, in order.
         components: ``Type Name`` of what the status streams announced.
-        arm: the arm built from the replies.
+        arm: the arm built from the replies (with its effectors).
+        warnings: what the discovery could not learn, and why.
+        spawn_rotation: the robot's roll, pitch, yaw at its start (rad, z-down world frame).
     """
 
     host: str
@@ -53,6 +66,8 @@ class DiscoveryRecord:
     exchanges: list[Exchange] = field(default_factory=list)
     components: list[str] = field(default_factory=list)
     arm: WireArm | None = None
+    warnings: list[str] = field(default_factory=list)
+    spawn_rotation: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def reply_lines(self) -> list[str]:
         """The raw CONF/GEO lines, in order (the cache key of a description)."""
@@ -107,8 +122,35 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
             sgeo = ask(m.GetGeo("GroundTruth", sname), m.Geo, sname)
             assert isinstance(sgeo, m.Geo)
             sensors += [i for i in sgeo.items if i.name.lower() == sname.lower()]
-    record.arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
+    arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
+    record.arm = replace(arm, effectors=mount_order(_effectors(record, ask), arm.name,
+                                                    tuple(j.link for j in arm.joints)))
     return record
+
+
+def _effectors(record: DiscoveryRecord, ask: Ask) -> tuple[WireEffector, ...]:
+    """GETCONF and GETGEO of every effector the status streams announced (EFF lines), tool
+    changers first. One that does not answer (a tool dropped since its last EFF line: UDK
+    hides it) is left out, with a warning."""
+    found = []
+    for kind in EFFECTOR_TYPES:
+        for comp in record.components:
+            ctype, _, name = comp.partition(" ")
+            if ctype != kind:
+                continue
+            try:
+                conf = ask(m.GetConf(kind, name), m.Conf, name)
+                geo = ask(m.GetGeo(kind, name), m.Geo, name)
+            except ResponseTimeoutError as exc:
+                record.warnings.append(f"{kind} {name} announced itself but did not answer "
+                                       f"GETCONF/GETGEO ({exc}); it is not in the description")
+                log.warning("%s", record.warnings[-1])
+                continue
+            assert isinstance(conf, m.Conf) and isinstance(geo, m.Geo)
+            citem = next(i for i in conf.items if i.name.lower() == name.lower())
+            gitem = next(i for i in geo.items if i.name.lower() == name.lower())
+            found.append(effector_from_replies(kind, citem, gitem, record.exchanges[-1].reply))
+    return tuple(found)
 
 
 Ask = Callable[..., m.Message]
@@ -143,6 +185,9 @@ def spawn_robot(client: UsarClient, robot_class: str, robot_name: str | None = N
     elif not any(n.lower() == start.lower() for n in poses.names):
         raise UnknownStartError(start, poses.names)
     record.start = start
+    record.spawn_rotation = next((p.rotation for p in poses.poses
+                                  if start is not None and p.name.lower() == start.lower()),
+                                 (0.0, 0.0, 0.0))
     name = robot_name or robot_class.split(".")[-1]
     log.info("spawning %s '%s' at %s", robot_class, name, start or "the origin")
     first = client.spawn(robot_class, name, start=start,
