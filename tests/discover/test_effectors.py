@@ -106,3 +106,19 @@ def test_mounts_are_ordered_and_a_bad_mount_is_named() -> None:
 def test_an_effector_geo_without_its_pose_is_refused() -> None:
     with pytest.raises(DescriptionError, match="lacks Location"):
         _effector(GR_CONF, "GEO {Type Gripper} {Name vac} {Mount tc}{Tip 0.00,0.00,0.20}")
+
+
+def test_the_srdf_names_the_tool_as_moveits_end_effector_and_reads_back() -> None:
+    from usar_arm.urdf.srdf_reader import read_srdf
+
+    with fake_usarsim(CONF, GEO, effectors={"ToolChanger": (TC_CONF, TC_GEO),
+                                            "Gripper": (GR_CONF, GR_GEO)}, status=EFF) as srv:
+        desc = describe(DescribeOptions(robot="Anything", host="127.0.0.1", port=srv.port,
+                                        acm_samples=50, timeout=2.0))
+    assert ('<end_effector name="vac" parent_link="link_2" group="gripper" '
+            'parent_group="manipulator"/>') in desc.srdf
+    srdf = read_srdf(desc.srdf)
+    assert [g.name for g in srdf.groups] == ["manipulator", "gripper"]
+    assert srdf.group("gripper", "test").links == ("tc", "vac", "vac_tcp")
+    assert srdf.disabled == {(d.link1, d.link2) for d in desc.acm.disabled}
+    assert ("link_2", "vac") in srdf.disabled  # adjacent through the phantom tool changer
