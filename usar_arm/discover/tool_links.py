@@ -6,7 +6,8 @@ named the KR60's ``toolchange_mount``): an arm link, or the effector below it. A
 pointing out of the tool along the suction axis (ROS-Industrial's tool0 convention), and a
 collision body: the wire gives no tool geometry, so the body is a cylinder of
 :data:`TOOL_RADIUS` (a conservative default, announced as such in the notes and discovery.json)
-from the tool's origin to its tip. A tool changer gets no body: UDK's is a phantom part without
+from the tool's origin to its tip, lengthened by the Tip's print step (UDK prints 0.18 for the
+KR60 vacuum's 0.183 m). A tool changer gets no body: UDK's is a phantom part without
 collision.
 """
 
@@ -92,11 +93,13 @@ def tool_links(frames: tuple[EffectorFrame, ...], link_frames: dict[int, tuple[s
         length = float(np.linalg.norm(tip_local))
         body: tuple[Collision, ...] = ()
         if not e.is_tool_changer and length >= MIN_TIP:
-            body = (Collision(CylinderShape(TOOL_RADIUS, length),
-                              segment_origin(np.zeros(3), tip_local, length)),)
+            reach = length + e.tip_resolution  # the true tip may lie half a print step further
+            body = (Collision(CylinderShape(TOOL_RADIUS, reach),
+                              segment_origin(np.zeros(3), tip_local * reach / length, reach)),)
             notes.append(f"{e.name}: the wire gives no tool geometry; its collision body is a "
                          f"cylinder of the default radius {TOOL_RADIUS:g} m from its origin to "
-                         f"its tip ({length:.3f} m).")
+                         f"its tip ({length:.3f} m, plus the Tip's print step "
+                         f"{e.tip_resolution:g} m).")
         links.append(Link(e.name, None, TOOL_GREY if body else None,
                           "tool_grey" if body else None, body))
         joints.append(Joint(f"{e.name}_mount", JointType.FIXED, parent, e.name, _origin(rel)))
