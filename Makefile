@@ -10,7 +10,7 @@ WARM_UP := from usar_arm.planning.compiled import warm_up; warm_up(); \
 	from usar_arm.workspace.kernels import warm_up; warm_up()
 
 .PHONY: demo test test-all test-slow lint typecheck docs bench bench-quick load soak clean \
-	ros-setup
+	ros-setup ros1-system ros1-setup
 
 $(DEMO_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(DEMO_VENV)
@@ -33,6 +33,16 @@ $(TEST_VENV)/.installed: pyproject.toml
 ros-setup: $(TEST_VENV)/.installed
 	$(TEST_VENV)/bin/usar-arm ros --setup
 
+# Debian's ROS 1 and the tools that judge the ROS 1 node (tests/ros1: robot_state_publisher,
+# RViz under Xvfb, rosbag, view_frames): installed with apt-get where this runs as root (CI, a
+# fresh Debian 12: about 360 MB, once), else said in one line (the ROS 1 tests then skip).
+ros1-system: $(TEST_VENV)/.installed
+	$(TEST_VENV)/bin/python tools/ros1_debian.py
+
+# The ROS 1 environment (a venv of Debian's interpreter, control_msgs generated; seconds).
+ros1-setup: ros1-system
+	$(TEST_VENV)/bin/usar-arm ros --ros1 --setup
+
 demo: $(DEMO_VENV)/.installed
 	$(DEMO_VENV)/bin/usar-arm demo
 
@@ -40,7 +50,7 @@ demo: $(DEMO_VENV)/.installed
 # (everything not marked slow), on both cores. The consumer tests (tests/consumers, about 100 s
 # run alone) drive Tesseract in its own venv, bench/.venvs/tesseract (created here once, about
 # 2 minutes and 320 MB; never a dependency of the package).
-test: $(TEST_VENV)/.installed
+test: $(TEST_VENV)/.installed ros1-system
 	$(PYTHON) bench/peers/venvs.py --only tesseract
 	$(TEST_VENV)/bin/python -m pytest -n 2 -m "not slow and not realtime" tests
 

@@ -180,8 +180,7 @@ def peer(peer_name: str, stage: str, note: str = "") -> Solver:
     py = venvs.python_path(peer_name)
     skip = ""
     if not venvs.is_ready(peer_name):
-        skip = (f"no venv at {py.parent.parent} (create it with "
-                f"`python3 bench/peers/venvs.py --only {peer_name}`)")
+        skip = venvs.missing_reason(peer_name)
     elif not script.is_file():
         skip = f"no runner {script.name}"
     return Solver(peer_name, "peer", (str(py), str(script)), skip, note)

@@ -81,16 +81,26 @@ def srdf_disabled(srdf_text: str | None) -> set[tuple[str, str]]:
             for e in root.iter("disable_collisions")}
 
 
+def _ros_pose(p: dict[str, Any] | None) -> Array:
+    """4x4 of a ROS pose (position, orientation x y z w); the identity for None."""
+    if p is None:
+        return np.eye(4)
+    x, y, z, w = (float(v) for v in p["orientation"])
+    return pose(quat_matrix(w, x, y, z), p["position"])
+
+
 def obstacles_from_scene_yaml(text: str) -> list[tuple[fcl.CollisionGeometry, Array]]:
-    """(geometry, 4x4 pose) of every primitive of a MoveIt planning scene's world."""
+    """(geometry, 4x4 pose) of every primitive of a MoveIt planning scene's world, in the
+    scene's frame: the object's own ``pose`` (MoveIt's CollisionObject.pose; identity when
+    absent) times the primitive's pose relative to it."""
     doc = yaml.safe_load(text)
     out = []
     for obj in doc["world"]["collision_objects"]:
+        at = _ros_pose(obj.get("pose"))
         for prim, p in zip(obj.get("primitives", []), obj.get("primitive_poses", []),
                            strict=True):
             d = [float(v) for v in prim["dimensions"]]
-            x, y, z, w = (float(v) for v in p["orientation"])
-            t = pose(quat_matrix(w, x, y, z), p["position"])
+            t = at @ _ros_pose(p)
             if prim["type"] == "box":
                 g = fcl.Box(*d[:3])
             elif prim["type"] == "cylinder":

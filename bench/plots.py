@@ -76,7 +76,8 @@ def _boxes(ax: Any, case: dict[str, Any], title: str, unit: str = "ms",
 
 def ik(doc: dict[str, Any], folder: Path) -> Path:
     cases = doc["cases"]
-    fig = Figure(figsize=(11, 1.2 + 0.55 * max(len(c["solvers"]) for c in cases.values())))
+    fig = Figure(figsize=(5.5 * max(2, len(cases)),
+                          1.2 + 0.55 * max(len(c["solvers"]) for c in cases.values())))
     axes = fig.subplots(1, len(cases), squeeze=False)[0]
     for ax, (name, case) in zip(axes, cases.items(), strict=True):
         _boxes(ax, case, f"IK {name} ({case['dof']} joints): time per pose")
@@ -155,7 +156,9 @@ def scaling_obstacles(docs: dict[str, Any], folder: Path) -> Path | None:
 def scaling_joints(docs: dict[str, Any], folder: Path) -> Path | None:
     panels = []
     if "ik" in docs:
-        panels.append(("IK mean time per pose", docs["ik"]["cases"], "mean"))
+        panels.append(("IK mean time per pose", {
+            n: c for n, c in docs["ik"]["cases"].items() if c.get("set", "uniform") == "uniform"},
+            "mean"))
     if "plan" in docs:
         panels.append(("Planning median time", {n: c for n, c in docs["plan"]["cases"].items()
                                                 if not n.startswith("boxes_")}, "median"))

@@ -24,6 +24,7 @@ from report_format import (
     fmt_pct,
     fmt_s,
     fmt_threshold,
+    fmt_x,
     solver_rows,
     table,
 )
@@ -54,10 +55,12 @@ def ik_section(doc: dict[str, Any]) -> list[str]:
     out = []
     for name, case in doc["cases"].items():
         tol = case["tolerance"]
+        drawn = (doc["settings"].get("edges", "") + ". " if case.get("set") == "edges"
+                 else "")
         out += [f"### {name} ({case['dof']} joints), {case['problems']['count']} poses", "",
-                f"Tolerance {tol['position_m']:g} m, {tol['orientation_rad']:g} rad; seed = "
-                "mid-range of the limits; success = Pinocchio FK of the answer within the "
-                "tolerance and the limits.", "",
+                f"{drawn}Tolerance {tol['position_m']:g} m, {tol['orientation_rad']:g} rad; "
+                "seed = mid-range of the limits; success = Pinocchio FK of the answer within "
+                "the tolerance and the limits.", "",
                 *table([*HEAD, NOTES], solver_rows("ik", case))]
     out += ["![IK time per pose](ik.png)", ""]
     return out
@@ -262,20 +265,37 @@ def workspace_section(doc: dict[str, Any]) -> list[str]:
             *table(["move", "plan ms", "motion s", "true mm", "true mrad"], cycle), ""]
 
 def ros_section(doc: dict[str, Any]) -> list[str]:
-    """The live ROS 2 node as its own rclpy client in another process saw it."""
+    """The live nodes as their own clients in other processes saw them: the arm on ROS 2
+    (rclpy) and on ROS 1 (rospy, actionlib), the ground vehicle on ROS 2."""
     out = ([f"Skipped: {doc['settings']['skipped']}.", ""] if doc["settings"].get("skipped")
            else [])
     if "P3AT" in doc["cases"]:
         out = [*_platform_lines(doc["cases"]["P3AT"]), *out]
+    if "KR60-ROS1" in doc["cases"]:
+        r = doc["cases"]["KR60-ROS1"]
+        out = ["`usar-arm ros --ros1` (embedded KR60) measured by `bench/ros1_probe.py`, a "
+               "rospy and actionlib client in the ROS 1 interpreter, on a roscore of its own; "
+               f"load average at its end {r['load_average_1min_at_end']:.1f} on "
+               f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], _arm_rows(r)), "", *out]
     if "KR60" not in doc["cases"]:
         return out
     r = doc["cases"]["KR60"]
+    return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
+            "in another process with its own Pinocchio FK, on a private domain on localhost; "
+            f"load average at its end {r['load_average_1min_at_end']:.1f} on "
+            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], _arm_rows(r)), "", *out]
+
+
+def _arm_rows(r: dict[str, Any]) -> list[list[str]]:
+    """An arm node's figures (either middleware's probe) as table rows."""
     js, goals, refused, node = r["joint_states"], r["goals"], r["refused_goals"], r["node"]
     lat, acc = js["latency_ms"], goals["accept_ms"]
     over = goals["node_over_time"]
-    rows = [
+    seq = f", {js['seq_gaps']} header.seq gaps" if "seq_gaps" in js else ""
+    return [
         ["/joint_states rate", f"{js['rate_hz']:.2f} Hz over {js['seconds']:.0f} s, "
-                               f"{js['dropped']} missing, longest gap {js['max_gap_s']:.3f} s"],
+                               f"{js['dropped']} missing, longest gap {js['max_gap_s']:.3f} s"
+                               + seq],
         ["ASTA arrival -> subscriber", f"p50 {lat['p50']:.2f} ms, p99 {lat['p99']:.2f} ms, "
                                        f"max {lat['max']:.1f} ms"],
         ["tool0 from /tf vs FK", f"{r['tf']['tool0_max_error_m']:.1e} m, "
@@ -294,10 +314,6 @@ def ros_section(doc: dict[str, Any]) -> list[str]:
          + f" (start, after {over[min(1, len(over) - 1)]['t_s']:.0f} s, "
            f"after {over[-1]['t_s']:.0f} s of goals)"],
     ]
-    return ["`usar-arm ros` (embedded KR60) measured by `bench/ros_probe.py`, an rclpy client "
-            "in another process with its own Pinocchio FK, on a private domain on localhost; "
-            f"load average at its end {r['load_average_1min_at_end']:.1f} on "
-            f"{r['cpus']} CPUs.", "", *table(["figure", "measured"], rows), "", *out]
 
 
 def _latency(stats: dict[str, Any], label: str = "median") -> str:
@@ -333,7 +349,8 @@ def _platform_lines(r: dict[str, Any]) -> list[str]:
 
 def robots_section(doc: dict[str, Any]) -> list[str]:
     """``robots.json``: the UR5 and the Panda of example-robot-data on MotionBenchMaker's
-    problems, usar-arm beside its peers, and VAMP's published figures (not measured here)."""
+    problems, usar-arm beside its peers (VAMP among them when a local build was found), and
+    VAMP's published figures (quoted, not measured here)."""
     out = [f"{doc.get('mode')} mode, generated {doc.get('generated')}, "
            f"{doc.get('wall_seconds', 0) / 60:.1f} min; "
            + doc.get("settings", {}).get("machine_note", ""), ""]
@@ -351,21 +368,54 @@ def robots_section(doc: dict[str, Any]) -> list[str]:
                 if "skipped" in s:
                     rows.append([task, name, "skipped", "-", "-", s["skipped"]])
                     continue
-                extra = []
-                if task == "collision":
-                    extra.append(f"missed {s.get('missed_contacts')}, invented "
-                                 f"{s.get('invented_contacts')}")
-                if s.get("method"):
-                    extra.append(f"method {s['method']}")
-                ratio = ratios.get(name)
                 rows.append([task, name, f"{s.get('verified')}/{s.get('problems')} "
                              f"({fmt_pct(s.get('success_rate'))})", fmt_s(s.get("median_s")),
-                             "-" if ratio is None else f"{ratio:.3g}", "; ".join(extra)])
+                             "-" if ratios.get(name) is None else f"{ratios[name]:.3g}",
+                             "; ".join(_robots_notes(task, s))])
         out += [*table(["task", "solver", "verified", "median", "usar-arm / peer", "notes"],
                        rows), ""]
     out += ["Targets:", "", *table(["target", "measured", "threshold", "pass"], [
         [t["target"], fmt_measured(t), fmt_threshold(t), "yes" if t["pass"] else "**no**"]
         for t in doc.get("targets", [])]), ""]
+    return [*out, *_vamp_lines(doc)]
+
+
+def _robots_notes(task: str, s: dict[str, Any]) -> list[str]:
+    """The notes cell of a solver's row in the robots table."""
+    extra = []
+    if task == "collision":
+        extra.append(f"missed {s.get('missed_contacts')}, invented {s.get('invented_contacts')}")
+    if task == "plan" and s.get("paths_in_collision"):
+        extra.append(f"{s['paths_in_collision']} paths in collision on the meshes")
+    if s.get("median_own_s") is not None:
+        extra.append(f"its own timer: median {fmt_s(s['median_own_s'])}")
+    if s.get("method"):
+        extra.append(f"method {s['method']}")
+    return extra
+
+
+def _vamp_lines(doc: dict[str, Any]) -> list[str]:
+    """VAMP measured beside usar-arm (both timers, paths judged on the meshes), or how to build
+    it; then its authors' published figures, quoted."""
+    out = []
+    vamp = doc.get("vamp", {})
+    measured = [(k, vamp[k]) for k in ("ur5", "panda") if vamp.get(k, {}).get("measured")]
+    if measured:
+        out += [f"VAMP measured here ({vamp.get('built')}; {vamp.get('collision_model')}; "
+                f"{vamp.get('machine_note')}), on the same blocked problems:", "",
+                *table(["robot", "VAMP paths free on the meshes", "VAMP median (Python call)",
+                        "VAMP median (its own timer)", "of it planning / simplification",
+                        "usar-arm median", "usar-arm / VAMP (call / own timer)"],
+                       [[k, f"{r['verified_on_meshes']}/{r['problems']} (answered "
+                         f"{r['answered']})", fmt_s(r["median_call_s"]),
+                         fmt_s(r["median_own_s"]),
+                         f"{fmt_s(r['median_plan_own_s'])} / "
+                         f"{fmt_s(r['median_simplify_own_s'])}",
+                         fmt_s(r["usar_arm_median_s"]),
+                         f"{fmt_x(r['ratio_usar_to_vamp_call'])} / "
+                         f"{fmt_x(r['ratio_usar_to_vamp_own'])}"] for k, r in measured]), ""]
+    elif vamp:
+        out += [f"VAMP not measured in this run: {vamp.get('panda', {}).get('skipped')}.", ""]
     v = doc.get("vamp_published", {})
     if v:
         out += [f"VAMP ({v.get('status')}; {v.get('machine')}; {v.get('source')}; "

@@ -1,7 +1,9 @@
 """Robots stage: two mesh arms that no one here wrote, example-robot-data's UR5 and Panda (their
 STL collision meshes and SRDFs; ``robots_data.py``), on MotionBenchMaker's problems as VAMP's
 repository carries them (table_pick, table_under_pick, box, bookshelf_small/tall/thin, cage:
-boxes and cylinders, start and goal configurations), used as they are.
+boxes and cylinders, start and goal configurations), posed as MBM poses them: the UR5 stands
+0.9144 m up, turned 1.57 rad, in the scene's frame, table_pick's objects at their own pose, the
+Panda's fingers 0.065 m open each (``robots_data.py``).
 
 Three tasks per robot, every solver (ours, each peer in its venv) on the same files, in
 alternating rounds (``common.run_alternating``), every answer checked by a brute-force judge
@@ -25,8 +27,17 @@ that reads the URDF, the meshes, the SRDF and the scene YAML itself (``mesh_judg
   it joins start and goal within the limits and the judge finds every configuration 0.005 rad
   apart along it free.
 
-VAMP (vectorised CPU planning) does not build here; its published reference timings on the same
-problem sets are quoted (``VAMP_PUBLISHED``), marked as not measured here.
+VAMP (vectorised CPU planning, on its sphere models of the robots MBM was made for) plans beside
+them when a local build is present (``robots_vamp.py``): timed both ways, its own timer and the
+Python call, its paths judged on the meshes like every other solver's. Without a build the stage
+says how to make one. Its authors' published timings are quoted beside, as published.
+
+Every planner is reseeded per problem (usar-arm's OMPL with the problem's seed before each plan,
+roboplan and mplib with it, VAMP's sampler reset), so a problem's answer and time do not depend
+on the problems solved before it in the process.
+
+``BENCH_ROBOTS_TASKS`` (comma-separated, e.g. ``plan``) runs only those tasks (a stage run made
+to measure one of them); every task by default.
 
 As a solver (our side)::
 
@@ -36,6 +47,7 @@ As a solver (our side)::
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -45,11 +57,13 @@ import common
 import mesh_judge as mj
 import numpy as np
 import robots_data as data
+import robots_vamp
 from common import Context, peerio
 from scenes import from_json as scene_from_json
 from verify import PATH_STEP, densify
 
 ROBOT_KEYS = ("ur5", "panda")
+TASKS = ("collision", "ik", "plan")
 TOLERANCE = {"position_m": 1e-5, "orientation_rad": 1e-5}
 IK_TIMEOUT_S = 0.005
 PLAN_TIME_LIMIT_S = 2.0
@@ -79,30 +93,6 @@ handed to it gains ``<group name="manipulator"><chain base_link tip_link/></grou
 loses the groups made of other groups (and their states: the Panda's ``arm_and_hand``), which
 Tesseract's SRDF parser refuses ("Group: 'arm_and_hand' is empty or multiple types were
 provided"); its disabled pairs are the same."""
-
-VAMP_PUBLISHED = {
-    "status": "published, not measured here (VAMP does not build on this machine)",
-    "source": f"github.com/KavrakiLab/vamp resources/README.md at {data.VAMP_COMMIT}, "
-              "'Reference Timings' of scripts/evaluate_mbm.py with default planner settings "
-              "(RRT-Connect, dynamic domain), all 7 MBM sets of a robot together (700 problems)",
-    "machine": "AMD Ryzen 9 7950X (one core)",
-    "collision_model": "VAMP's sphere approximations of robowflex_resources' UR5 (with a "
-                       "Robotiq 85 gripper) and Panda (with hand): not example-robot-data's "
-                       "meshes",
-    "paper": "W. Thomason, Z. Kingston, L. E. Kavraki, 'Motions in Microseconds via Vectorized "
-             "Sampling-Based Planning', ICRA 2024 (arXiv 2309.14545): median 35 us for the "
-             "Panda on MBM, one core of a consumer desktop PC (README)",
-    "per_set": "the README gives no per-set figures; per-set tables are in the paper only "
-               "(not copied here)",
-    "ur5": {"planning_us": {"median": 39, "mean": 160.523, "p95": 776.05},
-            "simplification_us": {"median": 54, "mean": 65.7484},
-            "total_us": {"median": 111.5, "mean": 226.794, "p95": 836.65},
-            "solved_valid_total": [608, 608, 700]},
-    "panda": {"planning_us": {"median": 35, "mean": 76.1989, "p95": 343.3},
-              "simplification_us": {"median": 57, "mean": 67.408},
-              "total_us": {"median": 99, "mean": 144.116, "p95": 441.6},
-              "solved_valid_total": [699, 699, 700]}}
-
 
 # ------------------------------------------------------------------------------ our side
 def _robot(spec: dict[str, Any]) -> Any:
@@ -165,15 +155,21 @@ def _solve_ik(spec: dict[str, Any], checked: bool = True
 def _solve_plan(spec: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     from plan import scene_solver  # (the plan stage's solver; imports usar-arm)
 
-    from usar_arm.planning.ompl_adapter import OmplOptions
+    from usar_arm.planning.ompl_adapter import OmplOptions, reseed
 
     robot = _robot(spec)
     _check_order(robot, spec)
     options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
     enter, solve = scene_solver(spec, options, lambda plan: {
         "planner": "direct" if plan.ompl is None else plan.ompl.planner}, robot)
-    return (peerio.solve_by_scene(spec["problems"], enter, solve),
-            {"call": "planning.ptp.plan_to_joints", "ompl": vars(options)})
+
+    def seeded(p: dict[str, Any]) -> dict[str, Any]:
+        reseed(int(p["seed"]))  # (untimed) the plan depends on the problem's seed alone
+        return solve(p)
+
+    return (peerio.solve_by_scene(spec["problems"], enter, seeded),
+            {"call": "planning.ptp.plan_to_joints", "ompl": vars(options),
+             "seeding": "ompl_adapter.reseed(problem seed) before every plan"})
 
 
 def solver_main(argv: list[str] | None = None) -> int:
@@ -329,7 +325,8 @@ def _solvers(ctx: Context, task: str) -> list[common.Solver]:
                 ctx.peer("roboplan", "ik", "collision-checked; SimpleIk"),
                 ctx.peer("mplib", "ik", "collision-checked; Planner.IK, 20 CLIK starts")]
     return [ours, ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter"),
-            ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify)")]
+            ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify)"),
+            robots_vamp.solver(ctx)]
 
 
 def _summ(case: dict[str, Any], solver: str, key: str = "time_all_s",
@@ -359,8 +356,10 @@ def run(ctx: Context) -> dict[str, Any]:
                                  mj.MeshJudge(robot, mj.obstacles_from_scene_yaml(texts[scene])))
             return judges[scene]
 
-        specs["collision"] = _with_tesseract(specs["collision"], rf, ctx.work)
-        for task in ("collision", "ik", "plan"):
+        tasks = _tasks()
+        if "collision" in tasks:
+            specs["collision"] = _with_tesseract(specs["collision"], rf, ctx.work)
+        for task in tasks:
             spec = specs[task]
             label = f"robots_{key}_{task}"
             path = ctx.work / f"{label}.json"
@@ -381,8 +380,18 @@ def run(ctx: Context) -> dict[str, Any]:
         "machine_note": "shared machine: figures indicative"}, cases, targets, started)
     doc["robots"] = {k: _robot_summary(k, cases) for k in ROBOT_KEYS}
     doc["problem_scan"] = notes
-    doc["vamp_published"] = VAMP_PUBLISHED
+    doc["vamp"] = robots_vamp.summary(cases)
+    doc["vamp_published"] = robots_vamp.PUBLISHED
     return doc
+
+
+def _tasks() -> tuple[str, ...]:
+    """The tasks to run: ``BENCH_ROBOTS_TASKS`` (comma-separated) or all three."""
+    wanted = [t.strip() for t in os.environ.get("BENCH_ROBOTS_TASKS", "").split(",") if t.strip()]
+    unknown = set(wanted) - set(TASKS)
+    if unknown:
+        raise ValueError(f"BENCH_ROBOTS_TASKS names {sorted(unknown)}; tasks: {', '.join(TASKS)}")
+    return tuple(t for t in TASKS if t in wanted) if wanted else TASKS
 
 
 def _with_tesseract(spec: dict[str, Any], rf: data.RobotFiles, work: Path) -> dict[str, Any]:
@@ -466,7 +475,8 @@ def _case(task: str, path: Path, spec: dict[str, Any], outcomes: dict[str, commo
     def plan_check(p: dict[str, Any], r: dict[str, Any]) -> dict[str, Any]:
         pts = r.get("path") if r.get("success") else None
         if not pts:
-            return {"verified": False, "ends_match": None, "collision_free": None}
+            return {"verified": False, "ends_match": None, "collision_free": None,
+                    **robots_vamp.passthrough(r)}
         a = np.asarray(pts, float)
         ends = bool(np.allclose(a[0], p["start"], atol=1e-6)
                     and np.allclose(a[-1], p["goal"], atol=1e-6))
@@ -475,9 +485,15 @@ def _case(task: str, path: Path, spec: dict[str, Any], outcomes: dict[str, commo
         in_time = r.get("seconds") is not None and r["seconds"] <= spec["time_limit_s"] * 1.05
         return {"verified": ends and inside and free and in_time, "ends_match": ends,
                 "within_limits": inside, "collision_free": free, "waypoints": len(a),
-                "length": float(np.sum(np.linalg.norm(np.diff(a, axis=0), axis=1)))}
+                "length": float(np.sum(np.linalg.norm(np.diff(a, axis=0), axis=1))),
+                **robots_vamp.passthrough(r)}
 
-    case = common.build_case(path, spec, outcomes, plan_check)
+    def plan_extra(raw: dict[str, list[Any]]) -> dict[str, Any]:
+        return {"paths_in_collision": sum(1 for f in raw.get("collision_free", [])
+                                          if f is False),
+                **robots_vamp.own_time_summary(raw)}
+
+    case = common.build_case(path, spec, outcomes, plan_check, plan_extra)
     case["scenes"] = sorted(spec["scenes"])
     return case
 
@@ -502,6 +518,10 @@ def _robot_summary(key: str, cases: dict[str, Any]) -> dict[str, Any]:
                     "boundary_configurations", "boundary_missed", "boundary_invented")})
             if task == "ik" and name.startswith("usar-arm"):
                 row["method"] = (s.get("settings") or {}).get("method")
+            if task == "plan":
+                row["paths_in_collision"] = sm.get("paths_in_collision")
+                if sm.get("own_time_all_s"):
+                    row["median_own_s"] = sm["own_time_all_s"]["median"]
             per[name] = row
         ratio = {p: r.get("usar-arm", {}).get("median") for p, r in case.get("ratios",
                                                                                {}).items()}

@@ -6,11 +6,17 @@ problems as VAMP's repository carries them.
   ``robots/panda_description`` are unpacked from it; a cache that holds them is reused.
 * Every solver (ours, the peers) and the judge read the same derived URDF per robot, written
   beside the cache: the original text with ``package://example-robot-data/`` replaced by the
-  unpacked folder's absolute path (the peers do not all resolve ROS package URIs), and, for the
-  Panda, its two finger joints made ``fixed``, open at :data:`FINGER_OPENING` (the fingers
-  are not planned; peers that refuse joints outside the planned group would otherwise not
-  load it). Same meshes; the
-  original SRDF, except the UR5's, which gets one missing pair (:data:`EXTRA_DISABLED`).
+  unpacked folder's absolute path (the peers do not all resolve ROS package URIs); for the
+  Panda, its two finger joints made ``fixed``, each open at :data:`FINGER_POSITION` (the
+  fingers are not planned; peers that refuse joints outside the planned group would otherwise
+  not load it); for the UR5, a root link below ``base_link`` that stands it where MBM's UR5
+  stands in the scene's frame (:data:`MBM_MOUNT`). Same meshes; the original SRDF, except the
+  UR5's, which gets one missing pair (:data:`EXTRA_DISABLED`).
+* Posed as MBM poses them: the scene's frame is the derived URDF's root (MBM's virtual joint is
+  the identity in these files), and an object's primitive sits at the object's own ``pose``
+  composed with its ``primitive_poses`` entry (MoveIt's CollisionObject: the shapes are given
+  relative to the object's pose; only the UR5's ``table_pick`` objects carry a pose other than
+  the identity, up to 2.4 m away).
 * MotionBenchMaker problems: ``bench/data/vamp_mbm/<robot>_problems.tar.bz2``, the files
   ``resources/<robot>/problems.tar.bz2`` of github.com/KavrakiLab/vamp at commit
   :data:`VAMP_COMMIT` (Apache-2.0), copied byte for byte (this machine has no route to GitHub
@@ -67,10 +73,21 @@ EXTRA_DISABLED = {"ur5": (("wrist_3_link", "ee_link", "Adjacent"),)}
 ``ee_link`` carries a small collision box fixed on ``wrist_3_link``, always touching it, and
 example-robot-data's ``ur5.srdf`` does not disable the pair (MoveIt's setup assistant marks
 such pairs Adjacent). Without it mplib finds every configuration in collision."""
-FINGER_OPENING = 0.065
-"""m between the Panda's fingers (each 0.0325 m along its prismatic axis, y and -y)."""
+FINGER_POSITION = 0.065
+"""m: each of the Panda's fingers along its prismatic axis (y and -y), 0.13 m between them: the
+finger joints of MBM's start states (0.065, 0.065) and of VAMP's Panda (robowflex's model with
+its fingers fixed at y = +-0.065). Beyond example-robot-data's own finger limit (0.04 m), which
+a fixed joint does not have."""
+MBM_MOUNT = {"ur5": {"joint": "world_joint", "xyz": (0.0, 0.0, 0.9144),
+                     "rpy": (0.0, 0.0, 1.57)}}
+"""Where MBM's robot stands in the scene's frame, per robot that does not stand at its origin:
+MBM's UR5 (robowflex's ``ur5_robotiq85``, the model VAMP compiles) hangs ``base_link`` from an
+``offset_link`` root by a fixed ``offset_joint`` 0.9144 m up, turned 1.57 rad about z.
+example-robot-data's UR5 hangs it from a ``world`` root by a fixed ``world_joint`` at the
+identity: the derived URDF gives that joint MBM's origin, so the scene's frame is the root
+every solver and the judge plan in."""
 ROBOTS = {"ur5": dict(urdf="ur_description/urdf/ur5_robot.urdf",
-                      srdf="ur_description/srdf/ur5.srdf", group=None, base="base_link",
+                      srdf="ur_description/srdf/ur5.srdf", group=None, base="world",
                       tip="tool0",
                       joints=("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                               "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")),
@@ -78,12 +95,11 @@ ROBOTS = {"ur5": dict(urdf="ur_description/urdf/ur5_robot.urdf",
                         srdf="panda_description/srdf/panda.srdf", group="arm",
                         base="panda_link0", tip="panda_hand",
                         joints=tuple(f"panda_joint{i}" for i in range(1, 8)))}
-FIXED_JOINTS = {"panda": {"panda_finger_joint1": (FINGER_OPENING / 2, 0.0584),
-                          "panda_finger_joint2": (-FINGER_OPENING / 2, 0.0584)}}
-"""Joint -> (y offset, z) of its fixed origin: the fingers held open at MotionBenchMaker's
-separation (VAMP's resources/README.md: "the Panda we ship uses the original MBM finger
-separation, which is at 6.5cm"); closed fingers would cut through the objects the MBM goals
-grasp."""
+FIXED_JOINTS = {"panda": {"panda_finger_joint1": (FINGER_POSITION, 0.0584),
+                          "panda_finger_joint2": (-FINGER_POSITION, 0.0584)}}
+"""Joint -> (y offset, z) of its fixed origin: the fingers held open as MotionBenchMaker's
+problems hold them (:data:`FINGER_POSITION`); closed fingers would cut through the objects the
+MBM goals grasp."""
 
 
 def log(msg: str) -> None:
@@ -120,6 +136,8 @@ def robot_files(key: str, cache: Path = CACHE) -> RobotFiles:
     r = ROBOTS[key]
     text = (share / "robots" / r["urdf"]).read_text(encoding="utf-8")
     text = text.replace("package://example-robot-data/", f"{share}/")
+    if key in MBM_MOUNT:
+        text = _mounted(text, **MBM_MOUNT[key])
     for joint, (dy, z) in FIXED_JOINTS.get(key, {}).items():
         text, n = re.subn(
             rf'(<joint\s+name="{joint}"\s+type=)"prismatic"(>\s*<parent[^>]*>\s*<child[^>]*>\s*)'
@@ -148,6 +166,17 @@ def robot_files(key: str, cache: Path = CACHE) -> RobotFiles:
         if not srdf.is_file() or srdf.read_text(encoding="utf-8") != srdf_text:
             srdf.write_text(srdf_text, encoding="utf-8")
     return RobotFiles(key, out, srdf, r["group"], r["base"], r["tip"], r["joints"], relative)
+
+
+def _mounted(text: str, joint: str, xyz: tuple[float, ...], rpy: tuple[float, ...]) -> str:
+    """The URDF ``text`` with the origin of the fixed ``joint`` set to (``xyz`` m, ``rpy``
+    rad)."""
+    origin = f'<origin rpy="{" ".join(map(repr, rpy))}" xyz="{" ".join(map(repr, xyz))}"/>'
+    text, n = re.subn(rf'(<joint\s+name="{joint}"\s+type="fixed">(?:(?!</joint>).)*?)'
+                      r"<origin[^>]*/>", lambda m: m.group(1) + origin, text, flags=re.S)
+    if n != 1:
+        raise ValueError(f"no fixed joint {joint!r} with an <origin> to mount the robot by")
+    return text
 
 
 # ------------------------------------------------------------------------------ MBM problems
@@ -183,17 +212,42 @@ def _quat_wxyz(xyzw: list[float]) -> list[float]:
     return [w / n, x / n, y / n, z / n]
 
 
+def _quat_mul(a: list[float], b: list[float]) -> list[float]:
+    """Hamilton product of two (w, x, y, z) quaternions."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return [aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw]
+
+
+def _rotate(q: list[float], v: list[float]) -> list[float]:
+    """``v`` rotated by the unit quaternion ``q`` (w, x, y, z)."""
+    return _quat_mul(_quat_mul(q, [0.0, *v]), [q[0], -q[1], -q[2], -q[3]])[1:]
+
+
+def _object_pose(obj: dict[str, Any]) -> tuple[list[float], list[float]]:
+    """(xyz, quat_wxyz) of a collision object's own pose (identity without one)."""
+    pose = obj.get("pose")
+    if pose is None:
+        return [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+    return [float(v) for v in pose["position"]], _quat_wxyz(pose["orientation"])
+
+
 def scene_json(scene_text: str) -> list[dict[str, Any]]:
-    """The obstacles of a MoveIt planning scene, in the problem files' JSON form (the frame of
-    the scene is the robot's root: MBM's virtual joint is the identity in these files)."""
+    """The obstacles of a MoveIt planning scene, in the problem files' JSON form, in the
+    scene's frame (the derived URDF's root: MBM's virtual joint is the identity in these
+    files): each primitive at its object's pose composed with its primitive pose."""
     doc = yaml.safe_load(scene_text)
     items = []
     for obj in doc["world"]["collision_objects"]:
+        at, turn = _object_pose(obj)
         for k, (prim, pose) in enumerate(zip(obj.get("primitives", []),
                                              obj.get("primitive_poses", []), strict=True)):
             d = [float(v) for v in prim["dimensions"]]
-            item: dict[str, Any] = {"name": f"{obj['id']}_{k}", "xyz": list(pose["position"]),
-                                    "quat_wxyz": _quat_wxyz(pose["orientation"])}
+            offset = _rotate(turn, [float(v) for v in pose["position"]])
+            item: dict[str, Any] = {
+                "name": f"{obj['id']}_{k}", "xyz": [a + o for a, o in zip(at, offset, strict=True)],
+                "quat_wxyz": _quat_mul(turn, _quat_wxyz(pose["orientation"]))}
             if prim["type"] == "box":
                 item.update(type="box", size=d[:3])
             elif prim["type"] == "cylinder":  # shape_msgs: [height, radius]

@@ -1,7 +1,10 @@
-"""The ROS 2 stage: the live nodes measured from another process by rclpy clients of their own:
-the arm (``usar-arm ros``, embedded KR60) by ``bench/ros_probe.py``, the ground vehicle
+"""The ROS stage: the live nodes measured from another process by clients of their own: the arm
+on ROS 2 (``usar-arm ros``, embedded KR60) by ``bench/ros_probe.py``, the ground vehicle
 (``usar-arm ros --robot P3AT``, against ``usar-arm sim --world rooms``) by
-``bench/ros_platform.py``.
+``bench/ros_platform.py``, and the arm on ROS 1 (``usar-arm ros --ros1``, its own roscore) by
+``bench/ros1_probe.py``, a rospy client run in the ROS 1 interpreter (case ``KR60-ROS1``; the
+same figures and targets as the ROS 2 arm's; skipped with the reason where Debian's ROS 1 is
+missing).
 
 The probe runs in a subprocess of the interpreter that runs the benchmark (the test venv, where
 the ``ros`` extra and its message build live), so that ``bench/run.py`` itself never imports
@@ -29,11 +32,12 @@ from common import Context
 
 PROBE = Path(__file__).resolve().with_name("ros_probe.py")
 PLATFORM_PROBE = PROBE.with_name("ros_platform.py")
+ROS1_PROBE = PROBE.with_name("ros1_probe.py")
 PLATFORM_SECONDS = {"quick": 10.0, "full": 60.0}
 """Each of the platform probe's two windows (/scan, then cmd_vel) in seconds per mode."""
 WINDOWS = {"quick": (10.0, 20.0), "full": (60.0, 600.0)}
 """(joint_states window, goal period) in seconds per mode."""
-DOMAINS = {"ros_probe.json": 100, "ros_platform.json": 101}
+DOMAINS = {"ros_probe.json": 100, "ros_platform.json": 101, "ros1_probe.json": 0}
 """ROS_DOMAIN_ID of each probe and its node: one each, so that no participant of the first
 probe's processes lingers in the second's graph, and outside the ids the tests lease (5..99,
 tests/ros/helpers.py), so that a test session beside the benchmark never joins it."""
@@ -82,14 +86,31 @@ def _platform_probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
                 240 + 3 * seconds)
 
 
-def _run(ctx: Context, command: list[str], name: str, budget: float
+def _ros1_probe(ctx: Context) -> tuple[dict[str, Any] | None, str]:
+    """The ROS 1 probe in the ROS 1 interpreter (its own roscore: no domain to choose)."""
+    from usar_arm.ros import ros1_setup
+
+    try:
+        env = ros1_setup.setup()
+    except ros1_setup.Ros1SetupError as exc:
+        return None, str(exc)
+    seconds, goal_seconds = WINDOWS[ctx.mode]
+    return _run(ctx, [str(ROS1_PROBE), "--seconds", str(seconds), "--goal-seconds",
+                      str(goal_seconds)], "ros1_probe.json", 240 + seconds + goal_seconds * 1.5,
+                python=str(env.python), env=env.environ())
+
+
+def _run(ctx: Context, command: list[str], name: str, budget: float,
+         python: str = sys.executable, env: dict[str, str] | None = None
          ) -> tuple[dict[str, Any] | None, str]:
-    """Run a probe in this interpreter on the stage's domain; (its results, '') or (None, why)."""
+    """Run a probe (in this interpreter unless ``python``) on the stage's domain; (its
+    results, '') or (None, why)."""
     out = ctx.work / name
+    domain = ["--domain", str(DOMAINS[name])] if DOMAINS[name] else []
     try:
         done = subprocess.run(
-            [sys.executable, *command, "--domain", str(DOMAINS[name]), "--json", str(out)],
-            capture_output=True, text=True, timeout=budget, env={**os.environ})
+            [python, *command, *domain, "--json", str(out)],
+            capture_output=True, text=True, timeout=budget, env=env or {**os.environ})
     except subprocess.TimeoutExpired:
         return None, f"the probe did not finish within {budget:.0f} s"
     if done.returncode != 0 or not out.is_file():
@@ -106,10 +127,14 @@ def _hops(js: dict[str, Any]) -> str:
             if hops else "")
 
 
-def _targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
+def _targets(doc: dict[str, Any], prefix: str = "") -> list[dict[str, Any]]:
+    """The arm node's targets (``prefix``: the middleware, for the ROS 1 case)."""
     js, tf, goals, refused = (doc["joint_states"], doc["tf"], doc["goals"],
                               doc["refused_goals"])
-    t = common.target
+
+    def t(label: str, *rest: Any) -> dict[str, Any]:
+        return common.target(prefix + label, *rest)
+
     out = [
         t("/joint_states: ASTA arrival -> subscriber in another process, p99",
           js["latency_ms"].get("p99"), 2.0, "<=", "ms", _hops(js)),
@@ -127,6 +152,9 @@ def _targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
         t("FollowJointTrajectory: refused goal (unknown joint) answered, p99",
           refused["refused_result_ms"].get("p99"), 20.0, "<=", "ms"),
     ]
+    if "seq_gaps" in js:
+        out.append(t("/joint_states: header.seq gaps (messages lost in ROS 1's transport)",
+                     js["seq_gaps"], 0, "<=", "gaps"))
     if len(goals["node_over_time"]) < 3:  # quick mode: too short to judge growth
         return out
     return [
@@ -137,6 +165,10 @@ def _targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
         t("Node thread growth while executing goals, after the first 30 s",
           _growth(goals["node_over_time"], "threads"), 0, "<=", "threads"),
     ]
+
+
+def _ros1_targets(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    return _targets(doc, "ROS 1 ")
 
 
 def goal_seconds_of(goals: dict[str, Any]) -> float:
@@ -169,12 +201,13 @@ def run(ctx: Context) -> dict[str, Any]:
     settings: dict[str, Any] = {
         "joint_states_window_s": seconds, "goal_period_s": goal_seconds,
         "platform_window_s": PLATFORM_SECONDS[ctx.mode], "ros_domain_ids": DOMAINS,
-        "probes": ["bench/ros_probe.py", "bench/ros_platform.py"]}
+        "probes": ["bench/ros_probe.py", "bench/ros_platform.py", "bench/ros1_probe.py"]}
     cases: dict[str, Any] = {}
     targets: list[dict[str, Any]] = []
     skipped: dict[str, str] = {}
     for name, probe, judge in (("KR60", _probe, _targets),
-                               ("P3AT", _platform_probe, _platform_targets)):
+                               ("P3AT", _platform_probe, _platform_targets),
+                               ("KR60-ROS1", _ros1_probe, _ros1_targets)):
         with _stage_lock():
             doc, reason = probe(ctx)
         if doc is None:

@@ -26,7 +26,6 @@ Needs the ros extra and its message build (usar-arm ros --setup).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import subprocess
@@ -36,6 +35,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import ros_figures
+from ros_figures import stats as _stats
 
 from usar_arm.planning.kinematics import KinematicModel
 from usar_arm.ros.build import ensure_importable
@@ -53,26 +54,6 @@ from trajectory_msgs.msg import JointTrajectoryPoint  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ACTION = "KR60Arm_controller/follow_joint_trajectory"
-TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def _proc(pid: int) -> dict[str, float]:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    status = Path(f"/proc/{pid}/status").read_text()
-    rss = next(int(line.split()[1]) for line in status.splitlines() if line.startswith("VmRSS"))
-    return {"cpu_s": (int(fields[11]) + int(fields[12])) / TICKS, "rss_mb": rss / 1024,
-            "threads": int(fields[17])}
-
-
-def _matrix(t: Any) -> np.ndarray:
-    tr, q = t.transform.translation, t.transform.rotation
-    x, y, z, w = q.x, q.y, q.z, q.w
-    out = np.eye(4)
-    out[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                   [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                   [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    out[:3, 3] = (tr.x, tr.y, tr.z)
-    return out
 
 
 class Probe:
@@ -153,35 +134,20 @@ def _goals(probe: Probe, names: list[str], seconds: float, refused: bool,
     return out
 
 
-def _stats(values: list[float]) -> dict[str, float]:
-    a = np.asarray(values, float)
-    return {"n": len(a), "p50": float(np.percentile(a, 50)), "p99": float(np.percentile(a, 99)),
-            "max": float(a.max())} if len(a) else {"n": 0}
-
-
 def _tf_error(probe: Probe, model: KinematicModel) -> dict[str, Any]:
-    static = {t.child_frame_id: (t.header.frame_id, _matrix(t))
-              for m in probe.static for t in m.transforms}
-    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for _, m in probe.states}
-    worst_m = worst_rad = 0.0
-    checked = 0
-    for msg in probe.tf:
-        tree = dict(static)
-        tree.update({t.child_frame_id: (t.header.frame_id, _matrix(t)) for t in msg.transforms})
-        state = states.get((msg.transforms[0].header.stamp.sec,
-                            msg.transforms[0].header.stamp.nanosec))
-        if state is None or "tool0" not in tree or "link_6" not in tree:
-            continue
-        pose, frame = np.eye(4), "tool0"
-        while frame != "base_link":
-            parent, matrix = tree[frame]
-            pose, frame = matrix @ pose, parent
-        fk = model.frame_pose(np.array(state.position), "tool0")
-        worst_m = max(worst_m, float(np.max(np.abs(pose[:3, 3] - fk[:3, 3]))))
-        worst_rad = max(worst_rad, float(np.max(np.abs(pose[:3, :3] - fk[:3, :3]))))
-        checked += 1
-    return {"messages_checked": checked, "tool0_max_error_m": worst_m,
-            "tool0_max_rotation_error": worst_rad}
+    def tree(msg: Any) -> ros_figures.Tree:
+        return {t.child_frame_id: (t.header.frame_id, _matrix(t)) for t in msg.transforms}
+
+    static = {k: v for m in probe.static for k, v in tree(m).items()}
+    positions = {(m.header.stamp.sec, m.header.stamp.nanosec): m.position
+                 for _, m in probe.states}
+    messages = [((m.transforms[0].header.stamp.sec, m.transforms[0].header.stamp.nanosec),
+                 tree(m)) for m in probe.tf if m.transforms]
+    return ros_figures.tool0_error(static, messages, positions, model)
+
+
+def _matrix(t: Any) -> np.ndarray:
+    return ros_figures.matrix(t.transform.translation, t.transform.rotation)
 
 
 def _joint_states(records: list[tuple[float, Any]], hops: list[tuple[float, float]]
@@ -189,23 +155,14 @@ def _joint_states(records: list[tuple[float, Any]], hops: list[tuple[float, floa
     stamps = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for _, m in records])
     received = np.array([t for t, _ in records])
     source, middleware = np.array(hops).reshape(-1, 2).T
-    gaps = np.diff(stamps)
-    period = float(np.median(gaps))
-    seconds = float(stamps[-1] - stamps[0])
-    return {"messages": len(records), "seconds": seconds,
-            "rate_hz": (len(records) - 1) / seconds,
-            # the ASTA lines the window should hold at the stream's period, less those received
-            # (a late line followed by an early one is not a drop)
-            "dropped": max(0, round(seconds / period) + 1 - len(records)),
-            "late_gaps_over_1.8_periods": int(np.sum(gaps > 1.8 * period)),
-            "max_gap_s": float(gaps.max()),
-            "latency_ms": _stats(((received - stamps) * 1000).tolist()),
-            # the same path in three hops (each its own percentiles: tails do not add up):
-            # node: line arrival -> publish call; middleware: publish call -> receipt in this
-            # process; subscriber: receipt -> this rclpy callback
-            "hops_ms": {"node": _stats(((source - stamps) * 1000).tolist()),
-                        "middleware": _stats(((middleware - source) * 1000).tolist()),
-                        "subscriber": _stats(((received - middleware) * 1000).tolist())}}
+    out = ros_figures.joint_state_figures(stamps, received)
+    # the same path in three hops (each its own percentiles: tails do not add up): node: line
+    # arrival -> publish call; middleware: publish call -> receipt in this process; subscriber:
+    # receipt -> this rclpy callback
+    out["hops_ms"] = {"node": _stats(((source - stamps) * 1000).tolist()),
+                      "middleware": _stats(((middleware - source) * 1000).tolist()),
+                      "subscriber": _stats(((received - middleware) * 1000).tolist())}
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -238,39 +195,24 @@ def main(argv: list[str] | None = None) -> int:
         model = KinematicModel(probe.urdf)
         names = list(probe.states[-1][1].name)
         home = np.array(probe.states[-1][1].position)  # the goals move about this, all run
-        start = _proc(node.pid)
+        start = ros_figures.proc(node.pid)
         probe.states.clear()
         probe.hops.clear()
         probe.tf.clear()
-        before = _proc(node.pid)["cpu_s"]
+        before = ros_figures.proc(node.pid)["cpu_s"]
         probe.spin(a.seconds)
-        idle_cpu = (_proc(node.pid)["cpu_s"] - before) / a.seconds
+        idle_cpu = (ros_figures.proc(node.pid)["cpu_s"] - before) / a.seconds
         streams = _joint_states(probe.states, probe.hops)
         tf = _tf_error(probe, model)
-        before = _proc(node.pid)["cpu_s"]
-        t0 = time.perf_counter()
-        chunks, samples = [], [{"t_s": 0.0, **_proc(node.pid)}]
-        while time.perf_counter() - t0 < a.goal_seconds - 1:  # in 30 s chunks
-            chunks.append(_goals(probe, names, min(30.0, a.goal_seconds), False, home))
-            samples.append({"t_s": time.perf_counter() - t0, **_proc(node.pid)})
-        busy_cpu = (_proc(node.pid)["cpu_s"] - before) / (time.perf_counter() - t0)
-        moving = {"goals": sum(c["goals"] for c in chunks),
-                  "accept_ms": _stats([v for c in chunks for v in c["latencies"]]),
-                  "error_codes": {k: sum(c["error_codes"].get(k, 0) for c in chunks)
-                                  for k in sorted({k for c in chunks for k in c["error_codes"]})},
-                  "errors": [e for c in chunks for e in c["errors"]][:5],
-                  "node_over_time": [{k: round(v, 3) for k, v in x.items() if k != "cpu_s"}
-                                     for x in samples]}
+        moving, busy_cpu = ros_figures.goal_period(
+            lambda s: _goals(probe, names, s, False, home), node.pid, a.goal_seconds)
         refused = _goals(probe, names, 5.0, True, home)
         refused.pop("latencies")
         refused.pop("errors")
-        end = _proc(node.pid)
+        end = ros_figures.proc(node.pid)
         doc = {"stage": "ros", "joint_states": streams, "tf": tf, "goals": moving,
                "refused_goals": refused,
-               "node": {"cpu_idle_fraction_of_a_core": idle_cpu,
-                        "cpu_executing_fraction_of_a_core": busy_cpu,
-                        "rss_mb_start": start["rss_mb"], "rss_mb_end": end["rss_mb"],
-                        "threads_start": start["threads"], "threads_end": end["threads"]},
+               "node": ros_figures.node_figures(idle_cpu, busy_cpu, start, end),
                "targets": {"joint_states_latency_p99_ms<=2": streams["latency_ms"]["p99"] <= 2,
                            "joint_states_none_dropped": streams["dropped"] == 0,
                            "tf_equals_fk_1e-9": tf["tool0_max_error_m"] <= 1e-9
@@ -291,11 +233,7 @@ def main(argv: list[str] | None = None) -> int:
     doc["node"]["exit_code"] = code
     doc["simulator"] = (f"usar-arm sim in its own process (port {a.sim_port})" if a.sim_port
                         else "embedded, in the node's process")
-    text = json.dumps(doc, indent=1)
-    print(text)
-    if a.json:
-        a.json.parent.mkdir(parents=True, exist_ok=True)
-        a.json.write_text(text + "\n")
+    ros_figures.emit(doc, a.json)
     return 0
 
 

@@ -38,12 +38,15 @@ ALLOWED: dict[str, set[str]] = {
 ENTRY_POINTS = {"cli", "__init__", "__main__"}
 THIRD_PARTY_LIMITS = {"numpy", "yaml"}  # core: numpy, and PyYAML in yamlio
 HEAVY = {"pinocchio": 1, "fcl": 1, "ompl": 1, "ruckig": 1, "mujoco": 1, "numba": 1, "ray": 1,
-         "rclpy": 1, "yourdfpy": 1, "trimesh": 1}
+         "rclpy": 1, "rospy": 1, "yourdfpy": 1, "trimesh": 1}
 ROS_MESSAGES = {"tf2_msgs", "control_msgs", "std_msgs", "sensor_msgs", "geometry_msgs",
                 "trajectory_msgs", "builtin_interfaces", "rosgraph_msgs", "action_msgs",
                 "unique_identifier_msgs", "nav_msgs", "visualization_msgs"}
-"""ROS 2 message packages (the wheels' and the two usar-arm builds): only rclpy's module
-imports them."""
+"""ROS message packages (ROS 2's wheels and usar-arm's builds; ROS 1's of the same names from
+Debian and the generated control_msgs): only the two transport modules import them."""
+ROS1_ONLY = {"rospy", "actionlib", "actionlib_msgs", "rosgraph", "genpy", "genmsg"}
+"""ROS 1's client library and tools (Debian's): only the ROS 1 transport (and genpy, the
+generation it runs at setup) imports them."""
 
 
 def _modules() -> list[tuple[str, Path]]:
@@ -119,12 +122,18 @@ def test_every_module_belongs_to_a_layer_with_a_rule() -> None:
     assert loose == set()
 
 
-def test_ros_messages_are_imported_only_where_rclpy_is() -> None:
-    """One module owns ROS 2: rclpy and every message package (usar_arm.ros.api, which the
-    arm's and the platform's nodes import)."""
-    users = {module for module, path in _modules() for name in _imports(path)
-             if name.split(".")[0] in ROS_MESSAGES | {"rclpy"}}
-    assert users == {"ros.api"}, f"ROS 2 is imported by {sorted(users)}"
+def _users(roots: set[str]) -> set[str]:
+    return {module for module, path in _modules() for name in _imports(path)
+            if name.split(".")[0] in roots}
+
+
+def test_each_middleware_is_imported_by_its_transport_alone() -> None:
+    """One module owns each middleware: rclpy by usar_arm.ros.ros2, rospy and actionlib by
+    usar_arm.ros.ros1 (genpy also by ros1_build, which generates control_msgs at setup);
+    the message packages by those two. The node logic (node, platform_node) imports none."""
+    assert _users({"rclpy"}) == {"ros.ros2"}
+    assert _users(ROS_MESSAGES) == {"ros.ros2", "ros.ros1"}, sorted(_users(ROS_MESSAGES))
+    assert _users(ROS1_ONLY) == {"ros.ros1", "ros.ros1_build"}, sorted(_users(ROS1_ONLY))
 
 
 OFFLINE_PLAN = """

@@ -10,6 +10,13 @@ Venvs live in bench/.venvs/<peer> (git-ignored).  A venv whose marker file
 (.installed, holding the pins it was built with) matches is skipped, so the
 script is idempotent; a venv whose pins changed is rebuilt.  Exits non-zero
 naming the peer whose install failed.
+
+VAMP (KavrakiLab/vamp) is a peer that this script does not install: its pip
+package downloads its C++ dependencies while it builds, so offline it is built
+from its sources by hand (see bench/README-peers.md) into a venv of its own,
+found where :func:`external_venv` looks (USAR_ARM_VAMP_VENV, else a link
+bench/.venvs/vamp, else the default build folder); the stage skips it, saying
+how to build it, when none holds an importable ``vamp``.
 """
 
 from __future__ import annotations
@@ -38,6 +45,31 @@ PEERS: dict[str, list[str]] = {
     "tesseract": ["tesseract-robotics==0.5.1", "pyyaml==6.0.3"],
 }
 MARKER = ".installed"
+EXTERNAL: dict[str, dict[str, str]] = {
+    "vamp": {
+        "env": "USAR_ARM_VAMP_VENV",
+        "default": "/work/vamp-work/venv",
+        "package": "vamp",
+        "built": "KavrakiLab/vamp f6de6a7 (vamp-planner 0.6.4), built from source",
+        "how": "build VAMP from its sources into a venv (its pip package fetches its C++ "
+               "dependencies at build time; recipe in bench/README-peers.md) and set "
+               "USAR_ARM_VAMP_VENV to it or link it as bench/.venvs/vamp",
+    },
+}
+"""Peers built by hand, not by this script: where their venv is looked for (the variable,
+then ``bench/.venvs/<peer>``, then ``default``), the package that must import, what was built,
+and how to build it."""
+
+
+def external_venv(peer: str) -> Path:
+    """The venv of a hand-built peer (:data:`EXTERNAL`): ``$<env>`` when set, else
+    ``bench/.venvs/<peer>`` when it exists (a link to the build's venv), else the default."""
+    e = EXTERNAL[peer]
+    if os.environ.get(e["env"]):
+        return Path(os.environ[e["env"]])
+    if venv_dir(peer).exists():
+        return venv_dir(peer)
+    return Path(e["default"])
 
 
 def venv_dir(peer: str) -> Path:
@@ -46,15 +78,31 @@ def venv_dir(peer: str) -> Path:
 
 def python_path(peer: str) -> Path:
     """Path of the python executable of a peer's venv (may not exist yet)."""
-    if peer not in PEERS:
-        raise KeyError(f"unknown peer {peer!r}; known: {', '.join(PEERS)}")
+    if peer not in PEERS and peer not in EXTERNAL:
+        raise KeyError(f"unknown peer {peer!r}; known: {', '.join([*PEERS, *EXTERNAL])}")
     sub = "Scripts/python.exe" if os.name == "nt" else "bin/python"
-    return venv_dir(peer) / sub
+    return (external_venv(peer) if peer in EXTERNAL else venv_dir(peer)) / sub
 
 
 def is_ready(peer: str) -> bool:
+    """True when the peer's venv is built: its marker holds the current pins, or (a
+    hand-built peer) its package's ``__init__.py`` is in the venv's site-packages."""
+    if peer in EXTERNAL:
+        lib = external_venv(peer) / "lib"
+        package = EXTERNAL[peer]["package"]
+        return python_path(peer).is_file() and any(
+            lib.glob(f"python3*/site-packages/{package}/__init__.py"))
     marker = venv_dir(peer) / MARKER
     return marker.is_file() and marker.read_text().split() == PEERS[peer]
+
+
+def missing_reason(peer: str) -> str:
+    """Why a peer's venv is not ready, and how to make it (one line)."""
+    if peer in EXTERNAL:
+        return (f"no {EXTERNAL[peer]['package']} in {external_venv(peer)}: "
+                f"{EXTERNAL[peer]['how']}")
+    return (f"no venv at {venv_dir(peer)} (create it with "
+            f"`python3 bench/peers/venvs.py --only {peer}`)")
 
 
 def _log(msg: str) -> None:
@@ -108,8 +156,16 @@ def main(argv: list[str] | None = None) -> int:
     if a.list:
         for p, reqs in PEERS.items():
             print(f"{p}\t{' '.join(reqs)}\t{'ready' if is_ready(p) else 'missing'}")
+        for p, e in EXTERNAL.items():
+            print(f"{p}\t{e['built']} (by hand, {external_venv(p)})\t"
+                  f"{'ready' if is_ready(p) else 'missing'}")
         return 0
     peers = [p.strip() for p in a.only.split(",") if p.strip()] if a.only else list(PEERS)
+    hand = [p for p in peers if p in EXTERNAL]
+    for p in hand:
+        _log(f"{p}: not installed by this script: "
+             + ("ready" if is_ready(p) else missing_reason(p)))
+    peers = [p for p in peers if p not in EXTERNAL]
     unknown = [p for p in peers if p not in PEERS]
     if unknown:
         print(f"unknown peer(s): {', '.join(unknown)}; known: {', '.join(PEERS)}", file=sys.stderr)

@@ -143,8 +143,10 @@ def test_seed_frames_and_wheel_odometry(tmp_path: Path) -> None:
     odom = got["odom"][-1][1]
     assert (odom.header.frame_id, odom.child_frame_id) == ("odom", "base_link")
     pairs = {(t.header.frame_id, t.child_frame_id) for t in static[0][1].transforms}
+    wheels = {("base_link", f"{end}_{side}_wheel") for end in ("front", "rear")
+              for side in ("left", "right")}  # at rest: UDK sends no wheel state
     assert pairs == {("base_link", "GndTruth"), ("base_link", "InsTest"),
-                     ("base_link", "lms200")}
+                     ("base_link", "lms200")} | wheels
 
 
 def test_an_arms_option_with_a_vehicle_is_refused(capsys: pytest.CaptureFixture[str]) -> None:

@@ -36,9 +36,10 @@ RESERVED = {"name", "type", "link", "value", "time", "location", "orientation", 
             "start", "rotation", "opcode", "params", "left", "right", "normalized", "light",
             "speed", "frontsteer", "rearsteer",
             "gametype", "level", "timelimit", "startposes", "resolution", "fov", "range",
-            "pose"}
+            "pose", "holding", "object", "count", "pair", "first", "last", "depth", "steps",
+            "size", "memory", "scale", "physics", "permanent", "material", "minpos", "maxpos"}
 HEADS = {"NFO", "GETSTARTPOSES", "INIT", "GETCONF", "GETGEO", "ACT", "SET", "DRIVE", "CONF",
-         "GEO", "ASTA", "STA", "SEN", "EFF"}
+         "GEO", "ASTA", "STA", "SEN", "EFF", "CONTROL"}
 
 # ------------------------------------------------------------------------ the wide domain
 # Any character a decoded line can hold except the two the grammar reserves ('{', '}'), the line
@@ -138,6 +139,15 @@ def build(d: Domain) -> dict[str, st.SearchStrategy[m.Message]]:
         "Odometry": st.builds(m.Odometry, d.values, st.tuples(d.scalar, d.scalar, d.scalar),
                               opt() | d.scalar, spelled("Odometry"), extras),
         "Eff": st.builds(m.Eff, d.values, d.values, opt() | d.scalar, extras),
+        "Control": st.builds(m.Control, d.values, *([opt() | d.values] * 12), extras),
+        "WcStatus": st.builds(m.WcStatus, st.lists(st.builds(
+            m.WcObjectStatus, d.values, fixed_v, fixed_v, st.just("") | d.values, fixed_v),
+            max_size=3).map(tuple)),
+        "ContactReport": st.builds(m.ContactReport, d.values, st.lists(st.builds(
+            m.ContactPair, d.names, d.names, d.scalar, d.scalar, d.scalar, d.ints),
+            max_size=3).map(tuple), opt() | d.scalar, spelled("Contact")),
+        "GripTruth": st.builds(m.GripTruth, d.values, st.booleans(), opt() | d.values,
+                               opt() | d.scalar, spelled("GripTruth"), extras),
         "Unknown": st.builds(m.Unknown, d.names.filter(lambda h: h.upper() not in HEADS),
                              st.lists(st.tuples(d.names, d.values), max_size=4).map(tuple)),
     }

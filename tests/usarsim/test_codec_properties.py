@@ -46,7 +46,8 @@ from usar_arm.usarsim.numbers import FULL, UDK, udk_float_string
 CORPUS = Path(__file__).resolve().parents[2] / "fuzz" / "corpus" / "codec"
 MESSAGE_TYPES = (m.GameInfo, m.StartPoses, m.GetStartPoses, m.Init, m.GetConf, m.GetGeo, m.Act,
                  m.Set, m.Drive, m.Conf, m.PlatformConf, m.Geo, m.Asta, m.Sta, m.Sen,
-                 m.RangeScan, m.Ins, m.Odometry, m.Eff, m.Unknown)
+                 m.RangeScan, m.Ins, m.Odometry, m.Eff, m.Unknown, m.Control, m.WcStatus,
+                 m.ContactReport, m.GripTruth)
 
 
 def test_the_strategies_cover_every_message_type() -> None:
@@ -138,8 +139,16 @@ def udk_quantized(msg: m.Message) -> m.Message:
                  orientation=_q("raw", msg.orientation))
     if isinstance(msg, m.Odometry):
         return r(msg, time=_q("scalar", msg.time), pose=_q("scalar", msg.pose))
-    if isinstance(msg, m.Eff):
+    if isinstance(msg, (m.Eff, m.GripTruth)):
         return r(msg, time=_q("scalar", msg.time))
+    if isinstance(msg, m.WcStatus):  # Str_LengthVectorFromUU / Str_AngleVectorFromUU
+        return r(msg, objects=tuple(r(o, size=_q("fixed4", o.size),
+                                      location=_q("fixed4", o.location),
+                                      rotation=_q("fixed4", o.rotation)) for o in msg.objects))
+    if isinstance(msg, m.ContactReport):
+        return r(msg, time=_q("scalar", msg.time), pairs=tuple(
+            r(p, first=_q("scalar", p.first), last=_q("scalar", p.last),
+              depth=_q("scalar", p.depth)) for p in msg.pairs))
     return msg  # no numbers printed in a style
 
 

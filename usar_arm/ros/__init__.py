@@ -1,11 +1,16 @@
-"""The live ROS 2 interface (``usar-arm ros``, docs/ros.md).
+"""The live ROS interface (``usar-arm ros``, ``usar-arm ros --ros1``, docs/ros.md).
 
-* :mod:`.build`: builds the message packages the package index lacks into a cache (no rclpy);
+* :mod:`.build`: builds the ROS 2 message packages the package index lacks (no rclpy);
+  :mod:`.ros1_setup` makes the ROS 1 environment (no rospy), :mod:`.ros1_build` generates
+  control_msgs there with genpy;
 * :mod:`.goals`, :mod:`.frames`, :mod:`.runner`: the driver's rules as plain Python (goal
   checks, the transform tree, running goals on usar-arm's executor); :mod:`.drive` and
   :mod:`.platform_state` those of a ground vehicle (cmd_vel to wheel speeds, odometry, scans);
-* :mod:`.api`: the only module that imports rclpy and ROS message packages;
-* :mod:`.node` (an arm) and :mod:`.platform_node` (a ground vehicle): the nodes.
+* :mod:`.node` (an arm) and :mod:`.platform_node` (a ground vehicle): the nodes' logic, for
+  both middlewares, through :mod:`.transport`'s records and protocol; :mod:`.convert` turns the
+  records into messages;
+* :mod:`.ros2` and :mod:`.ros1`: the transports, the only modules that import rclpy and rospy
+  (and their message packages).
 """
 
 from __future__ import annotations

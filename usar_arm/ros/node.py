@@ -1,72 +1,54 @@
-"""The live ROS 2 node (``usar-arm ros``): the simulated arm as a ROS 2 robot.
+"""The live node of an arm (``usar-arm ros``, ``usar-arm ros --ros1``): the simulated arm as a
+ROS robot, written once for both middlewares (each a :class:`~usar_arm.ros.transport.Transport`:
+:mod:`.ros2` on rclpy, :mod:`.ros1` on rospy). It serves:
 
-Every ROS name comes from :mod:`usar_arm.ros.api` (the one module that imports rclpy and the
-message packages). It serves:
-
-* ``robot_description`` (std_msgs/String, reliable, transient local): the learnt URDF;
+* ``robot_description``: the learnt URDF (ROS 2: a transient-local topic; ROS 1: the parameter);
 * ``joint_states`` (sensor_msgs/JointState): one per ASTA line, published on the line's
   arrival and stamped with it, URDF joint names, rad/m;
 * ``tf_static`` / ``tf`` (tf2_msgs/TFMessage): world -> base_link, every fixed joint, every
   moving joint per ASTA (what robot_state_publisher does with the joint states);
-* ``<controller>/follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory) and
+* ``<controller>/follow_joint_trajectory`` (control_msgs FollowJointTrajectory) and
   ``<controller>/joint_trajectory`` (trajectory_msgs/JointTrajectory): the two interfaces of
   joint_trajectory_controller, run by :class:`~usar_arm.ros.runner.GoalRunner`;
 * ``/clock`` (rosgraph_msgs/Clock) from the ASTA lines' simulated time with ``use_sim_time``;
-* ``robot_description_semantic`` (the SRDF, transient local) for MoveIt, and on ``tf`` the tip
-  GroundTruth sensor's frame as the simulator reports it (``<sensor>_truth`` in base_link).
+* ``robot_description_semantic`` (the SRDF) for MoveIt, and on ``tf`` the tip GroundTruth
+  sensor's frame as the simulator reports it (``<sensor>_truth`` in base_link).
 
-Names are relative, so ``--ros-args -r __ns:=/robot1`` moves all of them (``tf`` included)
-under the namespace; ``frame_prefix`` prefixes the frame names for one shared tree.
+Names are relative, so a namespace moves all of them (``tf`` included); ``frame_prefix``
+prefixes the frame names for one shared tree.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from usar_arm import Arm
 from usar_arm.core.errors import UsarArmError
 from usar_arm.core.spatial import Array
-from usar_arm.ros.api import (
-    LATCHED,
-    ActionServer,
-    CancelResponse,
-    Clock,
-    FollowJointTrajectory,
-    GoalResponse,
-    JointState,
-    JointTrajectory,
-    JointTrajectoryPoint,
-    MultiThreadedExecutor,
-    Node,
-    ReentrantCallbackGroup,
-    String,
-    TFMessage,
-    declared_options,
-    run_ros,
-    spin_until,
-)
-from usar_arm.ros.api import ros_seconds as _seconds
-from usar_arm.ros.api import ros_time as _time
-from usar_arm.ros.api import transform_message as _transform
 from usar_arm.ros.frames import Edge, TransformTree, world_from_platform
-from usar_arm.ros.goals import GoalRejected, TrajectoryGoal, check_goal
-from usar_arm.ros.runner import GoalRunner, Job, Outcome
+from usar_arm.ros.goals import INVALID_GOAL, CheckedGoal, GoalRejected, TrajectoryGoal, check_goal
+from usar_arm.ros.runner import Feedback, GoalRunner, Job, Outcome
+from usar_arm.ros.transport import (
+    ActionKind,
+    ClockRecord,
+    Counted,
+    FeedbackRecord,
+    GoalHandle,
+    JointStateRecord,
+    Kind,
+    TfRecord,
+    Transport,
+    summary,
+)
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.inbox import Received
 
 log = logging.getLogger("usar_arm.ros")
-
-RESULT_KEPT_S = 60
-"""How long a finished goal's result is kept for a client to fetch (s; rclpy's default, 900 s,
-lets the node's memory grow with every goal for 15 minutes)."""
-
 
 @dataclass(frozen=True)
 class NodeOptions:
@@ -80,7 +62,8 @@ class NodeOptions:
         use_sim_time: stamps and /clock from the simulator's time. frame_prefix: prepended to
             every frame. rate_hz: the executor's command rate. scene: goals whose motion
             collides in it are refused ('' = none). wire_precision: number format of the
-            embedded simulator (udk, full). node_name: the node's name.
+            embedded simulator (udk, full). node_name: the node's name (ROS 2: ``usar_arm``,
+            ROS 1: ``RosSim``, the seed's).
     """
 
     robot_type: str = "KR60"
@@ -96,33 +79,23 @@ class NodeOptions:
     node_name: str = "usar_arm"
 
 
-def goal_from_message(trajectory: JointTrajectory, path: list[Any] | None = None,
-                      final: list[Any] | None = None, time_tolerance: float = 0.0
-                      ) -> TrajectoryGoal:
-    """A JointTrajectory (and tolerances) as plain data."""
-    points = trajectory.points
-    return TrajectoryGoal(
-        tuple(trajectory.joint_names), tuple(_seconds(p.time_from_start) for p in points),
-        tuple(tuple(p.positions) for p in points), tuple(tuple(p.velocities) for p in points),
-        tuple(tuple(p.accelerations) for p in points), _seconds(trajectory.header.stamp),
-        {t.name: float(t.position) for t in path or []},
-        {t.name: float(t.position) for t in final or []}, time_tolerance)
-
-
 class StateStreams:
     """Publishes joint_states, tf and /clock from each ASTA line as it arrives (on the
     connection's reader thread)."""
 
-    def __init__(self, node: Node, arm: Arm, tree: TransformTree, use_sim_time: bool):
-        self.node = node
-        self.names = list(arm.joint_names)
+    def __init__(self, transport: Transport, arm: Arm, tree: TransformTree,
+                 counts: dict[str, int]):
+        self.transport = transport
+        self.names = tuple(arm.joint_names)
         self.links = arm.robot.wire_links
         self.actuator = str(arm.robot.actuator).lower()
         self.tree = tree
-        self.use_sim_time = use_sim_time
-        self.joint_states = node.create_publisher(JointState, "joint_states", 100)
-        self.tf = node.create_publisher(TFMessage, "tf", 100)
-        self.clock = node.create_publisher(Clock, "/clock", 10) if use_sim_time else None
+        self.use_sim_time = transport.use_sim_time
+        self.clock = Counted(transport.publisher("/clock", Kind.CLOCK, 10), "/clock", counts) \
+            if self.use_sim_time else None
+        self.joint_states = Counted(transport.publisher("joint_states", Kind.JOINT_STATE, 100),
+                                    "joint_states", counts)
+        self.tf = Counted(transport.publisher("tf", Kind.TF, 100), "tf", counts)
         self.count = 0
         self._previous: tuple[float, Array] | None = None
 
@@ -131,11 +104,11 @@ class StateStreams:
         msg = rec.message
         if not isinstance(msg, m.Asta) or msg.name.lower() != self.actuator:
             return
-        values = dict(msg.values)
-        if not all(k in values for k in self.links):
+        joints = msg.joints(self.links)
+        if joints is None:
             return
-        q = np.array([values[k] for k in self.links])
-        if not (np.all(np.isfinite(q)) and math.isfinite(msg.time)):
+        q = np.array(joints)
+        if not (np.all(np.isfinite(q)) and np.isfinite(msg.time)):
             return
         try:
             # Stamped with the line's arrival (the system clock's reading of that moment).
@@ -148,16 +121,15 @@ class StateStreams:
         stamped with the simulated time (s) with use_sim_time, else ``arrived`` (s since the
         epoch)."""
         if self.clock is not None:
-            self.clock.publish(Clock(clock=_time(sim_time)))
-        stamp = _time(sim_time if self.use_sim_time else arrived)
-        state = JointState(name=self.names, position=q.tolist())
-        state.header.stamp = stamp
+            self.clock.publish(ClockRecord(sim_time))
+        stamp = sim_time if self.use_sim_time else arrived
+        velocity: tuple[float, ...] = ()
         if self._previous is not None and sim_time > self._previous[0]:
-            state.velocity = ((q - self._previous[1]) / (sim_time - self._previous[0])).tolist()
+            velocity = tuple(((q - self._previous[1]) / (sim_time - self._previous[0])).tolist())
         self._previous = (sim_time, q)
-        self.joint_states.publish(state)
-        self.tf.publish(TFMessage(transforms=[_transform(e, stamp)
-                                              for e in self.tree.moving_edges(q)]))
+        self.joint_states.publish(JointStateRecord(stamp, self.names, tuple(q.tolist()),
+                                                   velocity))
+        self.tf.publish(TfRecord(stamp, tuple(self.tree.moving_edges(q))))
         self.count += 1
 
 
@@ -165,8 +137,9 @@ class TipTruth:
     """Publishes the tip GroundTruth sensor's frame as the simulator reports it (child
     ``<tip sensor>_truth`` of base_link on ``tf``), from a thread reading its SEN lines."""
 
-    def __init__(self, node: Node, arm: Arm, tree: TransformTree, streams: StateStreams):
-        self.node = node
+    def __init__(self, transport: Transport, arm: Arm, tree: TransformTree,
+                 streams: StateStreams):
+        self.transport = transport
         self.sensor = arm.tip_sensor()
         self.parent = tree.frame(arm.robot.chain.root)
         self.child = tree.frame(f"{arm.robot.tip_sensor}_truth")
@@ -187,115 +160,96 @@ class TipTruth:
                 log.warning("tip GroundTruth sensor: %s; its frame is no longer published", exc)
                 return
             after = reading.time
-            stamp = _time(reading.time) if self.streams.use_sim_time \
-                else self.node.get_clock().now().to_msg()
+            stamp = reading.time if self.streams.use_sim_time else self.transport.now()
             edge = Edge(self.parent, self.child, reading.pose @ offset)
             try:
-                self.streams.tf.publish(TFMessage(transforms=[_transform(edge, stamp)]))
+                self.streams.tf.publish(TfRecord(stamp, (edge,)))
             except Exception as exc:  # the context is shutting down
                 log.debug("not published: %s", exc)
                 return
 
 
 class TrajectoryInterfaces:
-    """The controller's action server and topic, on a :class:`GoalRunner`."""
+    """The controller's action and topic, on a :class:`GoalRunner`: what each goal is checked
+    against, how it runs and how it ends (the transport says it the middleware's way)."""
 
-    def __init__(self, node: Node, arm: Arm, runner: GoalRunner, controller: str,
+    def __init__(self, transport: Transport, arm: Arm, runner: GoalRunner, controller: str,
                  rate_hz: float, scene: str = ""):
-        self.node = node
+        self.transport = transport
         self.arm = arm
         self.world = arm.world(scene) if scene else None
         self.runner = runner
         self.rate_hz = rate_hz
-        self.names = list(arm.joint_names)
-        self._tickets: dict[bytes, int] = {}
-        group = ReentrantCallbackGroup()
-        self.server = ActionServer(
-            node, FollowJointTrajectory, f"{controller}/follow_joint_trajectory",
-            execute_callback=self._execute, goal_callback=lambda _goal: GoalResponse.ACCEPT,
-            handle_accepted_callback=self._accepted,
-            cancel_callback=lambda _handle: CancelResponse.ACCEPT, callback_group=group,
-            result_timeout=RESULT_KEPT_S)
-        self.topic = node.create_subscription(JointTrajectory, f"{controller}/joint_trajectory",
-                                              self._on_topic, 10, callback_group=group)
+        self.names = tuple(arm.joint_names)
+        transport.action(f"{controller}/follow_joint_trajectory",
+                         ActionKind.FOLLOW_JOINT_TRAJECTORY, self.arrived, self.serve)
+        transport.subscribe(f"{controller}/{transport.trajectory_topic}", Kind.TRAJECTORY,
+                            self._on_topic, long_running=True)
 
-    def _accepted(self, handle: Any) -> None:
-        """Number the goal in the order goals are accepted, then run it."""
-        self._tickets[bytes(handle.goal_id.uuid)] = self.runner.ticket()
-        handle.execute()
+    def arrived(self, handle: GoalHandle) -> None:
+        """Number the goal in the order goals arrive."""
+        handle.ticket = self.runner.ticket()
 
     def _current(self) -> Array:
         asta = self.arm.client.latest_asta(str(self.arm.robot.actuator)) \
             if self.arm.client is not None else None
-        if asta is None:
-            raise GoalRejected(-1, "no joint state from the simulator yet")
-        values = dict(asta.values)
-        return np.array([values[k] for k in self.arm.robot.wire_links])
+        joints = asta.joints(self.arm.robot.wire_links) if asta is not None else None
+        if joints is None:
+            raise GoalRejected(INVALID_GOAL, "no joint state from the simulator yet")
+        return np.array(joints)
 
-    def _check(self, goal: TrajectoryGoal) -> Any:
-        now = self.node.get_clock().now().nanoseconds * 1e-9
-        checked = check_goal(goal, self.arm.robot.chain, self._current(), now, self.rate_hz)
+    def check(self, goal: TrajectoryGoal) -> CheckedGoal:
+        """The goal checked against the arm where it is now (and the scene, if any).
+
+        Raises:
+            GoalRejected: a rule it breaks, with the controller's error code.
+        """
+        checked = check_goal(goal, self.arm.robot.chain, self._current(), self.transport.now(),
+                             self.rate_hz)
         if self.world is not None:
             trajectory = checked.trajectory
             for i in range(0, len(trajectory.t), max(1, len(trajectory.t) // 200)):
                 pairs = self.world.contacts(trajectory.q[i])
                 if pairs:
-                    raise GoalRejected(-1, f"the motion collides at t = {trajectory.t[i]:.2f}"
-                                           f" s: {', '.join(f'{a}-{b}' for a, b in pairs)}")
+                    raise GoalRejected(INVALID_GOAL, f"the motion collides at t = "
+                                       f"{trajectory.t[i]:.2f} s: "
+                                       f"{', '.join(f'{a}-{b}' for a, b in pairs)}")
         return checked
 
-    def _execute(self, handle: Any) -> Any:
-        ticket = self._tickets.pop(bytes(handle.goal_id.uuid), 0) or self.runner.ticket()
-        request = handle.request
-        result = FollowJointTrajectory.Result()
+    def serve(self, handle: GoalHandle) -> None:
+        """Check the goal, then run it to its end (blocks for the goal's duration)."""
         try:
-            goal = goal_from_message(request.trajectory, list(request.path_tolerance),
-                                     list(request.goal_tolerance),
-                                     _seconds(request.goal_time_tolerance))
-            checked = self._check(goal)
+            checked = self.check(handle.goal)
         except GoalRejected as exc:
             log.warning("goal refused: %s", exc.message)
-            result.error_code, result.error_string = exc.code, exc.message
-            handle.abort()
-            return result
-        outcome = self.runner.run(Job(checked, lambda: bool(handle.is_cancel_requested),
-                                      self._feedback_to(handle), "action goal", ticket))
-        self._finish(handle, outcome)
-        result.error_code, result.error_string = outcome.code, outcome.message
-        return result
-
-    def _finish(self, handle: Any, outcome: Outcome) -> None:
+            handle.refuse(exc.code, exc.message)
+            return
+        handle.accept()
+        outcome = self.runner.run(Job(checked, handle.cancel_requested,
+                                      self._feedback_to(handle), "action goal", handle.ticket))
         log.info("goal %s: %s", "succeeded" if outcome.succeeded else
                  "cancelled" if outcome.cancelled else "aborted", outcome.message)
         try:
-            if outcome.succeeded:
-                handle.succeed()
-            elif outcome.cancelled:
-                handle.canceled()
-            else:
-                handle.abort()
-        except Exception as exc:  # Ctrl-C/SIGTERM shut the context down first: nobody to tell
+            handle.finish(outcome)
+        except Exception as exc:  # Ctrl-C/SIGTERM shut the middleware down first
             log.debug("goal state not sent: %s", exc)
 
-    def _feedback_to(self, handle: Any) -> Any:
+    def _feedback_to(self, handle: GoalHandle) -> Feedback:
         def send(desired: Array, velocity: Array, actual: Array) -> None:
-            msg = FollowJointTrajectory.Feedback(joint_names=self.names)
-            msg.header.stamp = self.node.get_clock().now().to_msg()
-            msg.desired = JointTrajectoryPoint(positions=desired.tolist(),
-                                               velocities=velocity.tolist())
-            msg.actual = JointTrajectoryPoint(positions=actual.tolist())
-            msg.error = JointTrajectoryPoint(positions=(desired - actual).tolist())
-            handle.publish_feedback(msg)
+            handle.feedback(FeedbackRecord(
+                self.transport.now(), self.names, tuple(desired.tolist()),
+                tuple(velocity.tolist()), tuple(actual.tolist()),
+                tuple((desired - actual).tolist())))
         return send
 
-    def _on_topic(self, msg: JointTrajectory) -> None:
+    def _on_topic(self, goal: TrajectoryGoal) -> None:
         ticket = self.runner.ticket()
-        if not msg.points:  # as joint_trajectory_controller: stop what runs and hold
+        if not goal.positions:  # as joint_trajectory_controller: stop what runs and hold
             self.runner.stop_active("an empty joint_trajectory message: hold")
             log.info("joint_trajectory: an empty message; the arm holds")
             return
         try:
-            checked = self._check(goal_from_message(msg))
+            checked = self.check(goal)
         except GoalRejected as exc:
             log.error("joint_trajectory message refused: %s", exc.message)
             return
@@ -321,36 +275,32 @@ def _world_from_root(arm: Arm) -> Array:
     return world_from_platform(sensor.platform_pose())
 
 
-def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> int:
-    """Publish and serve until ``stop`` is set or the ROS context shuts down (Ctrl-C,
-    SIGTERM; checked every 0.1 s); the arm holds when it returns."""
+def serve(transport: Transport, arm: Arm, options: NodeOptions, stop: threading.Event) -> int:
+    """Publish and serve until ``stop`` is set or the middleware shuts down (Ctrl-C,
+    SIGTERM); the arm holds when it returns."""
     tree = TransformTree(arm.robot.chain, options.frame_prefix)
     assert arm.client is not None and arm.robot.actuator is not None
     executor = arm.executor()
     executor.identify()  # the drive model, once, before any goal (about 2 s)
     runner = GoalRunner(executor, arm.client, str(arm.robot.actuator), arm.robot.wire_links)
-    streams = StateStreams(node, arm, tree, options.use_sim_time)
+    counts: dict[str, int] = {}
+    streams = StateStreams(transport, arm, tree, counts)
     unsubscribe = arm.client.subscribe(streams.on_line)
     controller = options.controller or f"{arm.robot.actuator}_controller"
-    TrajectoryInterfaces(node, arm, runner, controller, options.rate_hz, options.scene)
+    TrajectoryInterfaces(transport, arm, runner, controller, options.rate_hz, options.scene)
     # Last: a client that has the description finds everything else served.
-    static = node.create_publisher(TFMessage, "tf_static", LATCHED)
-    stamp = node.get_clock().now().to_msg()
-    static.publish(TFMessage(transforms=[_transform(e, stamp)
-                                         for e in tree.static_edges(_world_from_root(arm))]))
+    static = Counted(transport.publisher("tf_static", Kind.TF, latched=True), "tf_static",
+                     counts)
+    static.publish(TfRecord(transport.now(), tuple(tree.static_edges(_world_from_root(arm)))))
     semantic = [text for name, text in arm.robot.files.items() if name.endswith(".srdf")]
     if semantic:
-        srdf = node.create_publisher(String, "robot_description_semantic", LATCHED)
-        srdf.publish(String(data=semantic[0]))
-    truth = TipTruth(node, arm, tree, streams)
-    description = node.create_publisher(String, "robot_description", LATCHED)
-    description.publish(String(data=arm.urdf))
-    spin = MultiThreadedExecutor(num_threads=4)
-    spin.add_node(node)
-    log.info("serving %s: %s/follow_joint_trajectory, joint_states, tf", arm.robot.actuator,
-             controller)
+        transport.describe("robot_description_semantic", semantic[0])
+    truth = TipTruth(transport, arm, tree, streams)
+    transport.describe("robot_description", arm.urdf)
+    log.info("serving %s on %s: %s/follow_joint_trajectory, joint_states, tf",
+             arm.robot.actuator, transport.name, controller)
     try:
-        spin_until(spin, stop)
+        transport.spin_until(stop)
     finally:
         runner.stopping = "the node is shutting down"
         runner.stop_active("the node is shutting down")
@@ -359,21 +309,17 @@ def serve(node: Node, arm: Arm, options: NodeOptions, stop: threading.Event) -> 
         if truth.thread.is_alive():
             truth.thread.join(2.0)
         unsubscribe()
-        spin.shutdown(timeout_sec=2.0)
+        log.info("published: %s", summary(counts))
     return 0
 
 
-def run(options: NodeOptions, ros_args: list[str] | None = None,
-        stop: threading.Event | None = None) -> int:
-    """Start ROS, learn the arm, serve until Ctrl-C/SIGTERM (or ``stop``); 0 on a clean
-    stop (the arm holds)."""
-    def body(node: Node) -> int:
-        chosen = declared_options(node, options)
-        arm = Arm.connect(chosen.robot_type, host=chosen.host or None, port=chosen.port,
-                          start=chosen.start or None, wire_precision=chosen.wire_precision)
-        try:
-            return serve(node, arm, chosen, stop or threading.Event())
-        finally:
-            arm.close()
-
-    return run_ros(options.node_name, options.use_sim_time, ros_args, body)
+def run(transport: Transport, options: NodeOptions, stop: threading.Event) -> int:
+    """Learn the arm its options (as the node's parameters have them) name, serve it until
+    ``stop`` or Ctrl-C/SIGTERM; 0 on a clean stop (the arm holds)."""
+    chosen = transport.parameters(options)
+    arm = Arm.connect(chosen.robot_type, host=chosen.host or None, port=chosen.port,
+                      start=chosen.start or None, wire_precision=chosen.wire_precision)
+    try:
+        return serve(transport, arm, chosen, stop)
+    finally:
+        arm.close()

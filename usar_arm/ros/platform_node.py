@@ -1,7 +1,8 @@
-"""The live ROS 2 node of a ground vehicle (``usar-arm ros --robot P3AT``, docs/ros.md).
+"""The live node of a ground vehicle (``usar-arm ros --robot P3AT``, docs/ros.md), written
+once for both middlewares (a :class:`~usar_arm.ros.transport.Transport` each).
 
 It spawns and learns the vehicle (:class:`~usar_arm.description.platform.LivePlatform`) and
-serves, every ROS name from :mod:`usar_arm.ros.api`:
+serves:
 
 * ``cmd_vel`` (geometry_msgs/Twist): linear.x, angular.z -> one DRIVE line per message
   (:func:`~usar_arm.ros.drive.velocity_command`: wheel speeds clamped keeping the ratio, or an
@@ -13,7 +14,8 @@ serves, every ROS name from :mod:`usar_arm.ros.api`:
 * ``ground_truth`` (nav_msgs/Odometry) and ``truth/map -> truth/base_footprint`` on ``tf``: the
   simulator's GroundTruth sensor, a tree of its own that never meets SLAM's map;
 * ``tf_static``: base_footprint -> base_link and every sensor mount; ``robot_description``
-  (transient local); ``/clock`` from the STA lines with ``use_sim_time``.
+  (ROS 2: transient local; ROS 1: the parameter); ``/clock`` from the STA lines with
+  ``use_sim_time``.
 
 The scan, odometry and truth are published on the connection's reader thread as each line
 arrives. UDK's P3AT sends no wheel state, so ``joint_states`` is not published (said at start).
@@ -24,7 +26,6 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from array import array
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,24 +34,6 @@ from usar_arm.core.errors import InvalidInputError
 from usar_arm.core.platform import FRAME_STYLES, PlatformDescription, PlatformFrames, mount_matrix
 from usar_arm.core.spatial import invert, transform
 from usar_arm.description.platform import LivePlatform
-from usar_arm.ros.api import (
-    LATCHED,
-    Clock,
-    EventsExecutor,
-    LaserScan,
-    Node,
-    Odometry,
-    String,
-    TFMessage,
-    Time,
-    Twist,
-    declared_options,
-    rclpy,
-    ros_time,
-    run_ros,
-    spin_until,
-    transform_message,
-)
 from usar_arm.ros.drive import (
     DriveCommand,
     WheelCommand,
@@ -58,8 +41,21 @@ from usar_arm.ros.drive import (
     stop_command,
     velocity_command,
 )
-from usar_arm.ros.frames import Edge, quaternion
+from usar_arm.ros.frames import Edge
 from usar_arm.ros.platform_state import PoseSample, PoseTracker, scan_fields, sensor_pose
+from usar_arm.ros.transport import (
+    ClockRecord,
+    Counted,
+    Kind,
+    OdometryRecord,
+    Publisher,
+    ScanRecord,
+    TfRecord,
+    Transport,
+    TwistRecord,
+    summary,
+)
+from usar_arm.urdf.description_reader import read_urdf
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 from usar_arm.usarsim.inbox import Received
@@ -115,10 +111,10 @@ def odom_source(desc: PlatformDescription, asked: str) -> str:
 class Streams:
     """Publishes scan, odom, ground truth, tf and /clock from the SEN and STA lines."""
 
-    def __init__(self, node: Node, desc: PlatformDescription, frames: PlatformFrames,
-                 odom_sensor: str, use_sim_time: bool):
-        self.node, self.desc, self.frames = node, desc, frames
-        self.use_sim_time = use_sim_time
+    def __init__(self, transport: Transport, desc: PlatformDescription, frames: PlatformFrames,
+                 odom_sensor: str, counts: dict[str, int]):
+        self.transport, self.desc, self.frames = transport, desc, frames
+        self.use_sim_time = transport.use_sim_time
         footprint = transform(pos=(0.0, 0.0, desc.footprint_height)) \
             if frames.footprint is not None else np.eye(4)
         # base_footprint in a sensor's frame: mount^-1 (base_link in the sensor) times
@@ -134,13 +130,16 @@ class Streams:
                                  if truth else np.eye(4), relative=False)
         self.scanners = {s.name.lower(): s for s in desc.sensors_of("RangeScanner")}
         self.scan_times: dict[str, float] = {}
-        self.scan_pub = node.create_publisher(LaserScan, "scan", 10)
-        self.odom_pub = node.create_publisher(Odometry, "odom", 10)
-        self.truth_pub = node.create_publisher(Odometry, "ground_truth", 10)
-        self.tf = node.create_publisher(TFMessage, "tf", 100)
-        self.clock = node.create_publisher(Clock, "/clock", 10) if use_sim_time else None
+        def publisher(topic: str, kind: Kind, depth: int) -> Counted:
+            return Counted(transport.publisher(topic, kind, depth), topic, counts)
+
+        self.clock = publisher("/clock", Kind.CLOCK, 10) if self.use_sim_time else None
+        self.scan_pub = publisher("scan", Kind.SCAN, 10)
+        self.odom_pub = publisher("odom", Kind.ODOMETRY, 10)
+        self.truth_pub = publisher("ground_truth", Kind.ODOMETRY, 10)
+        self.tf = publisher("tf", Kind.TF, 100)
         self.sim_time = 0.0
-        self.counts = {"scan": 0, "odom": 0, "ground_truth": 0}
+        self.counts = counts
         self.failures: set[str] = set()
 
     def on_line(self, rec: Received) -> None:
@@ -150,22 +149,24 @@ class Streams:
             self._handle(rec)
         except Exception as exc:  # a publisher of a context shutting down, a bad number
             kind = type(exc).__name__
-            quiet = kind in self.failures or not rclpy.ok()
+            quiet = kind in self.failures or not self.transport.ok()
             self.failures.add(kind)
             log.log(logging.DEBUG if quiet else logging.WARNING,
                     "%s line not published: %s: %s", rec.line[:40], kind, exc)
 
-    def _stamp(self, rec: Received, sim: float | None) -> Time:
+    def _stamp(self, rec: Received, sim: float | None) -> float:
+        """The stamp of a line's messages (s): its simulated time with use_sim_time (the last
+        STA's when the line has none), else its arrival on the system clock."""
         if self.use_sim_time:
-            return ros_time(sim if sim is not None else self.sim_time)
-        return ros_time(time.time() - (time.monotonic() - rec.wall_time))
+            return sim if sim is not None else self.sim_time
+        return time.time() - (time.monotonic() - rec.wall_time)
 
     def _handle(self, rec: Received) -> None:
         msg = rec.message
         if isinstance(msg, m.Sta):
             self.sim_time = msg.time
             if self.clock is not None:
-                self.clock.publish(Clock(clock=ros_time(msg.time)))
+                self.clock.publish(ClockRecord(msg.time))
             return
         if isinstance(msg, m.RangeScan):
             self._scan(rec, msg)
@@ -178,13 +179,13 @@ class Streams:
             pose = sensor_pose(msg)
             if pose is not None:
                 sample = self.odom.update(at if at is not None else rec.wall_time, pose)
-                self._publish_pose(self.odom_pub, "odom", sample, self.frames.odom,
+                self._publish_pose(self.odom_pub, sample, self.frames.odom,
                                    self.frames.root, self._stamp(rec, at))
         elif self.truth_name is not None and name.lower() == self.truth_name.lower():
             pose = sensor_pose(msg)
             if pose is not None:
                 sample = self.truth.update(at if at is not None else rec.wall_time, pose)
-                self._publish_pose(self.truth_pub, "ground_truth", sample,
+                self._publish_pose(self.truth_pub, sample,
                                    TRUTH_PREFIX + self.frames.map,
                                    TRUTH_PREFIX + self.frames.root, self._stamp(rec, at))
 
@@ -196,47 +197,28 @@ class Streams:
         last = self.scan_times.get(sensor.name, now)
         self.scan_times[sensor.name] = now
         fields = scan_fields(msg, sensor.scanner, now - last)
-        out = LaserScan(angle_min=fields.angle_min, angle_max=fields.angle_max,
-                        angle_increment=fields.angle_increment, time_increment=0.0,
-                        scan_time=fields.scan_time, range_min=fields.range_min,
-                        range_max=fields.range_max,
-                        ranges=array("f", fields.ranges))  # no per-item checks
-        out.header.stamp = self._stamp(rec, msg.time)
-        out.header.frame_id = self.frames.sensor(sensor)
-        self.scan_pub.publish(out)
-        self.counts["scan"] += 1
+        self.scan_pub.publish(ScanRecord(self._stamp(rec, msg.time), self.frames.sensor(sensor),
+                                         fields))
 
-    def _publish_pose(self, pub: object, topic: str, sample: PoseSample, parent: str,
-                      child: str, stamp: Time) -> None:
-        msg = Odometry(child_frame_id=child)
-        msg.header.stamp, msg.header.frame_id = stamp, parent
-        p = sample.pose[:3, 3]
-        pose = msg.pose.pose
-        pose.position.x, pose.position.y, pose.position.z = (float(v) for v in p)
-        q = pose.orientation
-        q.x, q.y, q.z, q.w = quaternion(sample.pose[:3, :3])
-        t = msg.twist.twist
-        t.linear.x, t.linear.y, t.linear.z = sample.linear
-        t.angular.x, t.angular.y, t.angular.z = sample.angular
-        pub.publish(msg)  # type: ignore[attr-defined]
-        self.tf.publish(TFMessage(transforms=[transform_message(
-            Edge(parent, child, sample.pose), stamp)]))
-        self.counts[topic] += 1
+    def _publish_pose(self, pub: Publisher, sample: PoseSample, parent: str, child: str,
+                      stamp: float) -> None:
+        pub.publish(OdometryRecord(stamp, parent, child, sample))
+        self.tf.publish(TfRecord(stamp, (Edge(parent, child, sample.pose),)))
 
 
 class Driver:
     """cmd_vel -> DRIVE, with the command timeout (checked by a 20 Hz timer); the mapping by
     the vehicle's steering type (:func:`~usar_arm.ros.drive.velocity_command`)."""
 
-    def __init__(self, node: Node, client: UsarClient, desc: PlatformDescription,
+    def __init__(self, transport: Transport, client: UsarClient, desc: PlatformDescription,
                  timeout: float):
         self.client, self.desc, self.timeout = client, desc, timeout
         self.last_command = time.monotonic()
         self.current: DriveCommand = stop_command(desc, WheelCommand(0.0, 0.0))
         self.last_clamp_log = -CLAMP_LOG_S
         self.lock = threading.Lock()
-        node.create_subscription(Twist, "cmd_vel", self.on_twist, 10)
-        node.create_timer(0.05, self.check_timeout)
+        transport.subscribe("cmd_vel", Kind.TWIST, self.on_twist)
+        transport.timer(0.05, self.check_timeout)
 
     def send(self, command: DriveCommand) -> None:
         """One DRIVE line (rad/s and rad, not normalized)."""
@@ -244,19 +226,19 @@ class Driver:
             self.current = command
             self.client.send(drive_line(command))
 
-    def on_twist(self, msg: Twist) -> None:
+    def on_twist(self, msg: TwistRecord) -> None:
         """A cmd_vel message: drive, or stop on a command that is not finite."""
         self.last_command = time.monotonic()
         d = self.desc
         try:
-            command = velocity_command(d, msg.linear.x, msg.angular.z, self.current)
+            command = velocity_command(d, msg.linear_x, msg.angular_z, self.current)
         except InvalidInputError as exc:
             log.error("cmd_vel refused, the robot stops: %s", exc)
-            self._send_safely(stop_command(d, self.current))
+            self.send_safely(stop_command(d, self.current))
             return
         if time.monotonic() - self.last_clamp_log > CLAMP_LOG_S and self._say(command):
             self.last_clamp_log = time.monotonic()
-        self._send_safely(command)
+        self.send_safely(command)
 
     def _say(self, command: DriveCommand) -> bool:
         """Log what of a command had to give way (True when something did)."""
@@ -279,9 +261,9 @@ class Driver:
         """Stop the robot when no cmd_vel came within the timeout."""
         if self.current.moving and time.monotonic() - self.last_command > self.timeout:
             log.info("no cmd_vel for %g s: the robot stops", self.timeout)
-            self._send_safely(stop_command(self.desc, self.current))
+            self.send_safely(stop_command(self.desc, self.current))
 
-    def _send_safely(self, command: DriveCommand) -> None:
+    def send_safely(self, command: DriveCommand) -> None:
         try:
             self.send(command)
         except Exception as exc:  # the connection is gone: nothing to drive
@@ -299,51 +281,53 @@ def static_edges(desc: PlatformDescription, frames: PlatformFrames) -> list[Edge
     return edges
 
 
-def serve(node: Node, live: LivePlatform, options: PlatformNodeOptions, frames: PlatformFrames,
-          stop: threading.Event) -> int:
-    """Publish and serve until ``stop`` is set or the context shuts down; the robot stops."""
+def resting_joints(urdf: str) -> list[Edge]:
+    """Each moving joint of the vehicle's URDF (the wheels, an Ackermann's steering) at rest,
+    its parent -> child transform at 0: UDK sends no wheel or steer state, so they are drawn
+    where they are mounted, not turning (without them RViz's RobotModel has no transform for
+    the wheel links and reports an error)."""
+    return [Edge(j.parent, j.child, j.origin.matrix()) for j in read_urdf(urdf).chain.joints
+            if j.actuated]
+
+
+def serve(transport: Transport, live: LivePlatform, options: PlatformNodeOptions,
+          frames: PlatformFrames, stop: threading.Event) -> int:
+    """Publish and serve until ``stop`` is set or the middleware shuts down; the robot stops."""
     desc = live.result.description
-    streams = Streams(node, desc, frames, odom_source(desc, options.odom_sensor),
-                      options.use_sim_time)
-    driver = Driver(node, live.client, desc, options.cmd_timeout)
+    counts: dict[str, int] = {}
+    streams = Streams(transport, desc, frames, odom_source(desc, options.odom_sensor), counts)
+    driver = Driver(transport, live.client, desc, options.cmd_timeout)
     unsubscribe = live.client.subscribe(streams.on_line)
-    stamp = node.get_clock().now().to_msg()
-    static = node.create_publisher(TFMessage, "tf_static", LATCHED)
-    static.publish(TFMessage(transforms=[transform_message(e, stamp)
-                                         for e in static_edges(desc, frames)]))
-    node.create_publisher(String, "robot_description", LATCHED).publish(
-        String(data=live.result.urdf))
+    static = Counted(transport.publisher("tf_static", Kind.TF, latched=True), "tf_static",
+                     counts)
+    static.publish(TfRecord(transport.now(), (*static_edges(desc, frames),
+                                              *resting_joints(live.result.urdf))))
+    transport.describe("robot_description", live.result.urdf)
     log.info("the server sends no wheel state (UDK's %s has no wheel encoder line): "
              "joint_states is not published", desc.name)
-    log.info("serving %s: cmd_vel, odom (from %s), scan, ground_truth, tf", desc.name,
-             streams.odom_name)
-    spin = EventsExecutor()  # cmd_vel and the timeout timer, dispatched in C++ (rclpy's)
-    spin.add_node(node)
+    log.info("serving %s on %s: cmd_vel, odom (from %s), scan, ground_truth, tf", desc.name,
+             transport.name, streams.odom_name)
     try:
-        spin_until(spin, stop)
+        transport.spin_until(stop)
     finally:
         unsubscribe()
-        driver._send_safely(stop_command(desc, driver.current))
-        spin.shutdown(timeout_sec=2.0)
+        driver.send_safely(stop_command(desc, driver.current))
+        log.info("published: %s", summary(counts))
     return 0
 
 
-def run(options: PlatformNodeOptions, ros_args: list[str] | None = None,
-        stop: threading.Event | None = None) -> int:
-    """Start ROS, spawn and learn the vehicle, serve until Ctrl-C/SIGTERM (or ``stop``); 0 on
-    a clean stop (the vehicle stopped)."""
-    def body(node: Node) -> int:
-        chosen = declared_options(node, options)
-        if chosen.frames not in FRAME_STYLES:
-            raise InvalidInputError(f"frames '{chosen.frames}': expected one of "
-                                    f"{', '.join(FRAME_STYLES)}")
-        frames = FRAME_STYLES[chosen.frames]
-        live = LivePlatform(chosen.robot_type, chosen.host or None, chosen.port,
-                            chosen.start or None, wire_precision=chosen.wire_precision,
-                            frames=frames)
-        try:
-            return serve(node, live, chosen, frames, stop or threading.Event())
-        finally:
-            live.close()
-
-    return run_ros(options.node_name, options.use_sim_time, ros_args, body)
+def run(transport: Transport, options: PlatformNodeOptions, stop: threading.Event) -> int:
+    """Spawn and learn the vehicle its options (as the node's parameters have them) name,
+    serve it until ``stop`` or Ctrl-C/SIGTERM; 0 on a clean stop (the vehicle stopped)."""
+    chosen = transport.parameters(options)
+    if chosen.frames not in FRAME_STYLES:
+        raise InvalidInputError(f"frames '{chosen.frames}': expected one of "
+                                f"{', '.join(FRAME_STYLES)}")
+    frames = FRAME_STYLES[chosen.frames]
+    live = LivePlatform(chosen.robot_type, chosen.host or None, chosen.port,
+                        chosen.start or None, wire_precision=chosen.wire_precision,
+                        frames=frames)
+    try:
+        return serve(transport, live, chosen, frames, stop)
+    finally:
+        live.close()

@@ -27,6 +27,7 @@ from usar_arm.ros.goals import (
     SUCCESSFUL,
     CheckedGoal,
 )
+from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
 
 log = logging.getLogger("usar_arm.ros")
@@ -61,13 +62,15 @@ class Job:
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a goal ended: ``succeeded`` (else aborted or, with ``cancelled``, cancelled),
-    the FollowJointTrajectory error code and a message."""
+    """How a goal ended: ``succeeded``, else aborted, or ``cancelled`` by its client, or
+    ``preempted`` by a newer goal (ROS 2 reports that as aborted, ROS 1's actionlib as
+    PREEMPTED); the FollowJointTrajectory error code and a message."""
 
     succeeded: bool
     code: int
     message: str
     cancelled: bool = False
+    preempted: bool = False
 
 
 class GoalRunner:
@@ -119,7 +122,7 @@ class GoalRunner:
         with self._guard:
             if self._latest is not None and job.ticket < self._latest.ticket:
                 return Outcome(False, SUCCESSFUL, "pre-empted by a newer goal before it "
-                               "started")
+                               "started", preempted=True)
             self._latest = job
         self.stop_active(f"pre-empted by a newer goal ({job.label})")
         if not self._lock.acquire(timeout=TAKE_OVER_TIMEOUT_S):
@@ -129,7 +132,7 @@ class GoalRunner:
             with self._guard:
                 if self._latest is not job:
                     return Outcome(False, SUCCESSFUL, "pre-empted by a newer goal before it "
-                                   "started")
+                                   "started", preempted=True)
                 self._active = job
             return self._run(job)
         finally:
@@ -190,7 +193,8 @@ class GoalRunner:
         if job.violation is not None:
             return Outcome(False, PATH_TOLERANCE_VIOLATED, job.violation)
         return Outcome(False, PATH_TOLERANCE_VIOLATED if not job.preempted else SUCCESSFUL,
-                       detail or f"{reason}; the arm holds")
+                       detail or f"{reason}; the arm holds",
+                       preempted=job.preempted is not None and self.stopping is None)
 
     def _monitor(self, job: Job, t: float) -> str | None:
         """The executor's per-period question: stop? Also checks the path tolerance and
@@ -202,10 +206,10 @@ class GoalRunner:
         if rec is None or rec.wall_time <= job.last_asta:
             return None
         job.last_asta = rec.wall_time
-        values = dict(getattr(rec.message, "values", ()))
-        if not all(k in values for k in self.links):
+        joints = rec.message.joints(self.links) if isinstance(rec.message, m.Asta) else None
+        if joints is None:
             return None
-        actual = np.array([values[k] for k in self.links])
+        actual = np.array(joints)
         sample_t = t - (time.perf_counter() - rec.wall_time)
         trajectory = job.goal.trajectory
         desired, velocity = trajectory.at(sample_t)

@@ -27,6 +27,8 @@ class ActuatorIndex:
     tip_site_id: int = -1
     drives: list[tuple[int, float, float, float]] = field(default_factory=list)
     """Per joint: ctrl index, sign, low and high limit (USARSim sign), for :meth:`set_targets`."""
+    changer_sites: dict[str, str] = field(default_factory=dict)
+    """Tool changer name -> the site at its frame."""
 
 
 @dataclass
@@ -58,3 +60,5 @@ class RobotEntry:
     platform_pose: Array
     actuators: dict[str, ActuatorIndex]
     vehicle: VehicleIndex | None = None
+    name: str = ""
+    """The robot's name (INIT's Name), for contact reports."""

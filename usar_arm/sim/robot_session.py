@@ -23,9 +23,13 @@ import numpy as np
 
 from usar_arm.core.spatial import matrix_to_rpy
 from usar_arm.sim import replies
+from usar_arm.sim.effectors import TYPES as EFFECTOR_TYPES
+from usar_arm.sim.effectors import Effectors
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_spec import ActuatorSpec, RobotSpec
 from usar_arm.sim.vehicle_session import VehicleSession
+from usar_arm.sim.world_controller import CLASS_NAME as WORLD_CONTROLLER
+from usar_arm.sim.world_controller import FindRobot, WorldController
 from usar_arm.sim.world_spec import WorldSpec
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import NumberStyle
@@ -127,6 +131,10 @@ class Session:
     next_status: float = 0.0
     vehicle: VehicleSession | None = None
     """The drive and sensors of a spawned ground vehicle (None for an arm)."""
+    effectors: Effectors | None = None
+    """The tool changers and tools of a spawned arm (None when it has none)."""
+    world_controller: WorldController | None = None
+    """Set when the connection INITed as a WorldController (it then has no robot)."""
     rejections: Rejections = field(init=False)
     _actuators: dict[str, ActuatorSpec] = field(default_factory=dict)
     _replies: dict[tuple[bool, str, str | None], m.Message | None] = field(default_factory=dict)
@@ -136,8 +144,10 @@ class Session:
 
     # ------------------------------------------------------------------ commands
     def handle(self, msg: m.Message, world: PhysicsWorld, world_spec: WorldSpec,
-               robots: dict[str, RobotSpec], style: NumberStyle) -> None:
-        """Act on one command from the client (replies go through ``send``)."""
+               robots: dict[str, RobotSpec], style: NumberStyle,
+               find_robot: FindRobot = lambda name: None) -> None:
+        """Act on one command from the client (replies go through ``send``); ``find_robot``
+        gives the key of the robot a WorldController's AbsMove names (None: no such robot)."""
         reject = self.rejections.reject
         if isinstance(msg, m.Act) and self.robot is not None:
             self._act(msg, world)
@@ -145,12 +155,24 @@ class Session:
             self.send(m.StartPoses(world_spec.start_poses))
         elif isinstance(msg, m.Init):
             self._init(msg, world_spec, robots)
+        elif isinstance(msg, m.Control):
+            self._control(msg, world, world_spec, find_robot)
         elif self.robot is None:
             head = msg.head if isinstance(msg, m.Unknown) else type(msg).__name__.upper()
-            reject("before INIT", "%s before the robot exists (send INIT first); dropped, as "
-                   "UDK does", head[:40])
+            if self.world_controller is not None:
+                reject("WorldController", "%s from a WorldController (it has no robot); "
+                       "ignored, as UDK does", head[:40], level=logging.INFO)
+            else:
+                reject("before INIT", "%s before the robot exists (send INIT first); "
+                       "dropped, as UDK does", head[:40])
         elif isinstance(msg, (m.GetConf, m.GetGeo)):
-            self._describe(msg, style)
+            self._describe(msg, style, world)
+        elif isinstance(msg, m.Set) and self.effectors is not None:
+            if msg.type == "Joint":
+                reject("SET Joint", "SET {Type Joint} is not simulated (move joints with ACT); "
+                       "ignored", level=logging.INFO)
+            else:
+                self.effectors.set(msg, world, reject)
         elif isinstance(msg, m.Drive) and self.vehicle is not None:
             self.vehicle.drive(msg, world, reject, style)
         elif isinstance(msg, m.Set) and self.vehicle is not None:
@@ -162,11 +184,27 @@ class Session:
             head = msg.head if isinstance(msg, m.Unknown) else type(msg).__name__.upper()
             reject("unknown command", "unknown or unsupported command %r ignored", head[:40])
 
+    def _control(self, msg: m.Control, world: PhysicsWorld, world_spec: WorldSpec,
+                 find_robot: FindRobot) -> None:
+        wc = self.world_controller
+        if wc is None:
+            self.rejections.reject("not a WorldController", "CONTROL {Type %s}: BotConnection: "
+                                   "Bot is not a world controller; ignored", msg.type[:40])
+            return
+        reply = wc.handle(msg, world, world_spec, find_robot)
+        if reply is not None:
+            self.send(reply)
+
     def _init(self, msg: m.Init, world_spec: WorldSpec, robots: dict[str, RobotSpec]) -> None:
         reject = self.rejections.reject
-        if self.robot is not None or self.pending is not None:
+        if self.robot is not None or self.pending is not None or self.world_controller:
             reject("second INIT", "INIT ignored: this connection already has a robot (one per "
                    "connection)")
+            return
+        if msg.class_name.lower() == WORLD_CONTROLLER.lower():
+            self.world_controller = WorldController(self.key, msg.name or "", reject)
+            self.robot_name = msg.name or ""
+            log.info("%s: a WorldController '%s'", self.peer, (msg.name or "")[:80])
             return
         spec = next((r for c, r in robots.items() if c.lower() == msg.class_name.lower()), None)
         if spec is None:
@@ -191,21 +229,27 @@ class Session:
         if p is None:
             return
         self.pending = None
-        world.add_robot(self.key, p.spec, p.location, p.rotation)
+        world.add_robot(self.key, p.spec, p.location, p.rotation, name=p.name)
         self.robot, self.robot_name = p.spec, p.name
         self.targets = {a.name: [0.0] * len(a.joints) for a in p.spec.actuators}
         self._actuators = {a.name.lower(): a for a in p.spec.actuators}
         if p.spec.vehicle is not None:
             self.vehicle = VehicleSession(self.key, p.spec)
+        if p.spec.tool_changers:
+            self.effectors = Effectors(self.key, p.spec)
         self.next_status = world.time + replies.SCAN_INTERVAL
         log.info("%s: spawned %s '%s' at %s", self.peer, p.spec.class_name, p.name,
                  ",".join(f"{v:g}" for v in p.location))
 
-    def _describe(self, msg: m.GetConf | m.GetGeo, style: NumberStyle) -> None:
+    def _describe(self, msg: m.GetConf | m.GetGeo, style: NumberStyle, world: PhysicsWorld
+                  ) -> None:
         assert self.robot is not None
         reply: m.Message | None
         key = (isinstance(msg, m.GetConf), msg.type, msg.name)
-        if key in self._replies:  # the answers never change: compute each once
+        if self.effectors is not None and msg.type.lower() in {t.lower() for t in
+                                                               EFFECTOR_TYPES}:
+            reply = self._describe_effectors(msg, style, world)  # tools come and go
+        elif key in self._replies:  # the answers never change: compute each once
             reply = self._replies[key]
         else:
             if self.vehicle is not None:
@@ -217,18 +261,33 @@ class Session:
             if len(self._replies) < MAX_CACHED_REPLIES:
                 self._replies[key] = reply
         if reply is None:
+            components = replies.known_components(self.robot)
+            if self.effectors is not None:
+                components += self.effectors.components(world)
             self.rejections.reject(
                 "matches nothing", "%s {Type %s} {Name %s} matches nothing; no reply, as UDK "
                 "does (components: %s)", type(msg).__name__.upper(), msg.type[:80],
-                (msg.name or "")[:80], ", ".join(replies.known_components(self.robot)),
+                (msg.name or "")[:80], ", ".join(components),
                 level=logging.INFO)
             return
         self.send(reply)
+
+    def _describe_effectors(self, msg: m.GetConf | m.GetGeo, style: NumberStyle,
+                            world: PhysicsWorld) -> m.Message | None:
+        assert self.effectors is not None
+        if isinstance(msg, m.GetConf):
+            items = self.effectors.conf(msg.type, msg.name, world, style)
+            return m.Conf(msg.type, tuple(items)) if items else None
+        geo = self.effectors.geo(msg.type, msg.name, world)
+        return m.Geo(msg.type, tuple(geo)) if geo else None
 
     def _act(self, msg: m.Act, world: PhysicsWorld) -> None:
         assert self.robot is not None
         reject = self.rejections.reject
         act = self._actuators.get(msg.name.lower())
+        if act is None and self.effectors is not None and msg.gripper is not None:
+            if self.effectors.act_gripper(msg.name, msg.gripper, world):
+                return
         if act is None:
             reject("unknown actuator", "ACT for unknown actuator '%s' (this robot has: %s)",
                    msg.name[:80], ", ".join(a.name for a in self.robot.actuators))
@@ -274,6 +333,9 @@ class Session:
         for act in spec.actuators:
             values = world.joint_values(self.key, act.name).tolist()
             out.append(m.Asta(t, act.name, tuple(enumerate(values, start=1))))
+        if self.effectors is not None:
+            out += self.effectors.status(t, world)
+        out.append(m.ContactReport(self.robot_name, world.contacts.take(self.key), t))
         return out
 
 

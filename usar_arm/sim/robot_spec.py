@@ -21,18 +21,28 @@ import yaml
 
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.spatial import Array, Vector, exp_so3, invert, rpy_to_matrix, transform
+from usar_arm.sim.effector_spec import (
+    CollisionCapsule,
+    ToolChangerSpec,
+    VacuumSpec,
+    Vec3,
+    load_capsules,
+    load_effectors,
+    required,
+    vec3,
+)
 from usar_arm.sim.vehicle import VehicleSpec, load_vehicle
-
-Vec3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
 class PartSpec:
-    """A rigid part: name, mass (kg), and where its mesh is drawn (m, actuator frame)."""
+    """A rigid part: name, mass (kg), where its mesh is drawn (m, actuator frame), and its
+    collision capsules (the simulator's own geometry; none: the part touches nothing)."""
 
     name: str
     mass: float
     mesh_offset: Vec3 | None = None
+    collision: tuple[CollisionCapsule, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -120,6 +130,10 @@ class RobotSpec:
     actuators: tuple[ActuatorSpec, ...]
     vehicle: VehicleSpec | None = None
     """The chassis, wheels and sensors of a ground vehicle (None: a static platform)."""
+    tool_changers: tuple[ToolChangerSpec, ...] = ()
+    """The tool changers on the arms (``toolchange`` on the KR60's flange)."""
+    tools: tuple[VacuumSpec, ...] = ()
+    """The tools the robot spawns with (``KR60gripper``), attached or not."""
 
     @property
     def short_name(self) -> str:
@@ -175,51 +189,37 @@ def tip_pose(act: ActuatorSpec, q: Vector) -> Array:
 # ------------------------------------------------------------------------------- loading
 
 
-def _vec(value: Any, path: str, field: str) -> Vec3:
-    if not (isinstance(value, list) and len(value) == 3):
-        raise FileFormatError(path, f"expected [x, y, z], got {value!r}", field=field)
-    try:
-        return (float(value[0]), float(value[1]), float(value[2]))
-    except (TypeError, ValueError):
-        raise FileFormatError(path, f"expected three numbers, got {value!r}", field=field) from None
-
-
-def _req(d: dict[str, Any], key: str, path: str, where: str) -> Any:
-    if key not in d:
-        raise FileFormatError(path, f"missing '{key}'", field=f"{where}.{key}")
-    return d[key]
-
-
 def _load_actuator(d: dict[str, Any], path: str, where: str) -> ActuatorSpec:
     parts = tuple(
-        PartSpec(str(_req(p, "name", path, f"{where}.parts[{i}]")),
-                 float(_req(p, "mass", path, f"{where}.parts[{i}]")),
-                 _vec(p["mesh_offset"], path, f"{where}.parts[{i}].mesh_offset")
-                 if "mesh_offset" in p else None)
-        for i, p in enumerate(_req(d, "parts", path, where)))
+        PartSpec(str(required(p, "name", path, f"{where}.parts[{i}]")),
+                 float(required(p, "mass", path, f"{where}.parts[{i}]")),
+                 vec3(p["mesh_offset"], path, f"{where}.parts[{i}].mesh_offset")
+                 if "mesh_offset" in p else None,
+                 load_capsules(p.get("collision"), path, f"{where}.parts[{i}].collision"))
+        for i, p in enumerate(required(d, "parts", path, where)))
     joints = []
-    for i, j in enumerate(_req(d, "joints", path, where)):
+    for i, j in enumerate(required(d, "joints", path, where)):
         w = f"{where}.joints[{i}]"
-        jtype = str(_req(j, "type", path, w))
+        jtype = str(required(j, "type", path, w))
         if jtype not in ("Revolute", "Prismatic"):
             raise FileFormatError(path, f"type must be Revolute or Prismatic, got {jtype}",
                                   field=f"{w}.type")
         joints.append(JointSpec(
-            name=str(_req(j, "name", path, w)), type=jtype,
-            parent=str(_req(j, "parent", path, w)), child=str(_req(j, "child", path, w)),
-            offset=_vec(_req(j, "offset", path, w), path, f"{w}.offset"),
-            direction=_vec(_req(j, "direction", path, w), path, f"{w}.direction"),
-            limit_low=float(_req(j, "limit_low", path, w)),
-            limit_high=float(_req(j, "limit_high", path, w)),
-            max_force=float(_req(j, "max_force", path, w)),
-            damping=float(_req(j, "damping", path, w)),
+            name=str(required(j, "name", path, w)), type=jtype,
+            parent=str(required(j, "parent", path, w)), child=str(required(j, "child", path, w)),
+            offset=vec3(required(j, "offset", path, w), path, f"{w}.offset"),
+            direction=vec3(required(j, "direction", path, w), path, f"{w}.direction"),
+            limit_low=float(required(j, "limit_low", path, w)),
+            limit_high=float(required(j, "limit_high", path, w)),
+            max_force=float(required(j, "max_force", path, w)),
+            damping=float(required(j, "damping", path, w)),
             inverse_measure_angle=bool(j.get("inverse_measure_angle", False))))
     act = ActuatorSpec(
-        name=str(_req(d, "name", path, where)), class_name=str(d.get("class", d["name"])),
-        position=_vec(d.get("position", [0, 0, 0]), path, f"{where}.position"),
-        direction=_vec(d.get("direction", [0, 0, 0]), path, f"{where}.direction"),
-        tip_offset=_vec(d.get("tip_offset", [0, 0, 0]), path, f"{where}.tip_offset"),
-        body=str(_req(d, "body", path, where)), parts=parts, joints=tuple(joints),
+        name=str(required(d, "name", path, where)), class_name=str(d.get("class", d["name"])),
+        position=vec3(d.get("position", [0, 0, 0]), path, f"{where}.position"),
+        direction=vec3(d.get("direction", [0, 0, 0]), path, f"{where}.direction"),
+        tip_offset=vec3(d.get("tip_offset", [0, 0, 0]), path, f"{where}.tip_offset"),
+        body=str(required(d, "body", path, where)), parts=parts, joints=tuple(joints),
         tip_sensor=d.get("tip_sensor"))
     names = {p.name for p in parts}
     for i, jt in enumerate(act.joints):
@@ -247,21 +247,28 @@ def load_robot(path: str | Path) -> RobotSpec:
         raise FileFormatError(p, "expected a mapping at the top level")
     plat = data.get("platform", {})
     items = tuple(ItemSpec(str(it["type"]), str(it["name"]),
-                           _vec(it.get("position", [0, 0, 0]), p, f"items[{i}].position"),
-                           _vec(it.get("direction", [0, 0, 0]), p, f"items[{i}].direction"))
+                           vec3(it.get("position", [0, 0, 0]), p, f"items[{i}].position"),
+                           vec3(it.get("direction", [0, 0, 0]), p, f"items[{i}].direction"))
                   for i, it in enumerate(data.get("items", [])))
     actuators = tuple(_load_actuator(a, p, f"actuators[{i}]")
                       for i, a in enumerate(data.get("actuators") or []))
     if not actuators and "vehicle" not in data:
         raise FileFormatError(p, "a robot needs actuators or a vehicle", field="robot.actuators")
+    changers, tools = load_effectors(data.get("effectors") or {}, p)
+    parts = {a.name: {q.name for q in a.parts} for a in actuators}
+    for i, c in enumerate(changers):
+        if c.parent not in parts.get(c.actuator, set()):
+            raise FileFormatError(p, f"tool changer {c.name}: no part {c.parent} on actuator "
+                                  f"{c.actuator}", field=f"effectors.tool_changers[{i}]")
     return RobotSpec(
-        class_name=str(_req(data, "class_name", p, "robot")),
+        class_name=str(required(data, "class_name", p, "robot")),
         platform_type=str(plat.get("type", "StaticPlatform")),
         steering_type=str(plat.get("steering_type", "None")),
         platform_mass=float(plat.get("mass", 0)),
         battery=int(plat.get("battery", 99999)),
         items=items, actuators=actuators,
-        vehicle=load_vehicle(data["vehicle"], p) if "vehicle" in data else None)
+        vehicle=load_vehicle(data["vehicle"], p) if "vehicle" in data else None,
+        tool_changers=changers, tools=tools)
 
 
 def builtin_robots(vehicles: bool = False) -> dict[str, RobotSpec]:

@@ -21,7 +21,7 @@ from usar_arm.sim.connection import MAX_WRITE_BUFFER, Connection
 from usar_arm.sim.physics import PhysicsWorld
 from usar_arm.sim.robot_session import Session
 from usar_arm.sim.robot_spec import RobotSpec, builtin_robots
-from usar_arm.sim.truth import Truth, tool0_in_base
+from usar_arm.sim.truth import EffectorTruth, Truth, in_base_link, tool0_in_base
 from usar_arm.sim.world_spec import WorldSpec, load_world
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import STYLES, NumberStyle
@@ -104,7 +104,8 @@ class SimServer:
         self.style: NumberStyle = STYLES[self.options.wire_precision]
         self.world = PhysicsWorld(timestep=1.0 / self.options.physics_hz,
                                   gravity=self.options.gravity,
-                                  scenery=self.world_spec.boxes, floor_z=self.world_spec.floor_z)
+                                  scenery=self.world_spec.boxes, floor_z=self.world_spec.floor_z,
+                                  cell=self.world_spec.cell)
         self.max_connections = MAX_CONNECTIONS
         self._clients: dict[str, Connection] = {}
         """Session key -> the connection that owns the session (``connection.session``)."""
@@ -216,11 +217,22 @@ class SimServer:
             self._clients.pop(session.key, None)
             if session.robot is not None:
                 self._leaving.append(session.key)
+            if session.world_controller is not None:
+                session.world_controller.close(self.world)
 
     def handle(self, session: Session, msg: m.Message) -> None:
         """Act on one message of a client (the loop thread, between physics frames)."""
         with self._lock:
-            session.handle(msg, self.world, self.world_spec, self.robots, self.style)
+            session.handle(msg, self.world, self.world_spec, self.robots, self.style,
+                           self._find_robot)
+
+    def _find_robot(self, name: str) -> str | None:
+        """The key of the robot INIT named ``name`` (exactly, as ``GetBotController``)."""
+        for conn in self._clients.values():
+            session = conn.session
+            if session is not None and session.robot is not None and session.robot_name == name:
+                return session.key
+        return None
 
     def clients(self) -> list[ClientInfo]:
         """The connected clients, read consistently from any thread."""
@@ -252,7 +264,16 @@ class SimServer:
                 for act in session.robot.actuators:
                     joints[act.name] = world.joint_values(key, act.name)
                     tool0[act.name] = tool0_in_base(act, platform, world.tip_pose(key, act.name))
-                return Truth(key, session.peer, world.time, joints, tool0)
+                tools = {}
+                for tool in world.rig.tools.values():
+                    if tool.key == key:
+                        pose = in_base_link(platform, world.rig.tool_pose(world.data, tool))
+                        tools[tool.spec.name] = EffectorTruth(
+                            tool.spec.name, tool.holder is not None,
+                            tool.holder.spec.name if tool.holder else None,
+                            tool.held.name if tool.held else None, pose)
+                return Truth(key, session.peer, world.time, joints, tool0, tools,
+                             world.contacts.history(key))
         return None
 
     # ------------------------------------------------------------------ physics

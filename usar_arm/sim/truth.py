@@ -11,15 +11,35 @@ of the flange. Poses are in the robot's base_link: the actuator's frame with REP
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from usar_arm.core.spatial import FLIP_X, Array, invert, transform
 from usar_arm.sim.robot_spec import ActuatorSpec, joint_frames, tip_pose
+from usar_arm.usarsim.messages import ContactPair
 
 _FLIP = transform(FLIP_X)
 """USARSim (z down) <-> REP-103 (z up): the same 4x4 both ways."""
+
+
+@dataclass(frozen=True)
+class EffectorTruth:
+    """One of a robot's tools as the simulator has it (whatever EFF says).
+
+    Attributes:
+        name: the tool's ItemName (``KR60gripper``).
+        attached: on a tool changer (its EFF lines are sent) or dropped.
+        holder: the tool changer holding it (None when dropped).
+        held: the name of the WorldController object its vacuum holds (None: nothing).
+        pose: the tool's 4x4 pose in the robot's base_link (m, REP-103).
+    """
+
+    name: str
+    attached: bool
+    holder: str | None
+    held: str | None
+    pose: Array
 
 
 @dataclass(frozen=True)
@@ -31,6 +51,9 @@ class Truth:
         sim_time: simulated time of the reading (s).
         joints: per actuator, the measured joint values (rad or m).
         tool0: per actuator, tool0's 4x4 pose in base_link (m).
+        effectors: per tool the robot spawned with, its state (:class:`EffectorTruth`).
+        contacts: the robot's contacts since it spawned (the latest 10,000 reported, then the
+            ones not reported yet), as the contact extension names them.
     """
 
     key: str
@@ -38,6 +61,8 @@ class Truth:
     sim_time: float
     joints: dict[str, Array]
     tool0: dict[str, Array]
+    effectors: dict[str, EffectorTruth] = field(default_factory=dict)
+    contacts: tuple[ContactPair, ...] = ()
 
 
 def _smallest_rotation_from_x(direction: Array) -> Array:
@@ -72,6 +97,12 @@ def tool0_in_base(act: ActuatorSpec, platform_world: Array, tip_world: Array) ->
     """tool0 (4x4, base_link) from the platform's and the Tip's world poses (USARSim frame)."""
     base: Array = platform_world @ act.mount()
     out: Array = _FLIP @ invert(base) @ tip_world @ _FLIP @ tool0_in_tip(act)
+    return out
+
+
+def in_base_link(platform_world: Array, pose_world: Array) -> Array:
+    """A world pose (4x4, USARSim frame) in a robot's base_link (REP-103)."""
+    out: Array = _FLIP @ invert(platform_world) @ pose_world @ _FLIP
     return out
 
 

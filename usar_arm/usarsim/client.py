@@ -22,6 +22,7 @@ bounded whatever the server sends.
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable, Mapping, Sequence
 
 from usar_arm.core.errors import ConnectionLostError, ResponseTimeoutError, UnknownRobotError
@@ -157,6 +158,68 @@ class UsarClient(Exchange):
         pairs = (tuple(sorted(targets.items())) if isinstance(targets, Mapping)
                  else tuple(enumerate(float(v) for v in targets)))
         self.send(m.Act(actuator, tuple((int(k), float(v)) for k, v in pairs)))
+
+
+    # ------------------------------------------------------------------ effectors
+    def set_effector(self, type_: str, name: str, opcode: str, params: str | None = None
+                     ) -> None:
+        """``SET {Type T} {Name n} {Opcode op} [{Params p}]`` (``Gripper`` or ``ToolChanger``;
+        OPEN, CLOSE, GRIP). UDK never answers: read the effect with :meth:`wait_effector`."""
+        self.send(m.Set(type_, name, opcode, params))
+
+    def latest_eff(self, name: str) -> m.Eff | None:
+        """The most recent EFF of effector ``name``, if any arrived."""
+        rec = self._inbox.latest("EFF", name)
+        return rec.message if rec is not None and isinstance(rec.message, m.Eff) else None
+
+    def wait_effector(self, name: str, status: str | None = None,
+                      after_time: float | None = None, timeout: float | None = None) -> m.Eff:
+        """Wait for an EFF of ``name`` later than ``after_time`` (s of simulated time) whose
+        Status is ``status`` (any, when None).
+
+        Raises:
+            ResponseTimeoutError: none came within the timeout (names the last status seen).
+        """
+        limit = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + limit
+        last: m.Eff | None = None
+        while True:
+            try:
+                rec = self.wait_stream("EFF", name, after_time,
+                                       max(0.0, deadline - time.monotonic()))
+            except ResponseTimeoutError:
+                if last is None:
+                    raise
+                raise ResponseTimeoutError(f"EFF of {name} with Status {status}", limit,
+                                           f"its last EFF said {last.status}") from None
+            eff = rec.message
+            assert isinstance(eff, m.Eff), "the EFF cache holds EFF lines"
+            if status is None or eff.status == status.upper():
+                return eff
+            last, after_time = eff, eff.time
+
+    def latest_grip(self, name: str) -> m.GripTruth | None:
+        """The most recent GripTruth (the extension) of vacuum ``name``: what it holds."""
+        rec = self._inbox.latest("SEN", name)
+        return (rec.message if rec is not None and isinstance(rec.message, m.GripTruth)
+                else None)
+
+    def wait_grip(self, name: str, after_time: float | None = None,
+                  timeout: float | None = None) -> m.GripTruth:
+        """Wait for a GripTruth of vacuum ``name`` later than ``after_time``."""
+        msg = self.wait_stream("SEN", name, after_time, timeout).message
+        if not isinstance(msg, m.GripTruth):
+            raise ResponseTimeoutError(f"GripTruth of {name}", self.timeout if timeout is None
+                                       else timeout, f"{name} sends SEN lines of another type")
+        return msg
+
+    def latest_contacts(self, robot: str) -> m.ContactReport | None:
+        """The most recent contact report (the extension) of robot ``robot`` (its INIT name):
+        the contacts since the report before it (:class:`~.contact_watch.ContactWatch`
+        keeps every report)."""
+        rec = self._inbox.latest("SEN", robot)
+        return (rec.message if rec is not None and isinstance(rec.message, m.ContactReport)
+                else None)
 
 
 def _conf_matcher(type_: str, name: str | None) -> Callable[[m.Message], bool]:

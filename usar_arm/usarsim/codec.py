@@ -22,6 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, cast
 
+from usar_arm.usarsim import cell_codec as cc
 from usar_arm.usarsim import compound as c
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.blocks import (
@@ -92,6 +93,8 @@ def _read_ranges(r: BlockReader, b: RawBlock) -> tuple[float, ...]:
 RANGES = Kind("ranges", _read_ranges, lambda v, s: ",".join(s.fixed_at(x, 2) for x in v))
 """r1,r2,... printed with FloatString(r, 2) each (RangeScanner.uc)."""
 BOOL = Kind("bool", _read_bool, lambda v, s: str(v).lower())
+TRUE_FALSE = Kind("True/False", _read_bool, lambda v, s: str(v))
+"""A bool as UnrealScript prints one (``True``, ``False``)."""
 BATTERY = Kind("battery", _read_battery, lambda v, s: str(v))
 
 
@@ -210,9 +213,21 @@ SPECS: tuple[MessageSpec, ...] = (
         Field("Time", "time", SCALAR), Field("Type", "type", example="Odometry"),
         Field("Name", "name", example="Odometer"),
         Field("Pose", "pose", SCALAR_VECTOR, example="0.0,0.0,0.0"))),
-    MessageSpec("EFF", m.Eff, _fields(
-        Field("Time", "time", SCALAR), Field("Type", "type", example="Gripper"),
-        Field("Name", "name", example="gripper"))),
+    MessageSpec("EFF", m.Eff, compound=(cc.parse_eff, cc.format_eff)),
+    MessageSpec("SEN", m.GripTruth, _fields(
+        Field("Time", "time", SCALAR), Field("Type", "type", example="GripTruth"),
+        Field("Name", "name", example="KR60gripper"),
+        Field("Holding", "holding", TRUE_FALSE, example="False"),
+        Field("Object", "object"))),
+    MessageSpec("SEN", m.ContactReport, compound=(cc.parse_contact_report,
+                                                  cc.format_contact_report)),
+    MessageSpec("CONTROL", m.Control, _fields(
+        Field("Type", "type", example="GetSTA"), Field("Name", "name"),
+        Field("ClassName", "class_name"), Field("Location", "location"),
+        Field("Rotation", "rotation"), Field("Scale", "scale"), Field("Physics", "physics"),
+        Field("Permanent", "permanent"), Field("Memory", "memory"),
+        Field("Material", "material"), Field("Start", "start"), Field("MinPos", "min_pos"),
+        Field("MaxPos", "max_pos"))),
 )
 
 _BY_TYPE: dict[type, MessageSpec] = {spec.type: spec for spec in SPECS}
@@ -231,7 +246,8 @@ def _parse_conf(r: BlockReader) -> m.Message:
 
 
 SEN_TYPES: dict[str, type] = {"rangescanner": m.RangeScan, "ins": m.Ins,
-                              "odometry": m.Odometry}
+                              "odometry": m.Odometry, "contact": m.ContactReport,
+                              "griptruth": m.GripTruth}
 """SEN lines with their own message type, by ``Type`` (lower case); any other is a :class:`Sen`."""
 
 
@@ -254,6 +270,8 @@ def parse_line(text: str) -> m.Message:
         ProtocolError: the line breaks the grammar or a value has the wrong form; the error
             quotes the line and the column.
     """
+    if cc.is_wc_status(text):  # not block grammar (an unclosed {Location)
+        return cc.parse_wc_status(text)
     head, raw = split_line(text)
     parse = _BY_HEAD.get(head.upper())
     if parse is None:
@@ -265,6 +283,8 @@ def format_message(msg: m.Message, style: NumberStyle = FULL) -> str:
     """The wire text of a message, terminated by CRLF, numbers printed in ``style``."""
     if isinstance(msg, m.Unknown):
         return line(msg.head, blocks(msg.blocks))
+    if isinstance(msg, m.WcStatus):
+        return cc.format_wc_status(msg, style)
     spec = _BY_TYPE.get(type(msg))
     if spec is None:
         raise TypeError(f"not a USARSim message: {msg!r}")

@@ -11,6 +11,7 @@ from typing import Any
 from usar_arm.core.errors import ProtocolError
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.blocks import CRLF, BlockReader, RawBlock, block, blocks, line
+from usar_arm.usarsim.cell_codec import join_glued
 from usar_arm.usarsim.numbers import NumberStyle
 
 # ------------------------------------------------------------------------- start poses
@@ -300,11 +301,19 @@ def parse_geo(r: BlockReader) -> m.Geo:
 def format_geo(msg: m.Message, s: NumberStyle) -> str:
     """The wire text of :class:`~.messages.Geo`."""
     assert isinstance(msg, m.Geo)
-    return line("GEO", [block("Type", msg.type)] + [_geo_item(i, s) for i in msg.items])
+    raw = msg.type.lower() in RAW_GEO_TYPES
+    return line("GEO", [block("Type", msg.type)] + [_geo_item(i, s, raw) for i in msg.items])
+
+
+RAW_GEO_TYPES = frozenset({"gripper", "toolchanger", "effector"})
+"""GEO types whose Location and Orientation UDK prints as raw vectors (2 decimals,
+``Effector.GetGeoData``), not with FloatString as sensors' and actuators' are."""
 
 
 def _conf_item(item: m.ConfItem, s: NumberStyle) -> str:
-    parts = [block("Name", item.name), *blocks(item.fields)]
+    head = join_glued([block("Name", item.name), *blocks(item.fields)],  # }{PositionTolerance
+                      ["Name", *(k for k, _ in item.fields)])
+    parts = [head]
     for ln in item.links:
         parts += [block("Link", str(ln.link)), block("JointType", ln.joint_type)]
         for key, value in (("MaxSpeed", ln.max_speed), ("MaxTorque", ln.max_torque),
@@ -315,12 +324,13 @@ def _conf_item(item: m.ConfItem, s: NumberStyle) -> str:
     return " ".join(parts)
 
 
-def _geo_item(item: m.GeoItem, s: NumberStyle) -> str:
+def _geo_item(item: m.GeoItem, s: NumberStyle, raw: bool = False) -> str:
+    vector = s.raw_vector if raw else s.fixed_vector
     text = block("Name", item.name)
     if item.location is not None:
-        text += " " + block("Location", s.fixed_vector(item.location))
+        text += " " + block("Location", vector(item.location))
     if item.orientation is not None:
-        text += " " + block("Orientation", s.fixed_vector(item.orientation))
+        text += " " + block("Orientation", vector(item.orientation))
     if item.mount is not None:
         text += block("Mount", item.mount)  # UDK: no space before {Mount
     if item.mount_link is not None:

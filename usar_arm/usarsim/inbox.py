@@ -27,10 +27,10 @@ wire_log = logging.getLogger("usar_arm.usarsim.wire")
 
 STATUS_HEADS = frozenset({"ASTA", "STA", "SEN", "EFF", "MISSTA"})
 """Command words of the unsolicited status lines: a malformed one does not fail a request."""
-_SENSOR_LINES = (m.Sen, m.RangeScan, m.Ins, m.Odometry)
+_SENSOR_LINES = (m.Sen, m.RangeScan, m.Ins, m.Odometry, m.ContactReport, m.GripTruth)
 """Every SEN line (the typed ones too): cached under ``("SEN", name)``."""
 _STREAMS = (m.Asta, m.Sta, m.Eff, *_SENSOR_LINES)
-_REPLIES = (m.StartPoses, m.Conf, m.PlatformConf, m.Geo)
+_REPLIES = (m.StartPoses, m.Conf, m.PlatformConf, m.Geo, m.WcStatus)
 _COMMAND_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _WARN_BAD_LINES = 5
 """Malformed lines logged as warnings per connection; the rest at DEBUG (a flood stays short)."""
@@ -128,7 +128,7 @@ class Inbox:
 
     def _on_stream(self, rec: Received,
                    msg: m.Asta | m.Sta | m.Sen | m.Eff | m.RangeScan | m.Ins | m.Odometry
-                   ) -> None:
+                   | m.ContactReport | m.GripTruth) -> None:
         if isinstance(msg, m.Asta):
             key, component = ("ASTA", msg.name), f"Actuator {msg.name}"
         elif isinstance(msg, m.Sta):

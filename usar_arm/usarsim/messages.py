@@ -12,6 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+# The cell's lines (WorldController, truth extensions), re-exported with the rest.
+from usar_arm.usarsim.cell_messages import ContactPair as ContactPair
+from usar_arm.usarsim.cell_messages import ContactReport as ContactReport
+from usar_arm.usarsim.cell_messages import Control as Control
+from usar_arm.usarsim.cell_messages import GripTruth as GripTruth
+from usar_arm.usarsim.cell_messages import WcObjectStatus as WcObjectStatus
+from usar_arm.usarsim.cell_messages import WcStatus as WcStatus
+
 Vector3 = tuple[float, float, float]
 Block = tuple[str, str]
 """A ``{Key value}`` block: key and value text (value is ``""`` for a bare ``{On}``)."""
@@ -339,6 +347,16 @@ class Eff:
     time: float | None = None
     extra: tuple[Block, ...] = ()
 
+    def get(self, key: str) -> str | None:
+        """The value of a data block (``Status``, ``ToolType``, ``Tool``), any case."""
+        return next((v for k, v in self.extra if k.lower() == key.lower()), None)
+
+    @property
+    def status(self) -> str | None:
+        """``OPEN`` or ``CLOSED`` (upper case), None for an effector without a Status."""
+        value = self.get("Status")
+        return None if value is None else value.upper()
+
 
 # ----------------------------------------------------------------------- anything else
 
@@ -354,4 +372,5 @@ class Unknown:
 Message = (
     GameInfo | StartPoses | GetStartPoses | Init | GetConf | GetGeo | Act | Set | Drive | Conf
     | PlatformConf | Geo | Asta | Sta | Sen | RangeScan | Ins | Odometry | Eff | Unknown
+    | Control | WcStatus | ContactReport | GripTruth
 )
