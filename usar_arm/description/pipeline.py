@@ -174,7 +174,8 @@ def _with_effectors(record: DiscoveryRecord, arm: WireArm, chain: KinematicChain
     frames in the output convention, and the rotations snapped on the way."""
     joint_links = tuple(j.link for j in arm.joints)
     down, snaps = effector_frames(frames_down, arm.effectors, joint_links, arm.name,
-                                  record.spawn_rotation)
+                                  record.spawn_rotation, record.effector_joints,
+                                  tuple(j.joint_type == "Prismatic" for j in arm.joints))
     placed = zup_effector_frames(down) if frame == "z-up" else down
     base = (naming.base, np.eye(4)) if naming.legacy else (naming.base_link,
                                                            invert(frames.mount))

@@ -36,6 +36,10 @@ log = logging.getLogger("usar_arm.discover")
 
 LISTEN_S = 0.35
 """How long to listen to the status streams after the spawn (s): more than one 10 Hz period."""
+SETTLE_S, SETTLE_TOL, SETTLE_WAIT_S = 0.2, 2e-4, 3.0
+"""The arm counts as settled when its joints moved less than SETTLE_TOL (rad or m: two ASTA
+print steps) over SETTLE_S s of simulated time; at most SETTLE_WAIT_S s of wall time is spent
+waiting (:func:`settled_joints`)."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,8 @@ class DiscoveryRecord:
         arm: the arm built from the replies (with its effectors).
         warnings: what the discovery could not learn, and why.
         spawn_rotation: the robot's roll, pitch, yaw at its start (rad, z-down world frame).
+        effector_joints: the arm's joints (rad or m) while its effectors' GEO was asked (None:
+            no effector).
     """
 
     host: str
@@ -68,6 +74,7 @@ class DiscoveryRecord:
     arm: WireArm | None = None
     warnings: list[str] = field(default_factory=list)
     spawn_rotation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    effector_joints: tuple[float, ...] | None = None
 
     def reply_lines(self) -> list[str]:
         """The raw CONF/GEO lines, in order (the cache key of a description)."""
@@ -123,9 +130,32 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
             assert isinstance(sgeo, m.Geo)
             sensors += [i for i in sgeo.items if i.name.lower() == sname.lower()]
     arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
-    record.arm = replace(arm, effectors=mount_order(_effectors(record, ask), arm.name,
-                                                    tuple(j.link for j in arm.joints)))
+    links = tuple(j.link for j in arm.joints)
+    if any(c.partition(" ")[0] in EFFECTOR_TYPES for c in record.components):
+        record.effector_joints = settled_joints(client, arm.name, links)
+        arm = replace(arm, effectors=mount_order(_effectors(record, ask), arm.name, links))
+    record.arm = arm
     return record
+
+
+def settled_joints(client: UsarClient, actuator: str, links: tuple[int, ...]
+                   ) -> tuple[float, ...]:
+    """The arm's joint values (rad or m, chain order) once two ASTA lines :data:`SETTLE_S` of
+    simulated time apart differ by less than :data:`SETTLE_TOL` (a spawned arm sags under
+    gravity for a moment); the latest ones after :data:`SETTLE_WAIT_S` s at most. Effector GEO
+    lines are world-axis differences at the pose the arm is in, which these describe."""
+    deadline = time.monotonic() + SETTLE_WAIT_S
+    before = client.wait_asta(actuator)
+    while True:
+        later = client.wait_asta(actuator, after_time=before.time + SETTLE_S)
+        q0, q1 = before.joints(links), later.joints(links)
+        if q0 is None or q1 is None:
+            raise DescriptionError(f"the ASTA lines of {actuator} lack some of its links "
+                                   f"{list(links)}: {later}")
+        if max(abs(a - b) for a, b in zip(q0, q1, strict=True)) < SETTLE_TOL \
+                or time.monotonic() > deadline:
+            return q1
+        before = later
 
 
 def _effectors(record: DiscoveryRecord, ask: Ask) -> tuple[WireEffector, ...]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usar_arm.core.spatial import FLIP_X, Array, rpy_to_matrix, transform
+from usar_arm.core.spatial import FLIP_X, Array, exp_so3, invert, rpy_to_matrix, transform
 from usar_arm.discover.effectors import WireEffector
 from usar_arm.discover.frames import SNAP_FACTOR, ArmFrames, Snap, nearest_rotation
 
@@ -42,12 +42,32 @@ class EffectorFrame:
     tip: Array
 
 
+def link_frames_at(frames: ArmFrames, q: tuple[float, ...], prismatic: tuple[bool, ...]
+                   ) -> list[Array]:
+    """Each joint's link frame (4x4, in ``frames``' actuator base frame) at joint values ``q``:
+    at the zero pose the frame at the joint's anchor, parallel to the base frame, as the
+    description's link frames are; moved by the joints up to it."""
+    out, chain = [], np.eye(4)
+    for anchor, axis, value, slide in zip(frames.anchors, frames.axes, q, prismatic,
+                                          strict=True):
+        if slide:
+            step = transform(pos=axis * value)
+        else:
+            rot = exp_so3(axis * value)
+            step = transform(rot, anchor - rot @ anchor)
+        chain = chain @ step
+        out.append(chain @ transform(pos=anchor))
+    return out
+
+
 def effector_frames(frames: ArmFrames, effectors: tuple[WireEffector, ...],
                     joint_links: tuple[int, ...], actuator: str,
-                    spawn_rotation: Vec3 = (0.0, 0.0, 0.0)) -> tuple[tuple[EffectorFrame, ...],
-                                                                    tuple[Snap, ...]]:
-    """The frames (z-down, like ``frames``) of ``effectors`` (mounted in order, each after the
-    one it rides on), and the rotations snapped.
+                    spawn_rotation: Vec3 = (0.0, 0.0, 0.0),
+                    joints: tuple[float, ...] | None = None,
+                    prismatic: tuple[bool, ...] | None = None
+                    ) -> tuple[tuple[EffectorFrame, ...], tuple[Snap, ...]]:
+    """The frames (z-down, like ``frames``; at the zero pose) of ``effectors`` (mounted in
+    order, each after the one it rides on), and the rotations snapped.
 
     Args:
         frames: the arm's joint frames in the z-down actuator base frame.
@@ -55,32 +75,40 @@ def effector_frames(frames: ArmFrames, effectors: tuple[WireEffector, ...],
         actuator: the arm's name (an effector whose Mount is it rides on the arm).
         spawn_rotation: the robot's roll, pitch, yaw at its spawn (rad): GEO's world axes are
             turned into the platform's by it.
+        joints, prismatic: the joint values (rad or m) the arm stood at while the GEO lines
+            were asked, and which joints slide: GEO measures in world axes at that pose (a
+            spawned arm sags), so each effector is taken back to its mount link's frame there
+            and placed on it at the zero pose. None: the zero pose.
     """
     if frames.frame != "z-down":
         raise ValueError(f"effector frames are computed from z-down frames, got {frames.frame}")
+    n = len(frames.anchors)
+    at_q = link_frames_at(frames, joints or (0.0,) * n, prismatic or (False,) * n)
+    at_zero = [transform(pos=p) for p in frames.anchors]
     to_platform = rpy_to_matrix(spawn_rotation).T
     to_actuator = frames.mount[:3, :3].T
-    done: dict[str, EffectorFrame] = {}
+    done: dict[str, tuple[EffectorFrame, Array]] = {}
     out: list[EffectorFrame] = []
     snaps: list[Snap] = []
     for e in effectors:
         offset = to_actuator @ to_platform @ np.asarray(e.location, dtype=float)
         rot = to_actuator @ rpy_to_matrix(e.orientation)
-        canon, dev = nearest_rotation(rot)
-        if 0 < dev <= SNAP_FACTOR * e.orientation_resolution:
-            snaps.append(Snap(f"{e.type} {e.name} frame", dev, tuple(canon.ravel())))
-            rot = canon
         if e.mount.lower() == actuator.lower():
             link = e.mount_link or 0
-            anchor = frames.anchors[joint_links.index(link)] if link else np.zeros(3)
+            k = joint_links.index(link) if link else -1
+            here, zero = (at_q[k], at_zero[k]) if link else (np.eye(4), np.eye(4))
             parent = actuator
         else:
-            below = done[e.mount.lower()]
-            link, anchor, parent = below.link, below.pose[:3, 3], below.effector.name
-        pose = transform(rot, anchor + offset)
-        tip = pose @ transform(pos=e.tip)
-        frame = EffectorFrame(e, link, parent, pose, tip)
-        done[e.name.lower()] = frame
+            below, below_q = done[e.mount.lower()]
+            link, parent, here, zero = below.link, below.effector.name, below_q, below.pose
+        pose_q = transform(rot, here[:3, 3] + offset)
+        pose = zero @ invert(here) @ pose_q
+        canon, dev = nearest_rotation(pose[:3, :3])
+        if 0 < dev <= SNAP_FACTOR * e.orientation_resolution:
+            snaps.append(Snap(f"{e.type} {e.name} frame", dev, tuple(canon.ravel())))
+            pose[:3, :3] = canon
+        frame = EffectorFrame(e, link, parent, pose, pose @ transform(pos=e.tip))
+        done[e.name.lower()] = (frame, pose_q)
         out.append(frame)
     return tuple(out), tuple(snaps)
 
