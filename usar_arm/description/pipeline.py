@@ -41,7 +41,7 @@ from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validate import validate
 from usar_arm.urdf.writer import urdf_text
 
-GENERATOR = 1
+GENERATOR = 2
 """The version of what discovery writes from the same CONF/GEO lines and options; part of the
 description cache's key, so a description cached by a generator that wrote something else is
 made again (bump it when the geometry, the collision matrix or the files change)."""

@@ -78,7 +78,10 @@ def effector_frames(frames: ArmFrames, effectors: tuple[WireEffector, ...],
         joints, prismatic: the joint values (rad or m) the arm stood at while the GEO lines
             were asked, and which joints slide: GEO measures in world axes at that pose (a
             spawned arm sags), so each effector is taken back to its mount link's frame there
-            and placed on it at the zero pose. None: the zero pose.
+            and placed on it at the zero pose. None: the zero pose. Over a wire that prints
+            locations in steps (UDK: 0.01 m) the offset from the mount, which the sag moves by
+            far less than a step, is put back on the printed grid, so the same lines give the
+            same description whatever the arm's sag when they were asked.
     """
     if frames.frame != "z-down":
         raise ValueError(f"effector frames are computed from z-down frames, got {frames.frame}")
@@ -103,6 +106,9 @@ def effector_frames(frames: ArmFrames, effectors: tuple[WireEffector, ...],
             link, parent, here, zero = below.link, below.effector.name, below_q, below.pose
         pose_q = transform(rot, here[:3, 3] + offset)
         pose = zero @ invert(here) @ pose_q
+        if e.location_resolution > 0:  # the sag moved it less than the print step: back on it
+            step = e.location_resolution
+            pose[:3, 3] = zero[:3, 3] + np.round((pose[:3, 3] - zero[:3, 3]) / step) * step
         canon, dev = nearest_rotation(pose[:3, :3])
         if 0 < dev <= SNAP_FACTOR * e.orientation_resolution:
             snaps.append(Snap(f"{e.type} {e.name} frame", dev, tuple(canon.ravel())))
