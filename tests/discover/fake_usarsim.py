@@ -26,9 +26,14 @@ def _read(line: str) -> tuple[str, list[tuple[str, str]]]:
 
 
 def fake_usarsim(conf: str, geo: str, *, greet: bool = True, answer: bool = True,
-                 close_mid_geo: bool = False, arm: str = "A", dof: int = 2) -> FakeServer:
+                 close_mid_geo: bool = False, arm: str = "A", dof: int = 2,
+                 effectors: dict[str, tuple[str, str]] | None = None,
+                 status: tuple[str, ...] = ()) -> FakeServer:
     """Serve NFO, GETSTARTPOSES, INIT (then 10 Hz ASTA), GETCONF/GETGEO from fixed lines and
-    ACT (the targets become the streamed joint values)."""
+    ACT (the targets become the streamed joint values). ``effectors``: ``{Type}`` -> the CONF
+    and GEO lines of that effector type (the request's Name is not checked); ``status``: more
+    lines streamed with every ASTA (EFF lines)."""
+    effectors = effectors or {}
 
     def script(conn: socket.socket) -> None:
         if greet:
@@ -44,7 +49,9 @@ def fake_usarsim(conf: str, geo: str, *, greet: bool = True, answer: bool = True
                                   for k, v in enumerate(joints))
                 try:
                     conn.sendall(f"STA {{Time {t:.4f}}} {{Battery 99999}} {{Type StaticPlatform}}"
-                                 f"\r\nASTA {{Time {t:.4f}}} {{Name {arm}}} {values}\r\n".encode())
+                                 f"\r\nASTA {{Time {t:.4f}}} {{Name {arm}}} {values}\r\n".encode()
+                                 + b"".join(s.replace("{T}", f"{t:.4f}").encode() + b"\r\n"
+                                            for s in status))
                 except OSError:
                     return
                 time.sleep(0.1)
@@ -77,6 +84,10 @@ def fake_usarsim(conf: str, geo: str, *, greet: bool = True, answer: bool = True
                                  b"{Mass 0} \r\n")
                 elif head == "GETGEO" and keys.get("type") == "Robot":
                     conn.sendall(b"GEO {Type StaticPlatform} {Name R}\r\n")
+                elif head in ("GETCONF", "GETGEO") and keys.get("type") in effectors:
+                    line = effectors[keys["type"]][0 if head == "GETCONF" else 1]
+                    if line:
+                        conn.sendall(line.encode() + b"\r\n")
                 elif head == "GETCONF":
                     conn.sendall(conf.encode() + b"\r\n")
                 elif head == "GETGEO":

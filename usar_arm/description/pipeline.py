@@ -19,16 +19,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from usar_arm.core.errors import InvalidInputError
 from usar_arm.core.fileio import write_tree_atomic
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.precision import with_precision
+from usar_arm.core.spatial import invert, transform
 from usar_arm.core.version import __version__
 from usar_arm.discover.build import build_chain
-from usar_arm.discover.frames import accumulate, snap_tolerance_for, to_frame
+from usar_arm.discover.frames import ArmFrames, Snap, accumulate, snap_tolerance_for, to_frame
 from usar_arm.discover.interview import DiscoveryRecord
 from usar_arm.discover.limits import home_state, load_limits_file, resolve
 from usar_arm.discover.naming import Naming
+from usar_arm.discover.tool_frames import EffectorFrame, effector_frames, zup_effector_frames
+from usar_arm.discover.tool_links import effector_json, tool_links, with_tools
 from usar_arm.discover.wire_arm import WireArm
 from usar_arm.planning.acm import AcmResult, compute_acm
 from usar_arm.planning.kinematics import KinematicModel
@@ -36,7 +41,7 @@ from usar_arm.urdf.srdf import GroupState, joint_limits_yaml, srdf_text
 from usar_arm.urdf.validation import validate
 from usar_arm.urdf.writer import urdf_text
 
-GENERATOR = 1
+GENERATOR = 2
 """The version of what discovery writes from the same CONF/GEO lines and options; part of the
 description cache's key, so a description cached by a generator that wrote something else is
 made again (bump it when the geometry, the collision matrix or the files change)."""
@@ -126,9 +131,16 @@ def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Descripti
         override = load_limits_file(options.velocity_limits, arm.dof,
                                     [naming.joint(k + 1) for k in range(arm.dof)])
     limits, warnings = resolve(arm, override)
+    warnings = [*record.warnings, *warnings]
     sources = tuple(lim.sources for lim in limits)
     notes = _notes(record, arm, options, frames_down.snaps, sources)
     chain = build_chain(arm, frames, limits, naming, notes)
+    effectors: tuple[EffectorFrame, ...] = ()
+    snaps = frames_down.snaps
+    if arm.effectors:
+        chain, effectors, tool_snaps = _with_effectors(record, arm, chain, frames, frames_down,
+                                                       naming, options.frame)
+        snaps += tool_snaps
     urdf = urdf_text(chain)
     validate(chain, urdf)
     kinematics = KinematicModel(urdf, chain.joint_names)
@@ -149,10 +161,27 @@ def describe_arm(record: DiscoveryRecord, options: DescribeOptions) -> Descripti
         f"home: {home_source}."]
     srdf = srdf_text(chain, [GroupState("home", home)], acm.disabled, acm_notes)
     joint_limits = joint_limits_yaml(chain, sources)
-    discovery = _discovery_json(record, arm, options, chain, frames_down.snaps, acm, sources,
-                                warnings)
+    discovery = _discovery_json(record, arm, options, chain, snaps, acm, sources, warnings)
+    discovery["effectors"] = [effector_json(f, chain) for f in effectors]
     return Description(chain, urdf, srdf, joint_limits, discovery, acm, home, sources,
                        tuple(warnings))
+
+
+def _with_effectors(record: DiscoveryRecord, arm: WireArm, chain: KinematicChain,
+                    frames: ArmFrames, frames_down: ArmFrames, naming: Naming, frame: str
+                    ) -> tuple[KinematicChain, tuple[EffectorFrame, ...], tuple[Snap, ...]]:
+    """The chain with the arm's effectors as links (:mod:`usar_arm.discover.tool_links`), their
+    frames in the output convention, and the rotations snapped on the way."""
+    joint_links = tuple(j.link for j in arm.joints)
+    down, snaps = effector_frames(frames_down, arm.effectors, joint_links, arm.name,
+                                  record.spawn_rotation, record.effector_joints,
+                                  tuple(j.joint_type == "Prismatic" for j in arm.joints))
+    placed = zup_effector_frames(down) if frame == "z-up" else down
+    base = (naming.base, np.eye(4)) if naming.legacy else (naming.base_link,
+                                                           invert(frames.mount))
+    link_frames = {0: base, **{link: (naming.link(k + 1), transform(pos=frames.anchors[k]))
+                               for k, link in enumerate(joint_links)}}
+    return with_tools(chain, tool_links(placed, link_frames)), placed, snaps
 
 
 def write_description(desc: Description, out_dir: str | Path) -> dict[str, Path]:

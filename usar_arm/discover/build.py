@@ -65,11 +65,14 @@ def link_cylinder(start: Array, end: Array, frame: Array | None = None) -> Cylin
         trimmed = length * 0.6
     if trimmed < MIN_CYLINDER_LENGTH:
         return None
-    return Cylinder(radius, trimmed, _along(np.asarray(start, dtype=float), d, length, frame))
+    return Cylinder(radius, trimmed,
+                    segment_origin(np.asarray(start, dtype=float), d, length, frame))
 
 
-def _along(start: Array, d: Array, length: float, frame: Array | None) -> Origin:
-    """The pose of a cylinder centred on the segment start -> start + d, its z along it."""
+def segment_origin(start: Array, d: Array, length: float, frame: Array | None = None
+                   ) -> Origin:
+    """The pose of a cylinder centred on the segment start -> start + d (m, ``length`` its
+    length), its z along it; ``frame`` (4x4) maps the segment's coordinates into the link's."""
     z = d / length
     ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     x = np.cross(ref, z)
@@ -92,7 +95,7 @@ def link_core(start: Array, end: Array, frame: Array | None = None,
         return None
     begin = np.asarray(start, dtype=float) + d / length * skip
     d = d * (1 - skip / length)
-    return Cylinder(CORE_RADIUS, length - skip, _along(begin, d, length - skip, frame))
+    return Cylinder(CORE_RADIUS, length - skip, segment_origin(begin, d, length - skip, frame))
 
 
 def link_collisions(start: Array, end: Array, frame: Array | None = None,

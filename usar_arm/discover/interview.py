@@ -13,9 +13,20 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
-from usar_arm.core.errors import ConnectionLostError, DescriptionError, UnknownStartError
+from usar_arm.core.errors import (
+    ConnectionLostError,
+    DescriptionError,
+    ResponseTimeoutError,
+    UnknownStartError,
+)
+from usar_arm.discover.effectors import (
+    EFFECTOR_TYPES,
+    WireEffector,
+    effector_from_replies,
+    mount_order,
+)
 from usar_arm.discover.wire_arm import WireArm, arm_from_replies
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.client import UsarClient
@@ -25,6 +36,10 @@ log = logging.getLogger("usar_arm.discover")
 
 LISTEN_S = 0.35
 """How long to listen to the status streams after the spawn (s): more than one 10 Hz period."""
+SETTLE_S, SETTLE_TOL, SETTLE_WAIT_S = 0.2, 2e-4, 3.0
+"""The arm counts as settled when its joints moved less than SETTLE_TOL (rad or m: two ASTA
+print steps) over SETTLE_S s of simulated time; at most SETTLE_WAIT_S s of wall time is spent
+waiting (:func:`settled_joints`)."""
 
 
 @dataclass(frozen=True)
@@ -43,7 +58,11 @@ class DiscoveryRecord:
         host, port: the server. robot_class: e.g. ``USARBot.KR60``. start: the start position.
         exchanges: each request and the raw reply, in order.
         components: ``Type Name`` of what the status streams announced.
-        arm: the arm built from the replies.
+        arm: the arm built from the replies (with its effectors).
+        warnings: what the discovery could not learn, and why.
+        spawn_rotation: the robot's roll, pitch, yaw at its start (rad, z-down world frame).
+        effector_joints: the arm's joints (rad or m) while its effectors' GEO was asked (None:
+            no effector).
     """
 
     host: str
@@ -53,6 +72,9 @@ class DiscoveryRecord:
     exchanges: list[Exchange] = field(default_factory=list)
     components: list[str] = field(default_factory=list)
     arm: WireArm | None = None
+    warnings: list[str] = field(default_factory=list)
+    spawn_rotation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    effector_joints: tuple[float, ...] | None = None
 
     def reply_lines(self) -> list[str]:
         """The raw CONF/GEO lines, in order (the cache key of a description)."""
@@ -110,8 +132,58 @@ def discover(client: UsarClient, robot_class: str, robot_name: str | None = None
             sgeo = ask(m.GetGeo("GroundTruth", sname), m.Geo, sname)
             assert isinstance(sgeo, m.Geo)
             sensors += [i for i in sgeo.items if i.name.lower() == sname.lower()]
-    record.arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
+    arm = arm_from_replies(platform, confs[actuator], geo_item, sensors, geo_line)
+    links = tuple(j.link for j in arm.joints)
+    if any(c.partition(" ")[0] in EFFECTOR_TYPES for c in record.components):
+        record.effector_joints = settled_joints(client, arm.name, links)
+        arm = replace(arm, effectors=mount_order(_effectors(record, ask), arm.name, links))
+    record.arm = arm
     return record
+
+
+def settled_joints(client: UsarClient, actuator: str, links: tuple[int, ...]
+                   ) -> tuple[float, ...]:
+    """The arm's joint values (rad or m, chain order) once two ASTA lines :data:`SETTLE_S` of
+    simulated time apart differ by less than :data:`SETTLE_TOL` (a spawned arm sags under
+    gravity for a moment); the latest ones after :data:`SETTLE_WAIT_S` s at most. Effector GEO
+    lines are world-axis differences at the pose the arm is in, which these describe."""
+    deadline = time.monotonic() + SETTLE_WAIT_S
+    before = client.wait_asta(actuator)
+    while True:
+        later = client.wait_asta(actuator, after_time=before.time + SETTLE_S)
+        q0, q1 = before.joints(links), later.joints(links)
+        if q0 is None or q1 is None:
+            raise DescriptionError(f"the ASTA lines of {actuator} lack some of its links "
+                                   f"{list(links)}: {later}")
+        if max(abs(a - b) for a, b in zip(q0, q1, strict=True)) < SETTLE_TOL \
+                or time.monotonic() > deadline:
+            return q1
+        before = later
+
+
+def _effectors(record: DiscoveryRecord, ask: Ask) -> tuple[WireEffector, ...]:
+    """GETCONF and GETGEO of every effector the status streams announced (EFF lines), tool
+    changers first. One that does not answer (a tool dropped since its last EFF line: UDK
+    hides it) is left out, with a warning."""
+    found = []
+    for kind in EFFECTOR_TYPES:
+        for comp in record.components:
+            ctype, _, name = comp.partition(" ")
+            if ctype != kind:
+                continue
+            try:
+                conf = ask(m.GetConf(kind, name), m.Conf, name)
+                geo = ask(m.GetGeo(kind, name), m.Geo, name)
+            except ResponseTimeoutError as exc:
+                record.warnings.append(f"{kind} {name} announced itself but did not answer "
+                                       f"GETCONF/GETGEO ({exc}); it is not in the description")
+                log.warning("%s", record.warnings[-1])
+                continue
+            assert isinstance(conf, m.Conf) and isinstance(geo, m.Geo)
+            citem = next(i for i in conf.items if i.name.lower() == name.lower())
+            gitem = next(i for i in geo.items if i.name.lower() == name.lower())
+            found.append(effector_from_replies(kind, citem, gitem, record.exchanges[-1].reply))
+    return tuple(found)
 
 
 Ask = Callable[..., m.Message]
@@ -146,6 +218,9 @@ def spawn_robot(client: UsarClient, robot_class: str, robot_name: str | None = N
     elif not any(n.lower() == start.lower() for n in poses.names):
         raise UnknownStartError(start, poses.names)
     record.start = start
+    record.spawn_rotation = next((p.rotation for p in poses.poses
+                                  if start is not None and p.name.lower() == start.lower()),
+                                 (0.0, 0.0, 0.0))
     name = robot_name or robot_class.split(".")[-1]
     log.info("spawning %s '%s' at %s", robot_class, name, start or "the origin")
     first = client.spawn(robot_class, name, start=start,

@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 from usar_arm.core.errors import DescriptionError
+from usar_arm.discover.effectors import WireEffector
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.numbers import printed_resolution
 
@@ -64,6 +65,8 @@ class WireArm:
         joints: in chain order, from the base outwards.
         tip: the Tip offset from the last joint's anchor, in the actuator base frame (m).
         tip_sensor: the tip GroundTruth sensor, when the server has one.
+        effectors: the tool changers and tools on the arm (:mod:`.effectors`), each after the
+            one it rides on.
         location_resolution, orientation_resolution, tip_resolution: the smallest step the
             server printed for link Locations (m; UDK truncates to 0.001), link Orientations
             (rad; UDK rounds to 0.01) and the Tip (m; 0.01); 0 when unknown or exact.
@@ -78,6 +81,7 @@ class WireArm:
     joints: tuple[WireJoint, ...]
     tip: Vec3
     tip_sensor: SensorMount | None = None
+    effectors: tuple[WireEffector, ...] = ()
     location_resolution: float = 0.0
     orientation_resolution: float = 0.0
     tip_resolution: float = 0.0

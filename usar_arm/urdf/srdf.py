@@ -10,6 +10,8 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.urdf.writer import comment_block, num
 
 GROUP = "manipulator"
+GRIPPER_GROUP = "gripper"
+"""The group of the tool's links (the tool changer, the tool, its TCP), MoveIt's end effector."""
 
 
 @dataclass(frozen=True)
@@ -32,8 +34,9 @@ class GroupState:
 
 def srdf_text(chain: KinematicChain, states: Sequence[GroupState],
               disabled: Sequence[DisabledPair], notes: Sequence[str] = ()) -> str:
-    """The SRDF: the manipulator group (base_link -> tool0), named states, a fixed virtual joint
-    to ``world``, and the disabled collision pairs, each with its reason."""
+    """The SRDF: the manipulator group (base_link -> tool0), named states, the tool's links as
+    the ``gripper`` group and MoveIt's end effector (when the arm has a tool), a fixed virtual
+    joint to ``world``, and the disabled collision pairs, each with its reason."""
     base, tip = chain.frames["base_link"], chain.frames["tool0"]
     lines = ['<?xml version="1.0"?>', *comment_block(notes),
              f"<robot name={quoteattr(chain.name)}>",
@@ -46,6 +49,7 @@ def srdf_text(chain: KinematicChain, states: Sequence[GroupState],
             value = num(state.values[joint])
             lines.append(f"    <joint name={quoteattr(joint)} value=\"{value}\"/>")
         lines.append("  </group_state>")
+    lines += _end_effector(chain)
     lines.append('  <virtual_joint name="virtual_joint" type="fixed" parent_frame="world" '
                  f"child_link={quoteattr(base)}/>")
     for pair in disabled:
@@ -53,6 +57,33 @@ def srdf_text(chain: KinematicChain, states: Sequence[GroupState],
                      f"link2={quoteattr(pair.link2)} reason={quoteattr(pair.reason)}/>")
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
+
+
+def tool_chain_links(chain: KinematicChain) -> list[str]:
+    """The links from the tool changer (or the tool) out to the TCP, in chain order: those
+    hanging off the arm below the chain's ``tool`` frame; empty when the arm has no tool."""
+    top = chain.frames.get("tool_changer", chain.frames.get("tool"))
+    if top is None:
+        return []
+    out = [top]
+    for j in chain.joints:
+        if j.parent in out and j.child not in out:
+            out.append(j.child)
+    return out
+
+
+def _end_effector(chain: KinematicChain) -> list[str]:
+    """The gripper group and MoveIt's end effector on the link the tool rides on."""
+    links = tool_chain_links(chain)
+    if "tool" not in chain.frames:
+        return []
+    parent = next(j.parent for j in chain.joints if j.child == links[0])
+    return [f"  <group name={quoteattr(GRIPPER_GROUP)}>",
+            *(f"    <link name={quoteattr(name)}/>" for name in links),
+            "  </group>",
+            f"  <end_effector name={quoteattr(chain.frames['tool'])} "
+            f"parent_link={quoteattr(parent)} group={quoteattr(GRIPPER_GROUP)} "
+            f"parent_group={quoteattr(GROUP)}/>"]
 
 
 def joint_limits_yaml(chain: KinematicChain, sources: Sequence[tuple[str, str, str]],

@@ -10,12 +10,16 @@ from collections.abc import Iterable, Sequence
 from xml.sax.saxutils import escape, quoteattr
 
 from usar_arm.core.model import Cylinder, Joint, JointType, KinematicChain, Link, Origin
+from usar_arm.core.precision import meaningful
 from usar_arm.core.shapes import CylinderShape
 
 
 def num(value: float) -> str:
-    """A number as the generated files print it: up to 10 significant digits, no ``-0``."""
-    text = f"{float(value):.10g}"
+    """A number as the generated files print it: with the precision it means (a length, an
+    angle or a unitless number to 1e-9 of its unit: :func:`~usar_arm.core.precision.meaningful`,
+    so a calibrated offset of 2.4e-5 m does not carry its fit's last bits, which differ between
+    CPUs), in up to 10 significant digits, no ``-0``."""
+    text = f"{meaningful(float(value)):.10g}"
     if text in ("-0", "-0.0"):
         return "0"
     return text
