@@ -107,9 +107,9 @@ def test_attaching_into_an_obstacle_is_refused_naming_the_pair(arm: Robot) -> No
 
 def test_unknown_links_and_name_clashes_are_errors_naming_the_valid_names(arm: Robot) -> None:
     box = Box((0.1, 0.1, 0.1))
-    with pytest.raises(AttachError, match="no link 'gripper'.*known: base_link, base, link_1"):
+    with pytest.raises(AttachError, match=r"no link .gripper..*known: base_link, base, link_1"):
         arm.carrying([AttachedBody("part", "gripper", box)])
-    with pytest.raises(AttachError, match="'link_3'.*already one of the robot's links"):
+    with pytest.raises(AttachError, match=r"'link_3'.*already one of the robot's links"):
         arm.carrying([AttachedBody("link_3", TCP, box)])
     with pytest.raises(AttachError, match="two carried objects have that name"):
         arm.carrying([AttachedBody("part", TCP, box), AttachedBody("part", "tool0", box)])
