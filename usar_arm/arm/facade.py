@@ -23,7 +23,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from usar_arm.arm.carry import Carrier, CarryBook
+from usar_arm.arm.carry import Carrier
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
 from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.control.tip import TipSensor, platform_sensor_name
@@ -37,6 +37,7 @@ from usar_arm.core.spatial import Array, pose_error
 from usar_arm.description.cache import cache_folder, robot_from_record
 from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.discover.interview import discover
+from usar_arm.planning.carry_book import CarryBook
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
