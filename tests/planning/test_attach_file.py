@@ -50,7 +50,7 @@ def test_json_files_meshes_and_scene_objects(tmp_path: Path) -> None:
         f"name: cone\nmesh: {{file: {SCENES / 'meshes' / 'fixture.stl'}, scale: 0.5}}\n"
         "xyz: [0, 0, 0.1]\n")
     cone = read_attach(tmp_path / "cone.yaml")
-    assert isinstance(cone.shape, Mesh) and cone.link == "tool0"
+    assert isinstance(cone.shape, Mesh) and cone.link is None and cone.body().link == "tool0"
     part = parse_attach({"name": "part", "link": "KR60gripper_tcp"}, "x", tmp_path)
     assert part.shape is None and part.pose is None
 

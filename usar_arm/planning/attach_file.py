@@ -41,13 +41,14 @@ class AttachRequest:
     """An object to attach: a new one (``shape`` and ``pose`` given) or a scene object's name.
 
     Attributes:
-        name: the object. link: the link to fix it to. touch_links: links it may touch.
+        name: the object. link: the link to fix it to (None: not given, :data:`DEFAULT_LINK`
+            unless the caller names one). touch_links: links it may touch.
         shape, pose: a new object's geometry and 4x4 pose in the link's frame (None: take the
             scene object's at the configuration it is attached at).
     """
 
     name: str
-    link: str = DEFAULT_LINK
+    link: str | None = None
     touch_links: tuple[str, ...] = ()
     shape: ObstacleShape | None = None
     pose: Array | None = None
@@ -55,7 +56,8 @@ class AttachRequest:
     def body(self) -> AttachedBody:
         """The body of a new object (FileFormatError-free: ``shape`` and ``pose`` are set)."""
         assert self.shape is not None and self.pose is not None
-        return AttachedBody(self.name, self.link, self.shape, self.pose, self.touch_links)
+        return AttachedBody(self.name, self.link or DEFAULT_LINK, self.shape, self.pose,
+                            self.touch_links)
 
 
 def _load_mesh(shape: MeshFile, path: str) -> Mesh:
@@ -85,8 +87,8 @@ def parse_attach(data: Any, path: str, base: Path, field: str = "") -> AttachReq
     if not isinstance(name, str) or not name:
         raise reader.fail("the object needs a 'name'", data, "name" if "name" in data else None,
                           f"{at}name")
-    link = data.get("link", DEFAULT_LINK)
-    if not isinstance(link, str) or not link:
+    link = data.get("link")
+    if link is not None and (not isinstance(link, str) or not link):
         raise reader.fail(f"'link' names a robot link, got {link!r}", data, "link", f"{at}link")
     touch = data.get("touch_links", [])
     if not isinstance(touch, list) or not all(isinstance(t, str) and t for t in touch):

@@ -123,7 +123,12 @@ class Robot:
         the pairs proven never in contact, the lever arms) is built once, in a world of the
         empty scene per padding and set of disabled pairs, that every later world is copied
         from (:meth:`CollisionWorld.in_scene`): a world per scene costs the scene's part only.
+        A scene object of a carried body's name is that body (:meth:`carrying`): it is not an
+        obstacle of the world.
         """
+        carried = {b.name for b in self.carried}
+        if any(o.name in carried for o in scene.objects):
+            scene = Scene(scene.name, tuple(o for o in scene.objects if o.name not in carried))
         validate_allow(scene, {lk.name for lk in self.chain.links})
         key = (float(padding), frozenset(self.disabled))
         base = self._worlds.get(key)
