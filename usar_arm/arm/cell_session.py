@@ -72,7 +72,8 @@ class CellSession:
                 log.info("destroying the %s an earlier run left", p.name)
                 self.wc.kill(p.name)
             wire = zdown_to_zup_transform(p.pose)  # (the flip is its own inverse)
-            self.wc.create(p.name, p.wc_class.name, wire[:3, 3], matrix_to_rpy(wire[:3, :3]),
+            self.wc.create(p.name, p.wc_class.name, wire[:3, 3].tolist(),
+                           matrix_to_rpy(wire[:3, :3]),
                            p.scale, p.physics, permanent=self.permanent or p.permanent,
                            memory=p.memory, material=p.material)
             made.append(p.name)

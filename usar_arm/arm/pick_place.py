@@ -5,15 +5,17 @@ carried as an attached object, let go in the bin, and the result judged by the s
 :func:`run_pick_place` runs the moves of :func:`usar_arm.arm.cycle.pick_and_place`: after the
 ``grip`` move it closes the vacuum, confirms the grip (GripTruth, or GetSTA on a server without
 the extension: the part must rise with the lift), reads where the part really is and attaches
-it to the tool's centre point, so that every later plan checks it; the objects it rested on may
-touch it during the lift only. While the part is carried, the executor stops the arm if the
-suction is lost. After the ``release`` move it opens the vacuum, detaches the part and plans
-the rest around where it fell. :class:`Placement` is the judgement: the part's final pose by
-GetSTA against the place, and every contact the simulator reported (its contact extension).
+it to the tool's centre point, so that every later plan checks it (the objects it rested on
+may touch it until it is clear of them: :mod:`usar_arm.planning.carry_book`). While the part
+is carried, the executor stops the arm if the suction is lost. After the ``release`` move it
+opens the vacuum, detaches the part and plans the rest around where it fell.
+:class:`Placement` is the judgement: the part's final pose by GetSTA against the place, and
+every contact the simulator reported (its contact extension).
 """
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,11 +30,14 @@ from usar_arm.arm.vacuum import Vacuum
 from usar_arm.control.executor import ExecutionOptions
 from usar_arm.control.motion import MotionOptions
 from usar_arm.core.cell_errors import GripError
+from usar_arm.core.errors import UsarArmError
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
-from usar_arm.planning.scene import Scene, SceneObject
+from usar_arm.planning.scene import Scene
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.contact_watch import ContactWatch
+
+log = logging.getLogger("usar_arm.arm.pick_place")
 
 PLACE_TOLERANCE_M = 0.005
 """How far (m, in x and y) the part may come to rest from the place and count as placed."""
@@ -138,13 +143,6 @@ def _without(scene: Scene, name: str) -> Scene:
                                    if o.name != name and not o.name.startswith(name + "/")))
 
 
-def _allowing(scene: Scene, names: set[str], link: str) -> Scene:
-    """``scene`` with ``link`` allowed to touch the objects ``names``."""
-    return Scene(scene.name, tuple(
-        SceneObject(o.name, o.shape, o.pose, (*o.allow, link)) if o.name in names else o
-        for o in scene.objects))
-
-
 class _Run:
     """One pick-and-place: the state between the moves."""
 
@@ -155,18 +153,11 @@ class _Run:
         self.vacuum = Vacuum(client, parts.vacuum)
         self.scene = cell.scene()
         self.carrying = False
-        self.supports: set[str] = set()
         self.placement = Placement()
         self.grip_time = self.lift_end = self.release_time = 0.0
         self.rose_from: float | None = None
         self.scenes: dict[str, Scene] = {}
         self.carrying_chain: KinematicChain | None = None
-
-    def planning_scene(self) -> Scene:
-        """The scene the next move is planned in."""
-        if not self.carrying:
-            return self.scene
-        return _allowing(self.scene, self.supports, self.parts.part)
 
     def grip(self, move: Move) -> None:
         """Close the vacuum, confirm what it holds, attach the part."""
@@ -183,10 +174,7 @@ class _Run:
         q = self.arm.joints()
         self.arm.attach(p.part, link=p.tcp_link, scene=self.scene, touch_links=p.touch_links,
                         q=q)
-        world = self.arm.world(_without(self.scene, p.part))
-        self.carrying_chain = world.chain
-        self.supports = {b if a == p.part else a for a, b in world.contacts(q)
-                         if p.part in (a, b)} - set(p.touch_links)
+        self.carrying_chain = self.arm.planning_robot.chain
         self.scene = _without(self.scene, p.part)
         self.carrying = True
 
@@ -201,7 +189,6 @@ class _Run:
             raise GripError(p.vacuum, move.name, f"the {p.part} lifted with the tool",
                             "GetSTA shows it did not rise" if now is not None
                             else "GetSTA lists no part")
-        self.supports = set()
         if self.placement.gripped is None:
             self.placement.gripped = p.part
 
@@ -214,6 +201,16 @@ class _Run:
         self.carrying = False
         self.cell.resting(p.part)
         self.scene = self.cell.scene()
+
+    def drop(self) -> None:
+        """After a failure: nothing stays attached in the planner's world (the part is where
+        the simulator has it, not in the gripper of the model)."""
+        if self.carrying:
+            self.carrying = False
+            try:
+                self.arm.detach(self.parts.part, q=self.arm.joints())
+            except UsarArmError as exc:  # (the connection may be what failed)
+                log.warning("could not detach %s after the failure: %s", self.parts.part, exc)
 
     def judge(self, watch: ContactWatch) -> Placement:
         """The part's final pose and the contacts, by the simulator."""
@@ -276,7 +273,7 @@ def run_pick_place(arm: Arm, cell: CellSession, moves: list[Move],
             executor = arm.executor(execution)
             try:
                 plan = arm.plan(joints=move.joints, pose=move.pose, motion=move.motion,
-                                scene=run.planning_scene(), options=motion)
+                                scene=run.scene, options=motion)
                 executor.monitor = run.vacuum.monitor() if run.carrying else None
                 try:
                     report = arm.execute(plan.trajectory, goal_pose=move.pose,
@@ -295,6 +292,7 @@ def run_pick_place(arm: Arm, cell: CellSession, moves: list[Move],
                     run.release(move)
             except Exception as exc:
                 exc.add_note(f"during move {i + 1} ({move.name}, {move.motion.upper()})")
+                run.drop()
                 raise
             done = MoveResult(move, plan, report, time.perf_counter() - begin)
             result.moves.append(done)

@@ -194,8 +194,8 @@ def run(args: argparse.Namespace) -> int:
         assert arm.client is not None, "a connected arm"
         with CellSession(arm.client.host, arm.client.port, "table",
                          permanent=args.host is not None) as cell:
-            made = cell.build()
-            progress(f"[3/4] created {', '.join(made)} through the WorldController; "
+            spawned = cell.build()
+            progress(f"[3/4] created {', '.join(spawned)} through the WorldController; "
                      "pick-and-place (the first move starts with a 2 s swing that learns the "
                      "drives' response)" + (", correcting the tool with the tip sensor"
                                             if args.tip_correction else ""))
