@@ -1,4 +1,5 @@
-"""``usar-arm demo``, the main job: description, seven executed moves, table, pictures, bag."""
+"""``usar-arm demo``, the main job: description, the part picked and placed in seven executed
+moves (judged by the simulator), table, pictures, bag."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from usar_arm.cli.main import main
-from usar_arm.core.errors import EXIT_OK
+from usar_arm.core.errors import EXIT_OK, EXIT_UNAVAILABLE
+from usar_arm.sim.server import SimOptions, SimServer
 
 MOVES = ["approach", "pick", "lift", "transfer", "place", "retreat", "home"]
 
@@ -27,7 +29,11 @@ def test_the_demo_runs_the_cycle_and_writes_everything(
     for move in MOVES:
         assert move in table
     assert "tool0 within 1 mm and 1 mrad of every goal: yes" in table
+    assert "part placed in the bin: yes (" in table
     report = json.loads((folder / "report.json").read_text())
+    placement = report["placement"]
+    assert placement["placed"] and placement["xy_error_m"] <= 0.005
+    assert placement["arm_contacts"] == [] and placement["carried_contacts"] == []
     rows = report["moves"]
     assert [r["move"] for r in rows] == MOVES
     for r in rows:  # the issue's targets, on the simulator's truth
@@ -60,4 +66,27 @@ def test_the_default_demo_on_the_udk_wire_calibrates_and_reaches_every_goal(
             f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad, simulator truth)")
     assert line in captured.out
     assert worst_m <= 3e-4 and worst_rad <= 3e-4
+    assert "part placed in the bin: yes (" in captured.out
     assert '"calibration"' in (folder / "description/KR60.discovery.json").read_text()
+
+
+@pytest.mark.slow
+def test_the_demo_in_a_server_the_user_started_leaves_the_cell_there(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``usar-arm demo --host H --port P``: the same pick-and-place in a running server, whose
+    cell (made permanent) is there afterwards, the part in the bin. A second run in the same
+    server finds the first's bin where its own would go (UDK: permanent objects outlive their
+    controller, and no other can destroy them) and says so."""
+    with SimServer(SimOptions(port=0)) as server:
+        args = ["demo", "--host", "127.0.0.1", "--port", str(server.port), "--no-bag",
+                "--no-calibrate"]
+        assert main([*args, "--out", str(tmp_path / "1")]) == EXIT_OK
+        assert "part placed in the bin: yes (" in capsys.readouterr().out
+        # GetSTA lists a controller's own objects only: the simulator's world has them all
+        objects = {o.name: o for o in server.world.objects.objects.values()}
+        assert sorted(objects) == ["bin", "part"]
+        part = server.world.object_pose(objects["part"])[:3, 3]  # z-down world
+        assert abs(part[0] - 1.45) < 0.005 and abs(part[1] + 0.50) < 0.005
+        assert main([*args, "--out", str(tmp_path / "2")]) == EXIT_UNAVAILABLE
+        err = capsys.readouterr().err
+        assert "an earlier run left in this server" in err and "restart the server" in err

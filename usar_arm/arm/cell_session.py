@@ -10,12 +10,12 @@ started keeps them, for inspection.
 
 from __future__ import annotations
 
-import logging
 import time
 
 import numpy as np
 
 from usar_arm.core.cell import Cell, load_cell
+from usar_arm.core.cell_errors import WorldControllerError
 from usar_arm.core.spatial import (
     Array,
     matrix_to_rpy,
@@ -27,8 +27,6 @@ from usar_arm.planning.cell_scene import scene_from_sightings
 from usar_arm.planning.scene import Scene
 from usar_arm.usarsim import messages as m
 from usar_arm.usarsim.world_controller import WorldControllerClient
-
-log = logging.getLogger("usar_arm.arm.cell_session")
 
 
 class CellSession:
@@ -58,24 +56,27 @@ class CellSession:
         self.close()
 
     def build(self) -> list[str]:
-        """Create every object the cell spawns, each confirmed by GetSTA; an object of the same
-        name left by an earlier run (a permanent one) is destroyed first. Returns the names.
+        """Create every object the cell spawns, each confirmed by GetSTA. Returns the names.
 
         Raises:
             WorldControllerError: an object was not created (names what GetSTA shows: a spawn
-                inside existing geometry, or a class the server does not know).
+                inside existing geometry, such as the permanent objects of an earlier run,
+                which outlive their controller and which no other controller can destroy; or
+                a class the server does not know).
         """
-        present = {o.name.upper() for o in self.wc.get_sta().objects}
         made = []
         for p in self.cell.spawn:
-            if p.name.upper() in present:
-                log.info("destroying the %s an earlier run left", p.name)
-                self.wc.kill(p.name)
             wire = zdown_to_zup_transform(p.pose)  # (the flip is its own inverse)
-            self.wc.create(p.name, p.wc_class.name, wire[:3, 3].tolist(),
-                           matrix_to_rpy(wire[:3, :3]),
-                           p.scale, p.physics, permanent=self.permanent or p.permanent,
-                           memory=p.memory, material=p.material)
+            try:
+                self.wc.create(p.name, p.wc_class.name, wire[:3, 3].tolist(),
+                               matrix_to_rpy(wire[:3, :3]), p.scale, p.physics,
+                               permanent=self.permanent or p.permanent, memory=p.memory,
+                               material=p.material)
+            except WorldControllerError as exc:
+                raise WorldControllerError(exc.command, exc.expected, exc.seen, (
+                    exc.hint + "; a cell an earlier run left in this server (its objects are "
+                    "permanent: no WorldController can destroy them) is in the way: restart "
+                    "the server") if self.permanent else exc.hint) from None
             made.append(p.name)
         return made
 
