@@ -17,6 +17,7 @@ from usar_arm.planning.carry_book import CarryBook
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Scene, SceneObject
+from usar_arm.planning.tool_change import CHANGER_ROLE, without_tool
 from usar_arm.usarsim.client import UsarClient
 
 
@@ -28,6 +29,7 @@ class Carrier:
     client: UsarClient | None
     _carry: CarryBook
     _scenes: dict[str, tuple[Scene, CollisionWorld]]
+    _mounted: bool
 
     if TYPE_CHECKING:  # (the Arm's own)
         def joints(self, timeout: float = 2.0, newer_than: float | None = None) -> Array:
@@ -44,8 +46,24 @@ class Carrier:
 
     @property
     def planning_robot(self) -> Robot:
-        """The robot plans, IK and worlds use: the arm carrying :attr:`attached`."""
-        return self.robot.carrying(self._carry.bodies)
+        """The robot plans, IK and worlds use: the arm as its tool changer has it
+        (:attr:`mounted_robot`), carrying :attr:`attached`."""
+        return self.mounted_robot.carrying(self._carry.bodies)
+
+    @property
+    def mounted_robot(self) -> Robot:
+        """The arm as its tool changer has it now: without its tool once the changer's latest
+        EFF says OPEN (it let the tool go: :func:`~usar_arm.planning.tool_change.without_tool`),
+        with it otherwise (and offline). A change empties the arm's cached worlds."""
+        changer = self.robot.chain.frames.get(CHANGER_ROLE)
+        if self.client is None or changer is None:
+            return self.robot
+        eff = self.client.latest_eff(changer)
+        mounted = eff is None or eff.status != "OPEN"
+        if mounted != self._mounted:
+            self._mounted = mounted
+            self._scenes.clear()
+        return self.robot if mounted else without_tool(self.robot)
 
     def _here(self, q: Array | None) -> Array:
         """``q``, or the live joints when connected, or home offline (rad/m)."""

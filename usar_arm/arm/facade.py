@@ -82,6 +82,7 @@ class Arm(Carrier):
         self.server = server
         self._scenes: dict[str, tuple[Scene, CollisionWorld]] = {}
         self._carry = CarryBook()
+        self._mounted = True  # (the tool changer holds its tool: carry.Carrier)
         self._executor: Executor | None = None
         self.cache_entry: Path | None = None
         """The description cache's entry of this arm (connected arms only)."""
