@@ -23,9 +23,10 @@ pytest.importorskip("rclpy", reason="the ros extra is not installed: pip install
 from action_msgs.msg import GoalStatus
 from control_msgs.action import GripperCommand
 from sensor_msgs.msg import JointState
+from tf2_msgs.msg import TFMessage
 from usarsim_inf.msg import EffectorCommand, EffectorStatus, ToolchangerStatus
 
-from tests.ros.helpers import Client, NodeProcess, domain_id, make_goal
+from tests.ros.helpers import LATCHED, Client, NodeProcess, domain_id, make_goal
 from tests.sim.cell_helpers import changer_pose
 from usar_arm.usarsim.world_controller import WorldControllerClient
 
@@ -57,7 +58,8 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Client, int
         except OSError:
             time.sleep(0.1)
     domain = domain_id()
-    node = NodeProcess(domain, ["--host", "127.0.0.1", "--port", str(port), "-v"],
+    node = NodeProcess(domain, ["--host", "127.0.0.1", "--port", str(port), "-v",
+                                "--ros-args", "-p", "gripper_joint_states:=true"],
                        folder / "node.log")
     client = Client(domain)
     try:
@@ -102,12 +104,27 @@ def test_status_topics_follow_each_eff_line(cell) -> None:
     assert (last.tool_type.type, last.tool_name) == (1, GRIPPER)  # ToolType Gripper -> 1
 
 
+def test_the_tools_frames_are_static_and_the_suction_joint_is_a_joint_state(cell) -> None:
+    client, _ = cell
+    static = client.collect(TFMessage, "tf_static", 10.0, LATCHED, until=bool)
+    edges = {(t.header.frame_id, t.child_frame_id) for t in static[0][1].transforms}
+    assert {("link_6", CHANGER), (CHANGER, GRIPPER), (GRIPPER, f"{GRIPPER}_tcp")} <= edges
+    states = [msg for _, msg in client.collect(JointState, "joint_states", 1.0)]
+    suction = [m for m in states if list(m.name) == [f"{GRIPPER}_suction"]]
+    arm = [m for m in states if list(m.name) == NAMES]
+    assert len(suction) >= 5 and len(arm) >= 5 and len(suction) + len(arm) == len(states)
+    assert {tuple(m.position) for m in suction} == {(0.0,)}  # the vacuum is off
+
+
 def test_close_over_nothing_succeeds_and_says_nothing_is_held(cell) -> None:
     client, _ = cell
     status, result = grip(client, 1.0)
     assert status == GoalStatus.STATUS_SUCCEEDED
     assert (result.position, result.reached_goal, result.stalled) == (1.0, True, False)
     assert statuses(client, f"{GRIPPER}/status", EffectorStatus, 0.5)[-1].state == CLOSE
+    suction = client.collect(JointState, "joint_states", 1.0,
+                             until=lambda ms: any(m.name[0] == f"{GRIPPER}_suction" for m in ms))
+    assert suction[-1][1].position[0] == 1.0
     status, result = grip(client, 0.0)
     assert status == GoalStatus.STATUS_SUCCEEDED
     assert (result.position, result.reached_goal, result.stalled) == (0.0, True, False)

@@ -12,6 +12,9 @@ and the gripper as a control_msgs GripperCommand action.
   changer goes CLOSE -> OPEN, the tool it held is forgotten (its commands ignored, its action's
   goals refused) until its EFF lines come back.
 * ``<gripper>/gripper_cmd`` (GripperCommand, :class:`GripperAction`): see its docstring.
+* with the node's ``gripper_joint_states``: per EFF line of a gripper, a JointState of its
+  virtual joint ``<gripper>_suction`` alone on ``joint_states`` (what MoveIt's state monitor
+  needs for the gripper controller of ``usar-arm moveit-config --gripper``).
 
 Units: s; a gripper's position is its virtual joint ``<gripper>_suction`` (0 off, 1 on).
 """
@@ -35,6 +38,7 @@ from usar_arm.ros.transport import (
     GoalHandle,
     GripperGoal,
     GripperRecord,
+    JointStateRecord,
     Kind,
     Publisher,
     ToolchangerStatusRecord,
@@ -88,13 +92,16 @@ def effectors_of(files: dict[str, str]) -> tuple[Effector, ...]:
 
 class EffectorTopics:
     """``<name>/status`` and ``<name>/command`` of every effector (the seed's usarsim_inf), from
-    the connection's EFF lines (on its reader thread)."""
+    the connection's EFF lines (on its reader thread); ``joint_states``: where a gripper's
+    virtual joint state goes (None: nowhere)."""
 
     def __init__(self, transport: Transport, client: UsarClient,
-                 effectors: tuple[Effector, ...], counts: dict[str, int]):
+                 effectors: tuple[Effector, ...], counts: dict[str, int],
+                 joint_states: Publisher | None = None):
         self.transport = transport
         self.client = client
         self.counts = counts
+        self.joint_states = joint_states
         self._lock = threading.Lock()
         self._status: dict[str, Publisher] = {}
         self._types: dict[str, str] = {}
@@ -144,6 +151,10 @@ class EffectorTopics:
                     del self._gates[eff.name]
         try:
             self._status[eff.name].publish(record)
+            if self.joint_states is not None and eff.type == GRIPPER:
+                self.joint_states.publish(JointStateRecord(
+                    eff.time if self.transport.use_sim_time and eff.time is not None
+                    else stamp, (f"{eff.name}{SUCTION_SUFFIX}",), (float(state),)))
         except Exception as exc:  # a publisher of a context shutting down: never kill the reader
             log.debug("not published: %s", exc)
 
@@ -288,12 +299,13 @@ class GripperAction:
 
 
 def serve_effectors(transport: Transport, client: UsarClient, files: dict[str, str],
-                    counts: dict[str, int]) -> tuple[EffectorTopics, list[GripperAction]]:
+                    counts: dict[str, int], joint_states: Publisher | None = None
+                    ) -> tuple[EffectorTopics, list[GripperAction]]:
     """Serve the effectors of a description (its discovery record's ``effectors``): the
-    topics, and one GripperCommand action per gripper. The caller subscribes
-    ``topics.on_line`` to the connection."""
+    topics, and one GripperCommand action per gripper (``joint_states``: see
+    :class:`EffectorTopics`). The caller subscribes ``topics.on_line`` to the connection."""
     effectors = effectors_of(files)
-    topics = EffectorTopics(transport, client, effectors, counts)
+    topics = EffectorTopics(transport, client, effectors, counts, joint_states)
     actions = [GripperAction(transport, client, e.name, topics)
                for e in effectors if e.type == GRIPPER]
     return topics, actions

@@ -66,7 +66,9 @@ class NodeOptions:
             every frame. rate_hz: the executor's command rate. scene: goals whose motion
             collides in it are refused ('' = none). wire_precision: number format of the
             embedded simulator (udk, full). node_name: the node's name (ROS 2: ``usar_arm``,
-            ROS 1: ``RosSim``, the seed's).
+            ROS 1: ``RosSim``, the seed's). gripper_joint_states: also publish each
+            gripper's virtual joint ``<gripper>_suction`` (0 off, 1 on) on joint_states, in
+            a message of its own per EFF line (for MoveIt's gripper controller).
     """
 
     robot_type: str = "KR60"
@@ -80,6 +82,7 @@ class NodeOptions:
     scene: str = ""
     wire_precision: str = "udk"
     node_name: str = "usar_arm"
+    gripper_joint_states: bool = False
 
 
 class StateStreams:
@@ -291,7 +294,9 @@ def serve(transport: Transport, arm: Arm, options: NodeOptions, stop: threading.
     unsubscribe = arm.client.subscribe(streams.on_line)
     controller = options.controller or f"{arm.robot.actuator}_controller"
     TrajectoryInterfaces(transport, arm, runner, controller, options.rate_hz, options.scene)
-    effectors, _grippers = serve_effectors(transport, arm.client, arm.robot.files, counts)
+    effectors, _grippers = serve_effectors(
+        transport, arm.client, arm.robot.files, counts,
+        streams.joint_states if options.gripper_joint_states else None)
     unsubscribe_effectors = arm.client.subscribe(effectors.on_line)
     # Last: a client that has the description finds everything else served.
     static = Counted(transport.publisher("tf_static", Kind.TF, latched=True), "tf_static",
