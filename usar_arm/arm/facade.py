@@ -23,6 +23,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from usar_arm.arm.carry import Carrier
 from usar_arm.control.executor import ExecutionOptions, ExecutionReport, Executor
 from usar_arm.control.motion import MotionOptions, MotionPlan, plan_motion
 from usar_arm.control.tip import TipSensor, platform_sensor_name
@@ -36,6 +37,7 @@ from usar_arm.core.spatial import Array, pose_error
 from usar_arm.description.cache import cache_folder, robot_from_record
 from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.discover.interview import discover
+from usar_arm.planning.carry_book import CarryBook
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.compiled import warm_up
 from usar_arm.planning.ik import IKResult
@@ -67,7 +69,7 @@ class EmbeddedServer(Protocol):
         """Stop serving and free the port."""
 
 
-class Arm:
+class Arm(Carrier):
     """A described arm, with (optionally) a live connection to the robot on a server.
 
     Build one with :meth:`connect` (live) or :meth:`from_files` (offline: plan only).
@@ -79,6 +81,7 @@ class Arm:
         self.client = client
         self.server = server
         self._scenes: dict[str, tuple[Scene, CollisionWorld]] = {}
+        self._carry = CarryBook()
         self._executor: Executor | None = None
         self.cache_entry: Path | None = None
         """The description cache's entry of this arm (connected arms only)."""
@@ -185,7 +188,7 @@ class Arm:
 
     def fk(self, q: Array, frame: str = "tool0") -> Array:
         """4x4 pose of ``frame`` in base_link at ``q``."""
-        return self.robot.kinematics.frame_pose(np.asarray(q, float), frame)
+        return self.planning_robot.kinematics.frame_pose(np.asarray(q, float), frame)
 
     # ------------------------------------------------------------------ the live robot
     def joints(self, timeout: float = 2.0, newer_than: float | None = None) -> Array:
@@ -217,15 +220,16 @@ class Arm:
             key, loaded = f"{type(scene).__name__} {scene}", None
         if key not in self._scenes:
             loaded = loaded or load_scene(scene)  # type: ignore[arg-type]
-            self._scenes[key] = (loaded, self.robot.collision_world(loaded))
+            self._scenes[key] = (loaded, self.planning_robot.collision_world(
+                self._carry.view(loaded)))
         return self._scenes[key][1]
 
     def ik(self, pose: Array, seed: Array | None = None, all_solutions: bool = False,
            scene: str | Path | Scene | None = None) -> IKResult:
         """IK of tool0 for ``pose``: nearest ``seed``, or every solution."""
         world = self.world(scene) if scene is not None else None
-        return self.robot.ik_solver().solve(np.asarray(pose, float), seed, all_solutions,
-                                            world)
+        return self.planning_robot.ik_solver().solve(np.asarray(pose, float), seed,
+                                                     all_solutions, world)
 
     def plan(self, *, joints: Array | None = None, pose: Array | None = None,
              motion: str = "ptp", scene: str | Path | Scene | None = None,
@@ -235,15 +239,15 @@ class Arm:
 
         ``start`` defaults to the arm's current joints (live) or home (offline). Keyword
         overrides (``speed_scale=0.3``, ``blend=True``...) change :class:`MotionOptions`. The
-        trajectory records a scene given by name or path (``Trajectory.scene``).
+        trajectory records a scene given by name or path (``Trajectory.scene``), and what the
+        arm carries (:meth:`attach`) in ``info['attached']``.
         """
         opts = replace(options or MotionOptions(), motion=motion, **overrides)
-        if start is None:
-            start = self.joints() if self.client is not None else self.home
-        plan = plan_motion(self.robot, self.world(scene), np.asarray(start, float),
-                           goal=None if joints is None else np.asarray(joints, float),
-                           pose=None if pose is None else np.asarray(pose, float),
-                           options=opts)
+        start = self._here(start)
+        plan = self._recorded(plan_motion(
+            self.planning_robot, self._carried_world(self.world(scene), start), start,
+            goal=None if joints is None else np.asarray(joints, float),
+            pose=None if pose is None else np.asarray(pose, float), options=opts))
         if scene is None or isinstance(scene, Scene):
             return plan
         named = recorded(scene, "scene", BUILTIN)  # (so that the trajectory's file says it)

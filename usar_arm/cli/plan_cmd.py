@@ -7,6 +7,7 @@ import argparse
 import numpy as np
 
 from usar_arm.arm.facade import Arm
+from usar_arm.cli.attach_args import add_attach_args, attach_from_args, attach_request
 from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
 from usar_arm.cli.execution_args import (
@@ -77,6 +78,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--from-joints", type=float, nargs="+", metavar="Q",
                    help="start here instead of the arm's current joints")
     add_motion_args(p)
+    add_attach_args(p)
     p.add_argument("--out", default=None, metavar="FILE", help="write the trajectory (JSON)")
     p.add_argument("--urdf", default=None, metavar="FILE",
                    help="plan for this URDF (SRDF and joint limits beside it) without a server")
@@ -141,8 +143,10 @@ def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     execution = _check_execute_args(args)
     check_bag_target(args.bag)
+    attach_request(args)  # (bad --attach options fail before an arm is opened)
     with open_arm(args) as arm:
         start = joint_vector(args.from_joints, arm, "--from-joints")
+        carried = attach_from_args(arm, args, start)
         plan = arm.plan(joints=joint_vector(args.joints, arm, "--joints"),
                         pose=goal_pose(args, arm), motion=args.motion, scene=args.scene,
                         start=start, options=motion_options(args, args.motion))
@@ -155,7 +159,8 @@ def run(args: argparse.Namespace) -> int:
             save_bag(args.bag, arm, plan.trajectory, report.executed if report else None)
         if args.out:
             plan.trajectory.save(args.out, report.executed if report else None)
-    summary = {**plan.summary(), "out": args.out}
+    summary = {**plan.summary(), "out": args.out,
+               "attached": plan.trajectory.info.get("attached", [])}
     if args.json:
         print_json({**summary, **(report.as_json() if report else {}), "bag": args.bag})
         return EXIT_OK
@@ -163,6 +168,9 @@ def run(args: argparse.Namespace) -> int:
         f"{plan.trajectory.duration:.2f} s motion, {len(plan.waypoints)} waypoints, "
         f"path {plan.path_length:.3f} rad")
     out("goal: " + " ".join(f"{v:.4f}" for v in plan.goal))
+    if carried is not None:
+        out(f"carrying: {carried.name} on {carried.link}"
+            + (f" (may touch {', '.join(carried.touch_links)})" if carried.touch_links else ""))
     if report is not None:
         print_report(report, plan.trajectory.joint_names)
     for what, path in (("trajectory", args.out), ("bag", args.bag)):

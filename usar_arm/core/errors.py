@@ -333,6 +333,44 @@ class TimingError(PlanningError):
     """Time-parameterisation failed (limits inconsistent, Ruckig error)."""
 
 
+class AttachError(InvalidInputError):
+    """An object cannot be attached to (or detached from) the arm: an unknown link, a name
+    that is already a link or a carried object, an object the scene lacks, nothing carried
+    by that name.
+
+    Attributes:
+        body: the object's name. problem: what was wrong. known: the names that would have
+            been accepted (links, objects, carried bodies).
+    """
+
+    def __init__(self, body: str, problem: str, known: Sequence[str] = ()):
+        self.body = body
+        self.problem = problem
+        self.known = tuple(known)
+        text = f"cannot attach '{body}': {problem}"
+        if self.known:
+            text += f" (known: {_names(self.known)})"
+        super().__init__(text)
+
+
+class AttachedCollisionError(PlanningError):
+    """An object to attach is in collision, at the configuration it is attached at, with
+    something other than its parent and touch links.
+
+    Attributes:
+        body: the object's name. contacts: (body, other, depth m) of each pair in contact.
+    """
+
+    exit_code = EXIT_IN_COLLISION
+
+    def __init__(self, body: str, contacts: Sequence[tuple[str, str, float]]):
+        self.body = body
+        self.contacts = tuple(contacts)
+        shown = ", ".join(f"{a}–{b} ({d * 1000:.1f} mm deep)" for a, b, d in self.contacts)
+        super().__init__(f"'{body}' is in collision where it would be attached: {shown}; "
+                         "name the links it may touch (touch_links) or attach it elsewhere")
+
+
 # --------------------------------------------------------------------------- execution
 
 

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from usar_arm.core.lazy import exports
 
 if TYPE_CHECKING:  # the public names, one per line, imported on first use (core/lazy.py)
+    from usar_arm.planning.attached import AttachedBody as AttachedBody
     from usar_arm.planning.collision import CollisionWorld as CollisionWorld
     from usar_arm.planning.collision import Contact as Contact
     from usar_arm.planning.compiled import warm_up as warm_up

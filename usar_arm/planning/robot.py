@@ -5,13 +5,17 @@ arm becomes one through :func:`usar_arm.description.cache.robot_from_record`."""
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from usar_arm.core.errors import FileFormatError
+import numpy as np
+
+from usar_arm.core.errors import AttachedCollisionError, FileFormatError
 from usar_arm.core.model import KinematicChain
+from usar_arm.core.spatial import Array
 from usar_arm.planning.acm import adjacent_pairs, default_state
+from usar_arm.planning.attached import AttachedBody, carrying
 from usar_arm.planning.collision import CollisionWorld, Pair
 from usar_arm.planning.ik import IKOptions, IKSolver
 from usar_arm.planning.kinematics import KinematicModel
@@ -87,9 +91,14 @@ class Robot:
     """The planning chain's kinematics as URDF text for Pinocchio (empty: ``urdf``)."""
     options: RobotOptions = field(default_factory=RobotOptions)
     """How the description was read (group, tip, packages, hulls)."""
+    carried: tuple[AttachedBody, ...] = ()
+    """The objects this robot carries (each a link of ``chain``; :meth:`carrying`)."""
     _kinematics: KinematicModel | None = None
     _ik: dict[tuple[str, IKOptions], IKSolver] = field(default_factory=dict)
     _worlds: dict[tuple[float, frozenset[Pair]], CollisionWorld] = field(
+        default_factory=dict, init=False, repr=False, compare=False)
+    _bare: Robot | None = field(default=None, repr=False, compare=False)
+    _carrying: dict[tuple[object, ...], Robot] = field(
         default_factory=dict, init=False, repr=False, compare=False)
 
     @property
@@ -114,7 +123,12 @@ class Robot:
         the pairs proven never in contact, the lever arms) is built once, in a world of the
         empty scene per padding and set of disabled pairs, that every later world is copied
         from (:meth:`CollisionWorld.in_scene`): a world per scene costs the scene's part only.
+        A scene object of a carried body's name is that body (:meth:`carrying`): it is not an
+        obstacle of the world.
         """
+        carried = {b.name for b in self.carried}
+        if any(o.name in carried for o in scene.objects):
+            scene = Scene(scene.name, tuple(o for o in scene.objects if o.name not in carried))
         validate_allow(scene, {lk.name for lk in self.chain.links})
         key = (float(padding), frozenset(self.disabled))
         base = self._worlds.get(key)
@@ -123,6 +137,57 @@ class Robot:
             base.lever_arms()  # (computed here, so that the copies carry them)
             self._worlds[key] = base
         return base.in_scene(scene)
+
+    @property
+    def bare(self) -> Robot:
+        """This arm carrying nothing (itself when it carries nothing)."""
+        return self._bare or self
+
+    def carrying(self, bodies: Sequence[AttachedBody]) -> Robot:
+        """This arm carrying exactly ``bodies`` (whatever this robot carries now): a Robot
+        whose chain has each body as a link fixed to its parent link (its parent and touch
+        links never checked against it), with the same states, actuator, files and options.
+        Cached per set of bodies; an empty ``bodies`` is the bare arm.
+
+        What it costs: the kinematics and, on first use, one collision world per padding (the
+        compiled verdicts' arrays and FCL's objects of the links; the never-in-contact proof of
+        the arm's own pairs is taken from the bare arm's world, only the bodies' are proven).
+
+        Raises:
+            AttachError: an unknown link, a name that is a link's or another body's.
+        """
+        bare = self.bare
+        bodies = tuple(bodies)
+        if not bodies:
+            return bare
+        key = tuple(b.key() for b in bodies)
+        found = bare._carrying.get(key)
+        if found is None:
+            chain, disabled = carrying(bare.chain, bare.disabled, bodies)
+            found = Robot(chain, bare.urdf, disabled, bare.states, bare.actuator, bare.source,
+                          bare.wire_links, bare.tip_sensor, bare.files, kinematic_urdf(chain),
+                          bare.options, bodies, _bare=bare)
+            bare._carrying[key] = found
+        return found
+
+    def check_attachable(self, body: AttachedBody, q: Array, scene: Scene = EMPTY) -> None:
+        """Refuse to attach ``body`` where it is in collision at ``q`` (rad/m) with anything
+        but its parent and touch links: a robot link, a body carried already, or an object of
+        ``scene`` (the object called ``body.name`` aside: it is the one being attached).
+
+        Raises:
+            AttachedCollisionError: naming each pair in contact and its depth (m).
+            AttachError: an unknown link or a name clash.
+        """
+        others = tuple(b for b in self.carried if b.name != body.name)
+        robot = self.carrying((*others, body))
+        rest = Scene(scene.name, tuple(o for o in scene.objects if o.name != body.name))
+        world = robot.collision_world(rest)
+        found = [(c.a if c.b == body.name else c.b, c.depth)
+                 for c in world.contact_details(np.asarray(q, float))
+                 if body.name in (c.a, c.b)]
+        if found:
+            raise AttachedCollisionError(body.name, [(body.name, o, d) for o, d in found])
 
     def home(self) -> list[float]:
         """The ``home`` state, or without one each joint at 0 (the middle of its limits when 0
@@ -165,10 +230,18 @@ def robot_from_files(urdf: str | Path, srdf: str | Path | None = None,
 
 
 def robot_from_texts(files: dict[str, str], urdf_name: str | None = None,
-                     source: str = "", options: RobotOptions | None = None) -> Robot:
+                     source: str = "", options: RobotOptions | None = None,
+                     carried: Sequence[AttachedBody] = ()) -> Robot:
     """A Robot from a description's files given as text (name -> text): ``X.urdf`` and, when
-    present, ``X.srdf``, ``X.joint_limits.yaml`` and ``X.discovery.json``. What a worker
-    process builds its arm from (the files travel by value; the solvers do not pickle)."""
+    present, ``X.srdf``, ``X.joint_limits.yaml`` and ``X.discovery.json``, carrying
+    ``carried`` (:meth:`Robot.carrying`). What a worker process builds its arm from (the
+    files and bodies travel by value; the solvers do not pickle)."""
+    robot = _robot_from_texts(files, urdf_name, source, options)
+    return robot.carrying(carried) if carried else robot
+
+
+def _robot_from_texts(files: dict[str, str], urdf_name: str | None, source: str,
+                      options: RobotOptions | None) -> Robot:
     if urdf_name is None:
         names = [n for n in files if n.endswith(".urdf")]
         if len(names) != 1:

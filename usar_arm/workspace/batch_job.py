@@ -23,6 +23,8 @@ from usar_arm.control.motion import MotionOptions, plan_motion
 from usar_arm.core.errors import UsarArmError
 from usar_arm.core.inputs import joint_vector
 from usar_arm.core.version import __version__
+from usar_arm.planning.attach_file import DEFAULT_LINK
+from usar_arm.planning.carry_book import CarryBook
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ompl_adapter import reseed
 from usar_arm.planning.robot import Robot
@@ -116,10 +118,30 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def _carrying(context: _Context, p: Problem, at: np.ndarray | list[float]
+              ) -> tuple[Robot, CollisionWorld]:
+    """The arm carrying what ``p`` attaches (scene objects grasped at ``at``), and its world
+    of the problem's scene (the carried objects out of it; a support allowed for the lift)."""
+    book, robot, at = CarryBook(), context.robot, np.asarray(at, float)
+    scene = context.scenes.get(p.scene or "", EMPTY)
+    for a in p.attach:
+        book.attach(robot.carrying(book.bodies), a.name, a.link or DEFAULT_LINK, at, scene,
+                    a.shape, a.pose, a.touch_links)
+    carrying = robot.carrying(book.bodies)
+    world = carrying.collision_world(book.view(scene))
+    return carrying, book.lift_off(carrying, world, at)
+
+
 def solve(context: _Context, p: Problem) -> dict[str, Any]:
     """The answer to one problem (raises the problem's typed failure)."""
     robot, options = context.robot, context.options
     world = context.world(p.scene)
+    if p.attach:
+        at = p.start if p.kind == "plan" else p.seed  # (an IK problem's new body: at home)
+        robot, world = _carrying(context, p, robot.home() if at is None else _joints(
+            robot, at, "plan.start" if p.kind == "plan" else "ik.seed"))
+    carried = {"attached": [{"name": a.name, "link": a.link or DEFAULT_LINK}
+                            for a in p.attach]} if p.attach else {}
     ik = robot.ik_solver()
     ik.reseed(options.seed)
     if p.kind == "ik":
@@ -132,7 +154,7 @@ def solve(context: _Context, p: Problem) -> dict[str, Any]:
                                "method": result.method}
         if p.all:
             out["solutions"] = [s.q.tolist() for s in result.solutions]
-        return out
+        return {**out, **carried}
     assert p.start is not None
     start = _joints(robot, p.start, "plan.start")
     goal = None if p.goal is None else _joints(robot, p.goal, "plan.goal")
@@ -144,7 +166,7 @@ def solve(context: _Context, p: Problem) -> dict[str, Any]:
            "path_length": plan.path_length, "planner": plan.details.get("planner")}
     if options.trajectories:
         out["trajectory"] = {"t": plan.trajectory.t.tolist(), "q": plan.trajectory.q.tolist()}
-    return out
+    return {**out, **carried}
 
 
 def answer(context: _Context, p: Problem) -> dict[str, Any]:

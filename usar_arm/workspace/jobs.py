@@ -89,13 +89,15 @@ def arm_builder(robot: Robot) -> ArmBuilder:
     urdf_name = next((n for n in robot.files if n.endswith(".urdf")), None)
     files = dict(robot.files) if urdf_name else {f"{robot.chain.name}.urdf": robot.urdf}
     return functools.partial(robot_from_texts, files, urdf_name or f"{robot.chain.name}.urdf",
-                             robot.source, robot.options)
+                             robot.source, robot.options, robot.carried)
 
 
 def description_text(robot: Robot) -> str:
-    """What a job's results depend on in the description (URDF and SRDF text)."""
+    """What a job's results depend on in the description (URDF and SRDF text, and what the
+    arm carries)."""
     srdf = next((t for n, t in robot.files.items() if n.endswith(".srdf")), "")
-    return robot.urdf + "\n" + srdf
+    carried = "".join(f"\ncarrying {b.key()!r}" for b in robot.carried)
+    return robot.urdf + "\n" + srdf + carried
 
 
 def _run(job: Job, backend: Backend, out_dir: str | Path | None, resume: bool,
