@@ -156,17 +156,18 @@ class Client:
         assert got, f"no {topic} within {timeout} s"
         return str(got[0][1].data)
 
-    def action(self, name: str) -> ActionClient:
+    def action(self, name: str, kind: Any = FollowJointTrajectory) -> ActionClient:
         if name not in self._clients:
-            self._clients[name] = ActionClient(self.node, FollowJointTrajectory, name)
+            self._clients[name] = ActionClient(self.node, kind, name)
         client = self._clients[name]
         assert client.wait_for_server(timeout_sec=30.0), f"no action server {name}"
         return client
 
-    def send(self, name: str, goal: FollowJointTrajectory.Goal,
-             timeout: float = 60.0) -> Any:
-        """Send a goal; returns its handle once accepted (or rejected)."""
-        client = self.action(name)
+    def send(self, name: str, goal: Any, timeout: float = 60.0,
+             kind: Any = FollowJointTrajectory) -> Any:
+        """Send a goal (of action type ``kind``); returns its handle once accepted (or
+        rejected)."""
+        client = self.action(name, kind)
         with self._turn:
             future = client.send_goal_async(goal, feedback_callback=self._feedback)
         return _wait(future, timeout)

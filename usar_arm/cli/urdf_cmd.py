@@ -66,6 +66,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     m.add_argument("--ros-distro", choices=ROS_DISTROS, default=DEFAULT_DISTRO,
                    help="ROS 2 distribution the package is for: ompl_planning.yaml's adapter "
                         f"keys differ (default {DEFAULT_DISTRO}, the current LTS)")
+    m.add_argument("--gripper", action="store_true",
+                   help="also drive the vacuum gripper: a virtual joint <gripper>_suction (0 "
+                        "off, 1 on) in the package's xacro and SRDF, and a GripperCommand "
+                        "controller on the node's <gripper>/gripper_cmd (run the node with "
+                        "`--ros-args -p gripper_joint_states:=true`)")
     m.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     add_verbosity(m)
     m.set_defaults(handler=run_moveit)
@@ -128,7 +133,7 @@ def run_moveit(args: argparse.Namespace) -> int:
     desc, chain = chosen.description, chosen.robot.chain
     arm_name = desc.discovery["robot"]["actuator"]
     files = moveit_files(chain, desc.urdf, desc.srdf, desc.joint_limits,
-                         f"{arm_name}_controller", desc.home, args.ros_distro)
+                         f"{arm_name}_controller", desc.home, args.ros_distro, args.gripper)
     paths = write_tree_atomic(root, files)
     others = other_files(root, paths)
     if others:

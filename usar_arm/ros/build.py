@@ -1,4 +1,5 @@
-"""Build the ROS 2 message packages the package index lacks (tf2_msgs, control_msgs).
+"""Build the ROS 2 message packages the package index lacks (tf2_msgs, control_msgs, and the
+seed's usarsim_inf).
 
 Their interface definitions ship in ``usar_arm/ros/interfaces/<package>/``; this module compiles
 them with cmake, ament and rosidl against the installed ros-jazzy wheels into a cache folder
@@ -47,6 +48,7 @@ PACKAGES: dict[str, tuple[str, ...]] = {
     "tf2_msgs": ("builtin_interfaces", "geometry_msgs", "std_msgs"),
     "control_msgs": ("action_msgs", "builtin_interfaces", "geometry_msgs", "std_msgs",
                      "trajectory_msgs", "unique_identifier_msgs"),
+    "usarsim_inf": ("builtin_interfaces", "std_msgs"),
 }
 """Each package built, with the message packages its definitions use (from the wheels)."""
 

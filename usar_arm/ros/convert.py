@@ -19,12 +19,17 @@ from usar_arm.ros.goals import TrajectoryGoal
 from usar_arm.ros.transport import (
     ActionKind,
     ClockRecord,
+    EffectorCommandRecord,
+    EffectorStatusRecord,
     FeedbackRecord,
+    GripperGoal,
+    GripperRecord,
     JointStateRecord,
     Kind,
     OdometryRecord,
     ScanRecord,
     TfRecord,
+    ToolchangerStatusRecord,
     TwistRecord,
 )
 
@@ -61,7 +66,8 @@ class MessageTypes:
 
 
 def to_message(record: Any, types: MessageTypes) -> Any:
-    """The message of a record (JointState, TFMessage, Clock, LaserScan, Odometry)."""
+    """The message of a record (JointState, TFMessage, Clock, LaserScan, Odometry, an
+    effector's status)."""
     kinds = types.by_kind
     if isinstance(record, JointStateRecord):
         state = kinds[Kind.JOINT_STATE](name=list(record.names), position=list(record.position),
@@ -84,6 +90,15 @@ def to_message(record: Any, types: MessageTypes) -> Any:
         return out
     if isinstance(record, OdometryRecord):
         return _odometry(record, types)
+    if isinstance(record, EffectorStatusRecord):
+        return _effector_status(kinds[Kind.EFFECTOR_STATUS](), record.stamp, record.name,
+                                record.state, types)
+    if isinstance(record, ToolchangerStatusRecord):
+        out = kinds[Kind.TOOLCHANGER_STATUS](tool_name=record.tool_name)
+        out.header.stamp, out.header.frame_id = types.time(record.stamp), record.name
+        _effector_status(out.effector_status, record.stamp, record.name, record.state, types)
+        out.tool_type.type = record.tool_type
+        return out
     raise TypeError(f"no message for {type(record).__name__}")
 
 
@@ -95,6 +110,12 @@ def _transform(parent: str, child: str, matrix: Any, stamp: Any, types: MessageT
     t.x, t.y, t.z = float(p[0]), float(p[1]), float(p[2])
     r = msg.transform.rotation
     r.x, r.y, r.z, r.w = quaternion(matrix[:3, :3])
+    return msg
+
+
+def _effector_status(msg: Any, stamp: float, name: str, state: int, types: MessageTypes
+                     ) -> Any:
+    msg.header.stamp, msg.header.frame_id, msg.state = types.time(stamp), name, state
     return msg
 
 
@@ -113,25 +134,42 @@ def _odometry(record: OdometryRecord, types: MessageTypes) -> Any:
 
 
 def goal_record(kind: ActionKind, request: Any, types: MessageTypes) -> Any:
-    """The goal record of an action's request (a :class:`TrajectoryGoal`)."""
+    """The goal record of an action's request (a :class:`TrajectoryGoal`, a
+    :class:`~usar_arm.ros.transport.GripperGoal`)."""
     if kind is ActionKind.FOLLOW_JOINT_TRAJECTORY:
         return goal_from_message(request.trajectory, types, list(request.path_tolerance),
                                  list(request.goal_tolerance),
                                  types.seconds(request.goal_time_tolerance))
+    if kind is ActionKind.GRIPPER_COMMAND:
+        return GripperGoal(float(request.command.position), float(request.command.max_effort))
     raise TypeError(f"no goal record for {kind.value}")
 
 
-def result_message(kind: ActionKind, code: int, message: str, types: MessageTypes) -> Any:
-    """An action's result: the error code and its message (FollowJointTrajectory)."""
+def result_message(kind: ActionKind, code: int, message: str, types: MessageTypes,
+                   state: Any = None) -> Any:
+    """An action's result: FollowJointTrajectory's error code and its message; GripperCommand's
+    ``state`` (a :class:`~usar_arm.ros.transport.GripperRecord`; None: nothing reached)."""
     if kind is ActionKind.FOLLOW_JOINT_TRAJECTORY:
         return types.actions[kind].result(error_code=code, error_string=message)
+    if kind is ActionKind.GRIPPER_COMMAND:
+        return _gripper(types.actions[kind].result,
+                        state if state is not None else GripperRecord(0.0, 0.0, False, False))
     raise TypeError(f"no result for {kind.value}")
 
 
-def feedback_message(kind: ActionKind, record: FeedbackRecord, types: MessageTypes) -> Any:
-    """An action's feedback message (FollowJointTrajectory: desired, actual, error)."""
-    if kind is not ActionKind.FOLLOW_JOINT_TRAJECTORY:
-        raise TypeError(f"no feedback for {kind.value}")
+def _gripper(cls: Any, state: GripperRecord) -> Any:
+    return cls(position=float(state.position), effort=float(state.effort),
+               stalled=bool(state.stalled), reached_goal=bool(state.reached_goal))
+
+
+def feedback_message(kind: ActionKind, record: FeedbackRecord | GripperRecord,
+                     types: MessageTypes) -> Any:
+    """An action's feedback message (FollowJointTrajectory: desired, actual, error;
+    GripperCommand: the gripper's state)."""
+    if kind is ActionKind.GRIPPER_COMMAND and isinstance(record, GripperRecord):
+        return _gripper(types.actions[kind].feedback, record)
+    if kind is not ActionKind.FOLLOW_JOINT_TRAJECTORY or not isinstance(record, FeedbackRecord):
+        raise TypeError(f"no feedback for {kind.value} from {type(record).__name__}")
     msg = types.actions[kind].feedback(joint_names=list(record.names))
     msg.header.stamp = types.time(record.stamp)
     msg.desired = types.point(positions=list(record.desired), velocities=list(record.velocity))
@@ -154,9 +192,11 @@ def goal_from_message(trajectory: Any, types: MessageTypes, path: list[Any] | No
 
 
 def to_record(kind: Kind, msg: Any, types: MessageTypes) -> Any:
-    """The record of an incoming message (a Twist, a JointTrajectory)."""
+    """The record of an incoming message (a Twist, a JointTrajectory, an EffectorCommand)."""
     if kind is Kind.TWIST:
         return TwistRecord(msg.linear.x, msg.angular.z)
+    if kind is Kind.EFFECTOR_COMMAND:
+        return EffectorCommandRecord(int(msg.state))
     if kind is Kind.TRAJECTORY:
         return goal_from_message(msg, types)
     raise TypeError(f"no record for incoming {kind.value}")

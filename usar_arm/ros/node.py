@@ -12,7 +12,9 @@ ROS robot, written once for both middlewares (each a :class:`~usar_arm.ros.trans
   joint_trajectory_controller, run by :class:`~usar_arm.ros.runner.GoalRunner`;
 * ``/clock`` (rosgraph_msgs/Clock) from the ASTA lines' simulated time with ``use_sim_time``;
 * ``robot_description_semantic`` (the SRDF) for MoveIt, and on ``tf`` the tip GroundTruth
-  sensor's frame as the simulator reports it (``<sensor>_truth`` in base_link).
+  sensor's frame as the simulator reports it (``<sensor>_truth`` in base_link);
+* the effectors (:mod:`.effectors`): ``<name>/status`` and ``<name>/command`` (usarsim_inf)
+  and ``<gripper>/gripper_cmd`` (control_msgs GripperCommand).
 
 Names are relative, so a namespace moves all of them (``tf`` included); ``frame_prefix``
 prefixes the frame names for one shared tree.
@@ -30,6 +32,7 @@ import numpy as np
 from usar_arm import Arm
 from usar_arm.core.errors import UsarArmError
 from usar_arm.core.spatial import Array
+from usar_arm.ros.effectors import serve_effectors
 from usar_arm.ros.frames import Edge, TransformTree, world_from_platform
 from usar_arm.ros.goals import INVALID_GOAL, CheckedGoal, GoalRejected, TrajectoryGoal, check_goal
 from usar_arm.ros.runner import Feedback, GoalRunner, Job, Outcome
@@ -63,7 +66,9 @@ class NodeOptions:
             every frame. rate_hz: the executor's command rate. scene: goals whose motion
             collides in it are refused ('' = none). wire_precision: number format of the
             embedded simulator (udk, full). node_name: the node's name (ROS 2: ``usar_arm``,
-            ROS 1: ``RosSim``, the seed's).
+            ROS 1: ``RosSim``, the seed's). gripper_joint_states: also publish each
+            gripper's virtual joint ``<gripper>_suction`` (0 off, 1 on) on joint_states, in
+            a message of its own per EFF line (for MoveIt's gripper controller).
     """
 
     robot_type: str = "KR60"
@@ -77,6 +82,7 @@ class NodeOptions:
     scene: str = ""
     wire_precision: str = "udk"
     node_name: str = "usar_arm"
+    gripper_joint_states: bool = False
 
 
 class StateStreams:
@@ -288,6 +294,10 @@ def serve(transport: Transport, arm: Arm, options: NodeOptions, stop: threading.
     unsubscribe = arm.client.subscribe(streams.on_line)
     controller = options.controller or f"{arm.robot.actuator}_controller"
     TrajectoryInterfaces(transport, arm, runner, controller, options.rate_hz, options.scene)
+    effectors, _grippers = serve_effectors(
+        transport, arm.client, arm.robot.files, counts,
+        streams.joint_states if options.gripper_joint_states else None)
+    unsubscribe_effectors = arm.client.subscribe(effectors.on_line)
     # Last: a client that has the description finds everything else served.
     static = Counted(transport.publisher("tf_static", Kind.TF, latched=True), "tf_static",
                      counts)
@@ -309,6 +319,7 @@ def serve(transport: Transport, arm: Arm, options: NodeOptions, stop: threading.
         if truth.thread.is_alive():
             truth.thread.join(2.0)
         unsubscribe()
+        unsubscribe_effectors()
         log.info("published: %s", summary(counts))
     return 0
 

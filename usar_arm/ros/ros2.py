@@ -5,7 +5,7 @@ It turns the node logic's records (:mod:`usar_arm.ros.transport`) into ROS 2 mes
 back. ROS 2's own conventions live here: ``robot_description`` is a reliable, transient-local
 topic; a goal that fails its checks is accepted, then aborted with the controller's error code
 (so the client gets the code in the result); a pre-empted goal is aborted. The generated
-tf2_msgs, control_msgs come from the cache :mod:`usar_arm.ros.build` fills.
+tf2_msgs, control_msgs and usarsim_inf come from the cache :mod:`usar_arm.ros.build` fills.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from usar_arm.ros.transport import (
     ActionKind,
     FeedbackRecord,
     GoalHandle,
+    GripperRecord,
     Kind,
     Options,
     seconds_of,
@@ -41,7 +42,7 @@ ensure_importable()  # the generated packages below come from the cache
 
 import rclpy  # noqa: E402
 from builtin_interfaces.msg import Duration, Time  # noqa: E402
-from control_msgs.action import FollowJointTrajectory  # noqa: E402
+from control_msgs.action import FollowJointTrajectory, GripperCommand  # noqa: E402
 from geometry_msgs.msg import TransformStamped, Twist  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: E402
@@ -60,6 +61,7 @@ from sensor_msgs.msg import JointState, LaserScan  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
+from usarsim_inf.msg import EffectorCommand, EffectorStatus, ToolchangerStatus  # noqa: E402
 
 log = logging.getLogger("usar_arm.ros")
 
@@ -86,10 +88,14 @@ TYPES = MessageTypes(
     time=ros_time, seconds=ros_seconds, ranges=lambda r: array("f", r),  # no per-item checks
     by_kind={Kind.TEXT: String, Kind.JOINT_STATE: JointState, Kind.TF: TFMessage,
              Kind.CLOCK: Clock, Kind.SCAN: LaserScan, Kind.ODOMETRY: Odometry,
-             Kind.TWIST: Twist, Kind.TRAJECTORY: JointTrajectory},
+             Kind.TWIST: Twist, Kind.TRAJECTORY: JointTrajectory,
+             Kind.EFFECTOR_COMMAND: EffectorCommand, Kind.EFFECTOR_STATUS: EffectorStatus,
+             Kind.TOOLCHANGER_STATUS: ToolchangerStatus},
     transform=TransformStamped, point=JointTrajectoryPoint,
     actions={ActionKind.FOLLOW_JOINT_TRAJECTORY: ActionTypes(
-        FollowJointTrajectory, FollowJointTrajectory.Result, FollowJointTrajectory.Feedback)})
+        FollowJointTrajectory, FollowJointTrajectory.Result, FollowJointTrajectory.Feedback),
+        ActionKind.GRIPPER_COMMAND: ActionTypes(
+            GripperCommand, GripperCommand.Result, GripperCommand.Feedback)})
 """ROS 2's message classes for :mod:`usar_arm.ros.convert`."""
 
 
@@ -117,13 +123,14 @@ class Ros2Goal:
         self.result = result_message(self.kind, code, message, TYPES)
         self.handle.abort()
 
-    def feedback(self, record: FeedbackRecord) -> None:
+    def feedback(self, record: FeedbackRecord | GripperRecord) -> None:
         """Publish one feedback message."""
         self.handle.publish_feedback(feedback_message(self.kind, record, TYPES))
 
     def finish(self, outcome: Any) -> None:
         """Succeed, cancel or abort (a pre-empted goal too: ROS 2 has no PREEMPTED)."""
-        self.result = result_message(self.kind, outcome.code, outcome.message, TYPES)
+        self.result = result_message(self.kind, outcome.code, outcome.message, TYPES,
+                                     outcome.state)
         if outcome.succeeded:
             self.handle.succeed()
         elif outcome.cancelled:

@@ -15,6 +15,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -64,13 +65,16 @@ class Job:
 class Outcome:
     """How a goal ended: ``succeeded``, else aborted, or ``cancelled`` by its client, or
     ``preempted`` by a newer goal (ROS 2 reports that as aborted, ROS 1's actionlib as
-    PREEMPTED); the FollowJointTrajectory error code and a message."""
+    PREEMPTED); the FollowJointTrajectory error code and a message; ``state``: what the
+    result reports besides (a GripperCommand's
+    :class:`~usar_arm.ros.transport.GripperRecord`), None for none."""
 
     succeeded: bool
     code: int
     message: str
     cancelled: bool = False
     preempted: bool = False
+    state: Any = None
 
 
 class GoalRunner:

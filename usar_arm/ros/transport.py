@@ -20,17 +20,17 @@ from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
 from usar_arm.ros.frames import Edge
-from usar_arm.ros.goals import TrajectoryGoal
 from usar_arm.ros.platform_state import PoseSample, ScanFields
 from usar_arm.ros.runner import Outcome
 
 
 class ActionKind(enum.Enum):
     """An action a node serves, by its ROS name (control_msgs on both middlewares). Adding one
-    (the effectors' GripperCommand) is a member here, its conversions in
-    :mod:`usar_arm.ros.convert` and its classes in each transport's message table."""
+    is a member here, its conversions in :mod:`usar_arm.ros.convert` and its classes in each
+    transport's message table."""
 
     FOLLOW_JOINT_TRAJECTORY = "control_msgs/FollowJointTrajectory"
+    GRIPPER_COMMAND = "control_msgs/GripperCommand"
 
 
 class Kind(enum.Enum):
@@ -44,6 +44,9 @@ class Kind(enum.Enum):
     ODOMETRY = "nav_msgs/Odometry"
     TWIST = "geometry_msgs/Twist"
     TRAJECTORY = "trajectory_msgs/JointTrajectory"
+    EFFECTOR_COMMAND = "usarsim_inf/EffectorCommand"
+    EFFECTOR_STATUS = "usarsim_inf/EffectorStatus"
+    TOOLCHANGER_STATUS = "usarsim_inf/ToolchangerStatus"
 
 
 def split_seconds(seconds: float) -> tuple[int, int]:
@@ -124,12 +127,64 @@ class TwistRecord:
     angular_z: float
 
 
-class GoalHandle(Protocol):
-    """One goal of an action as the logic serves it (its :class:`ActionKind`'s goal record,
-    e.g. a :class:`TrajectoryGoal`); each transport wraps its middleware's goal handle in
-    one."""
+@dataclass(frozen=True)
+class EffectorStatusRecord:
+    """One usarsim_inf/EffectorStatus: effector ``name`` (the header's frame_id) in ``state``
+    (0 OPEN, 1 CLOSE), stamped ``stamp`` (s)."""
 
-    goal: TrajectoryGoal
+    stamp: float
+    name: str
+    state: int
+
+
+@dataclass(frozen=True)
+class ToolchangerStatusRecord:
+    """One usarsim_inf/ToolchangerStatus: tool changer ``name`` in ``state`` (0 OPEN, 1
+    CLOSE), the tool's ``tool_type`` (usarsim_inf/ToolType: 0 UNKNOWN, 1 GRIPPER, 2 VACUUM, 3
+    TOOLCHANGER) and ``tool_name``, stamped ``stamp`` (s)."""
+
+    stamp: float
+    name: str
+    state: int
+    tool_type: int
+    tool_name: str
+
+
+@dataclass(frozen=True)
+class EffectorCommandRecord:
+    """What a node reads of a usarsim_inf/EffectorCommand: ``state`` (0 OPEN, else CLOSE)."""
+
+    state: int
+
+
+@dataclass(frozen=True)
+class GripperGoal:
+    """A control_msgs GripperCommand goal: the gripper's target ``position`` (for a vacuum,
+    its virtual joint: 0 off, 1 on) and ``max_effort`` (N; not used by a vacuum)."""
+
+    position: float
+    max_effort: float
+
+
+@dataclass(frozen=True)
+class GripperRecord:
+    """A GripperCommand feedback or result: ``position`` (the virtual joint: 0 off, 1 on),
+    ``effort`` (N; 0, not measured), ``stalled`` (a vacuum: it holds an object, by the
+    simulator's GripTruth extension), ``reached_goal`` (its EFF status is the goal's)."""
+
+    position: float
+    effort: float
+    stalled: bool
+    reached_goal: bool
+
+
+class GoalHandle(Protocol):
+    """One goal of an action as the logic serves it; each transport wraps its middleware's goal
+    handle in one."""
+
+    goal: Any
+    """Its :class:`ActionKind`'s goal record (a :class:`~usar_arm.ros.goals.TrajectoryGoal`, a
+    :class:`GripperGoal`)."""
     ticket: int
     """Its place in the order goals arrived (the logic numbers it on arrival)."""
 
@@ -142,7 +197,7 @@ class GoalHandle(Protocol):
     def refuse(self, code: int, message: str) -> None:
         """The goal failed its checks (``code``: the controller's error code)."""
 
-    def feedback(self, record: FeedbackRecord) -> None:
+    def feedback(self, record: FeedbackRecord | GripperRecord) -> None:
         """Send one feedback message."""
 
     def finish(self, outcome: Outcome) -> None:
@@ -199,8 +254,9 @@ class Transport(Protocol):
 
     def subscribe(self, topic: str, kind: Kind, callback: Callable[[Any], None],
                   long_running: bool = False) -> None:
-        """Call ``callback`` with each message's record (:class:`TwistRecord`, or a
-        :class:`TrajectoryGoal` for :attr:`Kind.TRAJECTORY`); ``long_running``: the callback
+        """Call ``callback`` with each message's record (:class:`TwistRecord`,
+        :class:`EffectorCommandRecord`, or a :class:`~usar_arm.ros.goals.TrajectoryGoal` for
+        :attr:`Kind.TRAJECTORY`); ``long_running``: the callback
         may block for a goal's duration while later messages still arrive."""
 
     def action(self, name: str, kind: ActionKind, arrived: Callable[[GoalHandle], None],

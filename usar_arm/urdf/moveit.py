@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.version import __version__
+from usar_arm.urdf import moveit_gripper as grip
 from usar_arm.urdf.moveit_planning import DEFAULT_DISTRO, check_distro, planning_files
 from usar_arm.urdf.srdf import GROUP
 from usar_arm.urdf.writer import num
@@ -30,31 +31,45 @@ def _yaml_list(items: Sequence[str], indent: int) -> list[str]:
 
 
 def moveit_files(chain: KinematicChain, urdf: str, srdf: str, joint_limits: str,
-                 controller: str, home: dict[str, float], distro: str = DEFAULT_DISTRO
-                 ) -> dict[str, str]:
+                 controller: str, home: dict[str, float], distro: str = DEFAULT_DISTRO,
+                 gripper: bool = False) -> dict[str, str]:
     """Relative path -> text of every file of the package, for ROS 2 ``distro`` (``humble`` or
-    ``jazzy``: ``ompl_planning.yaml``'s keys differ; the package records which)."""
+    ``jazzy``: ``ompl_planning.yaml``'s keys differ; the package records which); ``gripper``:
+    with the vacuum's virtual joint and its GripperCommand controller
+    (:mod:`.moveit_gripper`).
+
+    Raises:
+        InvalidInputError: ``gripper`` for an arm without a tool.
+    """
     check_distro(distro)
     robot = chain.name
     joints = list(chain.joint_names)
+    tool = chain if gripper else None
+    if tool is not None:
+        srdf = grip.with_gripper_srdf(srdf, tool)
+        joint_limits = joint_limits.rstrip("\n") + "\n" + "\n".join(
+            grip.joint_limits_lines(tool)) + "\n"
     files = {f"config/{robot}.urdf": urdf, f"config/{robot}.srdf": srdf,
              "config/joint_limits.yaml": joint_limits}
-    files.update(_xacro_files(robot, joints, home))
-    files.update(_controller_files(joints, controller))
-    files.update(_package_files(robot, distro))
+    files.update(_xacro_files(robot, joints, home, tool))
+    files.update(_controller_files(joints, controller, tool))
+    files.update(_package_files(robot, distro, tool is not None))
     files.update(planning_files(chain, distro))
     return files
 
 
-def _xacro_files(robot: str, joints: list[str], home: dict[str, float]) -> dict[str, str]:
-    """The robot's xacro (the URDF and the mock hardware's ros2_control macro) and the mock
-    hardware's initial positions (``home``, rad or m per joint)."""
+def _xacro_files(robot: str, joints: list[str], home: dict[str, float],
+                 tool: KinematicChain | None = None) -> dict[str, str]:
+    """The robot's xacro (the URDF, the gripper's virtual joint when ``tool``, and the mock
+    hardware's ros2_control macro) and the mock hardware's initial positions (``home``, rad
+    or m per joint)."""
     files: dict[str, str] = {}
     files[f"config/{robot}.urdf.xacro"] = "\n".join([
         '<?xml version="1.0" encoding="utf-8"?>',
         f'<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="{robot}">',
         '  <xacro:arg name="initial_positions_file" default="initial_positions.yaml"/>',
         f'  <xacro:include filename="{robot}.urdf"/>',
+        *(grip.xacro_lines(tool) if tool is not None else []),
         f'  <xacro:include filename="{robot}.ros2_control.xacro"/>',
         f'  <xacro:{robot}_ros2_control name="FakeSystem" '
         'initial_positions_file="$(arg initial_positions_file)"/>',
@@ -78,6 +93,7 @@ def _xacro_files(robot: str, joints: list[str], home: dict[str, float]) -> dict[
             "        </state_interface>",
             '        <state_interface name="velocity"/>',
             "      </joint>"]
+    control += grip.control_lines(tool) if tool is not None else []
     control += ["    </ros2_control>", "  </xacro:macro>", "</robot>", ""]
     files[f"config/{robot}.ros2_control.xacro"] = "\n".join(control)
     files["config/initial_positions.yaml"] = "\n".join(
@@ -86,10 +102,13 @@ def _xacro_files(robot: str, joints: list[str], home: dict[str, float]) -> dict[
     return files
 
 
-def _controller_files(joints: list[str], controller: str) -> dict[str, str]:
+def _controller_files(joints: list[str], controller: str, tool: KinematicChain | None = None
+                      ) -> dict[str, str]:
     """Kinematics, Pilz limits, and the ros2_control and MoveIt controllers (``controller``
-    drives ``joints``)."""
+    drives ``joints``; with ``tool``, the gripper's controller too)."""
     files: dict[str, str] = {}
+    entry, block = grip.ros2_controller_lines(tool) if tool is not None else ([], [])
+    names = [controller] + ([grip.gripper_of(tool)[0]] if tool is not None else [])
     files["config/kinematics.yaml"] = "\n".join([
         f"{GROUP}:",
         "  kinematics_solver: kdl_kinematics_plugin/KDLKinematicsPlugin",
@@ -108,6 +127,7 @@ def _controller_files(joints: list[str], controller: str) -> dict[str, str]:
         "    update_rate: 100  # Hz",
         f"    {controller}:",
         "      type: joint_trajectory_controller/JointTrajectoryController",
+        *entry,
         "    joint_state_broadcaster:",
         "      type: joint_state_broadcaster/JointStateBroadcaster",
         f"{controller}:",
@@ -115,16 +135,17 @@ def _controller_files(joints: list[str], controller: str) -> dict[str, str]:
         "    joints:", *_yaml_list(joints, 6),
         "    command_interfaces:", "      - position",
         "    state_interfaces:", "      - position", "      - velocity",
-        "    allow_nonzero_velocity_at_trajectory_end: true", ""])
+        "    allow_nonzero_velocity_at_trajectory_end: true", *block, ""])
     files["config/moveit_controllers.yaml"] = "\n".join([
         "moveit_controller_manager: moveit_simple_controller_manager/MoveItSimpleControllerManager",
         "moveit_simple_controller_manager:",
-        "  controller_names:", f"    - {controller}",
+        "  controller_names:", *_yaml_list(names, 4),
         f"  {controller}:",
         "    type: FollowJointTrajectory",
         "    action_ns: follow_joint_trajectory",
         "    default: true",
         "    joints:", *_yaml_list(joints, 6),
+        *(grip.moveit_controller_lines(tool) if tool is not None else []),
         "trajectory_execution:",
         "  allowed_execution_duration_scaling: 1.2",
         "  allowed_goal_duration_margin: 0.5",
@@ -132,7 +153,7 @@ def _controller_files(joints: list[str], controller: str) -> dict[str, str]:
     return files
 
 
-def _package_files(robot: str, distro: str) -> dict[str, str]:
+def _package_files(robot: str, distro: str, gripper: bool = False) -> dict[str, str]:
     """The package's own files: Setup Assistant record, package.xml, CMakeLists.txt and the
     launch files."""
     pkg = package_name(robot)
@@ -171,7 +192,7 @@ def _package_files(robot: str, distro: str) -> dict[str, str]:
             "moveit_setup_assistant", "joint_state_publisher", "joint_state_publisher_gui",
             "robot_state_publisher", "tf2_ros", "xacro", "controller_manager",
             "joint_trajectory_controller", "joint_state_broadcaster", "rviz2",
-            "warehouse_ros_mongo")],
+            "warehouse_ros_mongo", *(["gripper_controllers"] if gripper else []))],
         "  <export>", "    <build_type>ament_cmake</build_type>", "  </export>",
         "</package>", ""])
     files["CMakeLists.txt"] = "\n".join([
