@@ -16,3 +16,8 @@ if TYPE_CHECKING:  # the public names, one per line, imported on first use (core
     from usar_arm.cli.main import main as main
 
 __getattr__, __dir__, __all__ = exports(__name__, __file__)
+
+# ``usar_arm.cli.main`` is a module and the function it defines: importing the module (as the
+# entry point and the tests do) binds the *module* as this package's attribute ``main``, over the
+# lazy function. Bound here once, the function stays (cli.main loads no command module).
+from usar_arm.cli.main import main as main  # noqa: E402

@@ -158,6 +158,48 @@ def _outputs(arm: Arm, done: PickPlaceResult, folder: Path, bag: bool) -> dict[s
     return files
 
 
+def _calibrate() -> None:
+    """The demo's step 0: calibrate the KR60 through its tip sensor (once: cached)."""
+    progress("[0/4] calibrating the KR60 through its tip sensor, once per arm (the "
+             "description cache keeps it; --no-calibrate skips it)...")
+    made = ensure_calibrated(DescribeOptions(robot="KR60", wire_precision="udk"),
+                             progress=lambda done, total: progress(
+                                 f"  calibration tour: {done}/{total} poses"))
+    if made is not None:
+        f = made.validation.summary()
+        progress(f"  calibrated from {made.readings} readings in {made.seconds:.0f} s; "
+                 f"held-out readings {f['max_before_m'] * 1e3:.2f} -> "
+                 f"{f['max_after_m'] * 1e3:.2f} mm at worst")
+    else:
+        progress("  the cached description is calibrated already")
+
+
+def _print_verdicts(rows: list[dict[str, Any]], done: PickPlaceResult,
+                    args: argparse.Namespace) -> None:
+    """The table of the moves and the verdict lines (stdout)."""
+    with_truth = all(r["true_tip_error_m"] is not None for r in rows)
+    print_table(rows, with_truth)
+    if with_truth and rows[0]["tip_source"].startswith("GroundTruth"):
+        how = ", each truncated number taken at the middle of its step" \
+            if args.wire_precision == "udk" else ""
+        out(f"(sensor: the tip GroundTruth sensor as printed{how}; true: the simulator's "
+            "physics)")
+    rates = [r["rate_hz"] for r in rows]
+    out(f"\ncommands: {min(rates):.1f}-{max(rates):.1f} Hz, p99 jitter "
+        f"{max(r['jitter_p99_ms'] for r in rows):.2f} ms at worst; max tracking error "
+        f"{max(r['max_tracking_error_rad'] for r in rows) * 1000:.2f} mrad")
+    key = "true_tip_error" if with_truth else "tip_error"
+    ok, worst_m, worst_rad = _verdict(rows, key)
+    out(f"tool0 within 1 mm and 1 mrad of every goal: {'yes' if ok else 'no'} (worst "
+        f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad"
+        f"{', simulator truth' if with_truth else ''})")
+    out(done.placement.line())
+    if not ok and args.wire_precision == "udk" and not args.tip_correction:
+        out("  (a description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
+            "the Tip prints to the centimetre; calibration (the default), --tip-correction or "
+            "--wire-precision full close the gap)")
+
+
 def run(args: argparse.Namespace) -> int:
     setup_logging(verbosity(args))
     if not 0 < args.speed_scale <= 1:
@@ -169,18 +211,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--out {folder}: exists and is not a folder")
     begin = time.perf_counter()
     if args.wire_precision == "udk" and not args.no_calibrate and args.host is None:
-        progress("[0/4] calibrating the KR60 through its tip sensor, once per arm (the "
-                 "description cache keeps it; --no-calibrate skips it)...")
-        made = ensure_calibrated(DescribeOptions(robot="KR60", wire_precision="udk"),
-                                 progress=lambda done, total: progress(
-                                     f"  calibration tour: {done}/{total} poses"))
-        if made is not None:
-            f = made.validation.summary()
-            progress(f"  calibrated from {made.readings} readings in {made.seconds:.0f} s; "
-                     f"held-out readings {f['max_before_m'] * 1e3:.2f} -> "
-                     f"{f['max_after_m'] * 1e3:.2f} mm at worst")
-        else:
-            progress("  the cached description is calibrated already")
+        _calibrate()
     where = (f"the server at {args.host}:{args.port}" if args.host else
              f"the embedded simulator ({args.wire_precision} numbers)")
     progress(f"[1/4] starting {where} and discovering the KR60..." if args.host is None
@@ -219,27 +250,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(report)
         return EXIT_OK
-    with_truth = all(r["true_tip_error_m"] is not None for r in rows)
-    print_table(rows, with_truth)
-    if with_truth and rows[0]["tip_source"].startswith("GroundTruth"):
-        how = ", each truncated number taken at the middle of its step" \
-            if args.wire_precision == "udk" else ""
-        out(f"(sensor: the tip GroundTruth sensor as printed{how}; true: the simulator's "
-            "physics)")
-    rates = [r["rate_hz"] for r in rows]
-    out(f"\ncommands: {min(rates):.1f}-{max(rates):.1f} Hz, p99 jitter "
-        f"{max(r['jitter_p99_ms'] for r in rows):.2f} ms at worst; max tracking error "
-        f"{max(r['max_tracking_error_rad'] for r in rows) * 1000:.2f} mrad")
-    key = "true_tip_error" if with_truth else "tip_error"
-    ok, worst_m, worst_rad = _verdict(rows, key)
-    out(f"tool0 within 1 mm and 1 mrad of every goal: {'yes' if ok else 'no'} (worst "
-        f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad"
-        f"{', simulator truth' if with_truth else ''})")
-    out(done.placement.line())
-    if not ok and args.wire_precision == "udk" and not args.tip_correction:
-        out("  (a description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
-            "the Tip prints to the centimetre; calibration (the default), --tip-correction or "
-            "--wire-precision full close the gap)")
+    _print_verdicts(rows, done, args)
     out(f"\nwrote into {folder}/ in {time.perf_counter() - begin:.0f} s:")
     for what, path in files.items():
         out(f"  {what:<17} {path}")
