@@ -28,6 +28,7 @@ from report_format import (
     solver_rows,
     table,
 )
+from report_pick import pick_place_section
 from report_plan import plan_section, planners_section, timing_section
 from report_summary import summary_lines
 
@@ -38,7 +39,8 @@ STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
                 "workspace": "Workspace: reachability maps and base placement",
                 "planners": "OMPL planners for the MoveIt package",
                 "ros": "ROS 2 node (usar-arm ros)",
-                "robots": "Mesh robots: UR5 and Panda (example-robot-data) on MotionBenchMaker"}
+                "robots": "Mesh robots: UR5 and Panda (example-robot-data) on MotionBenchMaker",
+                "pickplace": "Pick-and-place on the embedded simulator, judged by it"}
 
 
 # ------------------------------------------------------------------------------ sections
@@ -432,7 +434,7 @@ SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_secti
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
             "workspace": workspace_section, "planners": planners_section,
-            "ros": ros_section, "robots": robots_section}
+            "ros": ros_section, "robots": robots_section, "pickplace": pick_place_section}
 
 
 def _load(doc: dict[str, Any]) -> str:

@@ -1,7 +1,7 @@
 """Run the benchmarks: usar-arm beside its peers, stage by stage, on one shared problem set.
 
     python bench/run.py [--quick] [--stages ik,collision,plan,timing,discovery,execution,
-                                            calibrate,workspace,planners,ros,robots]
+                                            calibrate,workspace,planners,ros,robots,pickplace]
                         [--out bench/results] [--problems DIR] [--rounds R] [--peers a,b]
 
 1. Writes the problem set (``bench/problems.py``; default ``bench/problems/<quick|full>``).
@@ -33,11 +33,11 @@ import common
 import problems as problem_sets
 
 STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate",
-          "workspace", "planners", "ros", "robots")
+          "workspace", "planners", "ros", "robots", "pickplace")
 MODULES = {"ik": "ik", "collision": "collision", "plan": "plan", "timing": "timing",
            "discovery": "discovery", "execution": "execution", "calibrate": "calibrate",
            "workspace": "workspace", "planners": "planners", "ros": "ros",
-           "robots": "robots"}
+           "robots": "robots", "pickplace": "pick_place"}
 ROUNDS = {"quick": 1, "full": 3}
 
 

@@ -40,9 +40,12 @@ def cell(arm: Arm) -> Iterator[CellSession]:
         yield session
 
 
-def test_the_part_is_picked_carried_and_rests_in_the_bin_with_no_contact(
+def test_the_part_is_picked_where_it_is_carried_and_rests_in_the_bin_with_no_contact(
         arm: Arm, cell: CellSession) -> None:
-    moves = pick_and_place(arm.home, tcp_offset(arm.robot))
+    cell.wc.abs_move("part", (1.47, 0.44, -0.75))  # 2 cm off the description's pick
+    seen = cell.pose("part")
+    assert seen is not None and np.allclose(seen[:2, 3], (1.47, -0.44), atol=1e-3)
+    moves = pick_and_place(arm.home, tcp_offset(arm.robot), (seen[0, 3], seen[1, 3]))
     done = run_pick_place(arm, cell, moves)
     p = done.placement
     assert p.gripped == "part"

@@ -55,8 +55,9 @@ class CellSession:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def build(self) -> list[str]:
-        """Create every object the cell spawns, each confirmed by GetSTA. Returns the names.
+    def build(self, shift: dict[str, tuple[float, float]] | None = None) -> list[str]:
+        """Create every object the cell spawns, each confirmed by GetSTA (``shift``: name ->
+        an offset (x, y; m) from the description's place). Returns the names.
 
         Raises:
             WorldControllerError: an object was not created (names what GetSTA shows: a spawn
@@ -66,7 +67,9 @@ class CellSession:
         """
         made = []
         for p in self.cell.spawn:
-            wire = zdown_to_zup_transform(p.pose)  # (the flip is its own inverse)
+            pose = p.pose.copy()
+            pose[:2, 3] += (shift or {}).get(p.name, (0.0, 0.0))
+            wire = zdown_to_zup_transform(pose)  # (the flip is its own inverse)
             try:
                 self.wc.create(p.name, p.wc_class.name, wire[:3, 3].tolist(),
                                matrix_to_rpy(wire[:3, :3]), p.scale, p.physics,

@@ -83,18 +83,20 @@ def tcp_offset(robot: Robot, frames: tuple[str, ...] = TCP_FRAMES) -> Array:
     return np.eye(4)
 
 
-def pick_and_place(home: Array, tcp: Array | None = None) -> list[Move]:
+def pick_and_place(home: Array, tcp: Array | None = None,
+                   pick: tuple[float, float] = PICK) -> list[Move]:
     """The table scene's cycle, ending at ``home`` (joint values); ``tcp``: tool0 -> the
-    tool's centre point (:func:`tcp_offset`; identity: the targets are tool0's)."""
+    tool's centre point (:func:`tcp_offset`; identity: the targets are tool0's); ``pick``: the
+    part's centre (x, y; m), such as where the simulator says it is."""
     to_tool0 = invert(np.eye(4) if tcp is None else np.asarray(tcp, float))
 
     def at(xy: tuple[float, float], z: float) -> Array:
         out: Array = transform(TOOL_DOWN, (xy[0], xy[1], z)) @ to_tool0
         return out
 
-    return [Move("approach", "ptp", at(PICK, CLEAR_Z)),
-            Move("pick", "lin", at(PICK, PICK_Z), then="grip"),
-            Move("lift", "lin", at(PICK, CLEAR_Z)),
+    return [Move("approach", "ptp", at(pick, CLEAR_Z)),
+            Move("pick", "lin", at(pick, PICK_Z), then="grip"),
+            Move("lift", "lin", at(pick, CLEAR_Z)),
             Move("transfer", "ptp", at(PLACE, CLEAR_Z)),
             Move("place", "lin", at(PLACE, PLACE_Z), then="release"),
             Move("retreat", "lin", at(PLACE, CLEAR_Z)),

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_arm.arm.cell_session import CellSession
-from usar_arm.arm.cycle import MoveResult, pick_and_place, tcp_offset
+from usar_arm.arm.cycle import PICK, MoveResult, pick_and_place, tcp_offset
 from usar_arm.arm.facade import Arm
 from usar_arm.arm.pick_place import PickPlaceResult, run_pick_place
 from usar_arm.arm.tour_calibration import ensure_calibrated, is_calibrated
@@ -230,7 +230,9 @@ def run(args: argparse.Namespace) -> int:
                      "pick-and-place (the first move starts with a 2 s swing that learns the "
                      "drives' response)" + (", correcting the tool with the tip sensor"
                                             if args.tip_correction else ""))
-            moves = pick_and_place(arm.home, tcp_offset(arm.robot))
+            part = cell.pose("part")  # the pick is where the simulator has the part
+            moves = pick_and_place(arm.home, tcp_offset(arm.robot),
+                                   PICK if part is None else (part[0, 3], part[1, 3]))
             motion = MotionOptions(speed_scale=args.speed_scale,
                                    ompl=OmplOptions(seed=args.seed))
             done = run_pick_place(arm, cell, moves, motion, execution, args.tip_correction,
