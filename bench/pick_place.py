@@ -1,9 +1,10 @@
 """Pick-and-place stage: the demo's real pick-and-place (``usar_arm.arm.pick_place``) on the
-embedded simulator, run after run, the KR60 calibrated first as the demo does: the part created through the WorldController (shifted by up
-to 2 cm per run, from the run's seed), picked where GetSTA says it is, carried around the tower
-as an attached object, let go in the bin; each run judged by the simulator (GetSTA: the part's
-resting pose against the place; the contact extension: contacts of the arm, the tool and the
-carried part). No peer runs on USARSim; our figures only.
+embedded simulator, run after run, the KR60 calibrated first as the demo does: the part
+created through the WorldController (shifted by up to 2 cm per run, from the run's seed),
+picked where GetSTA says it is, carried around the tower as an attached object, let go in the
+bin; each run judged by the simulator (GetSTA: the part's resting pose against the place; the
+contact extension: contacts of the arm, the tool and the carried part). No peer runs on
+USARSim; our figures only.
 
 As a solver (its own process, which starts one simulator per run)::
 
