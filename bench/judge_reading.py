@@ -175,6 +175,36 @@ def read_scene(items: list[dict[str, Any]]) -> list[Obstacle]:
     return out
 
 
+@dataclass(frozen=True)
+class Carried:
+    """An object the arm carries, as the judge reads it: its shape (an :class:`Obstacle` whose
+    pose is the object's in the frame of ``link``, the grasp), the link it is fixed to and the
+    links it may touch (never checked against it, nor is ``link``)."""
+
+    body: Obstacle
+    link: str
+    touch_links: frozenset[str]
+
+    @property
+    def name(self) -> str:
+        """The object's name (a scene obstacle of that name is this object: not checked)."""
+        return self.body.name
+
+
+def read_attached(items: list[dict[str, Any]]) -> list[Carried]:
+    """The carried objects of a problem file's ``attached`` list: each a scene item (type,
+    size/radius/length or mesh file, ``xyz`` and ``quat_wxyz`` in the link's frame) with its
+    ``link`` and ``touch_links``."""
+    out = []
+    for d in items:
+        if not isinstance(d.get("link"), str):
+            raise ValueError(f"the judge expected the link an attached object is fixed to, got "
+                             f"{d!r}")
+        (body,) = read_scene([{k: v for k, v in d.items() if k not in ("link", "touch_links")}])
+        out.append(Carried(body, d["link"], frozenset(d.get("touch_links", []))))
+    return out
+
+
 def _number_list(value: Any, count: int, what: str) -> list[float]:
     if not isinstance(value, list) or len(value) != count:
         raise ValueError(f"the judge expected {count} numbers for {what}, got {value!r}")
@@ -205,9 +235,47 @@ def _yaml_shape(obj: dict[str, Any], base: Path, what: str) -> tuple[str, dict[s
                   "faces": np.asarray(mesh.faces, np.int32)}
 
 
+WC_OBJECTS = {  # class: outer x, y, z (m) at scale 1, and an open container's wall (m)
+    "wccrate": ((0.30, 0.30, 0.25), 0.0), "wccratered": ((0.30, 0.30, 0.25), 0.0),
+    "wccrategreen": ((0.30, 0.30, 0.25), 0.0), "wccrateblue": ((0.30, 0.30, 0.25), 0.0),
+    "wckivapallet": ((0.30, 0.30, 0.25), 0.0), "wcpallet": ((1.20, 0.80, 0.144), 0.0),
+    "wcobjectbin": ((0.40, 0.30, 0.20), 0.015), "wckittray": ((0.50, 0.35, 0.05), 0.01),
+    "wckittraysmall": ((0.30, 0.20, 0.04), 0.01),
+}
+"""The WorldController objects a cell file may spawn, as docs/simulator.md gives their sizes:
+each is a box about its centre, or an open container (a floor and four walls, open at the
+top), scaled per axis by the object's ``scale``."""
+
+
+def _wc_pieces(obj: dict[str, Any], where: Array, what: str) -> list[Obstacle]:
+    """The boxes of a WorldController object (``class``, ``scale``) placed at ``where``: the
+    object itself, or ``<name>/floor`` and ``<name>/wall_front`` (+x), ``wall_back``,
+    ``wall_left`` (+y), ``wall_right`` of a container."""
+    cls = str(obj["class"]).rpartition(".")[2].lower()
+    if cls not in WC_OBJECTS:
+        raise ValueError(f"the judge does not know WorldController class {obj['class']!r} "
+                         f"({what})")
+    (x, y, z), wall = WC_OBJECTS[cls]
+    k = _number_list(obj.get("scale", [1.0, 1.0, 1.0]), 3, f"{what}.scale")
+    x, y, z = x * k[0], y * k[1], z * k[2]
+    name = str(obj["name"])
+    if wall == 0.0:
+        return [Obstacle(name, "box", where, {"size": [x, y, z]}, frozenset())]
+    tx, ty, tz = wall * k[0], wall * k[1], wall * k[2]
+    high, up = z - tz, tz / 2  # the walls stand on the floor
+    pieces = {"floor": ((0.0, 0.0, (tz - z) / 2), (x, y, tz)),
+              "wall_front": (((x - tx) / 2, 0.0, up), (tx, y, high)),
+              "wall_back": (((tx - x) / 2, 0.0, up), (tx, y, high)),
+              "wall_left": ((0.0, (y - ty) / 2, up), (x - 2 * tx, ty, high)),
+              "wall_right": ((0.0, (ty - y) / 2, up), (x - 2 * tx, ty, high))}
+    return [Obstacle(f"{name}/{piece}", "box", where @ pose(np.eye(3), centre),
+                     {"size": list(size)}, frozenset()) for piece, (centre, size) in pieces.items()]
+
+
 def read_scene_file(path: str | Path) -> list[Obstacle]:
     """The obstacles of a scene YAML file (``name``, ``objects``: each with a ``name``, one
-    shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``), read by the judge."""
+    shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``, or a WorldController
+    ``class`` and ``scale`` instead of a shape), read by the judge."""
     import yaml
 
     path = Path(path)
@@ -215,9 +283,12 @@ def read_scene_file(path: str | Path) -> list[Obstacle]:
     out = []
     for k, obj in enumerate(doc.get("objects") or []):
         what = f"{path.name} objects[{k}]"
-        kind, params = _yaml_shape(obj, path.parent, what)
         rpy = _number_list(obj.get("rpy", [0.0, 0.0, 0.0]), 3, f"{what}.rpy")
         where = pose(rpy_matrix(*rpy), _number_list(obj["xyz"], 3, f"{what}.xyz"))
+        if "class" in obj:
+            out += _wc_pieces(obj, where, what)
+            continue
+        kind, params = _yaml_shape(obj, path.parent, what)
         out.append(Obstacle(str(obj["name"]), kind, where, params,
                             frozenset(str(a) for a in obj.get("allow") or [])))
     return out
