@@ -25,7 +25,7 @@ import common
 from common import Context, peerio
 
 from usar_arm import Arm
-from usar_arm.arm.cycle import pick_and_place, run_cycle
+from usar_arm.arm.cycle import pick_and_place, run_cycle, tcp_offset
 from usar_arm.arm.tour_calibration import ensure_calibrated
 from usar_arm.description.pipeline import DescribeOptions
 
@@ -50,7 +50,7 @@ def solver_main(argv: list[str] | None = None) -> int:
         with Arm.connect("KR60", wire_precision=p["wire_precision"],
                          calibrated=p["calibrated"]) as arm:
             connected = time.perf_counter()
-            moves = pick_and_place(arm.home)[:p["moves"]]
+            moves = pick_and_place(arm.home, tcp_offset(arm.robot))[:p["moves"]]
             result = run_cycle(arm, moves, tip_correction=p["tip_correction"])
         done = time.perf_counter()
         return {"success": True, "seconds": done - connected,

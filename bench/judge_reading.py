@@ -235,43 +235,6 @@ def _yaml_shape(obj: dict[str, Any], base: Path, what: str) -> tuple[str, dict[s
                   "faces": np.asarray(mesh.faces, np.int32)}
 
 
-WC_OBJECTS = {  # class: outer x, y, z (m) at scale 1, and an open container's wall (m)
-    "wccrate": ((0.30, 0.30, 0.25), 0.0), "wccratered": ((0.30, 0.30, 0.25), 0.0),
-    "wccrategreen": ((0.30, 0.30, 0.25), 0.0), "wccrateblue": ((0.30, 0.30, 0.25), 0.0),
-    "wckivapallet": ((0.30, 0.30, 0.25), 0.0), "wcpallet": ((1.20, 0.80, 0.144), 0.0),
-    "wcobjectbin": ((0.40, 0.30, 0.20), 0.015), "wckittray": ((0.50, 0.35, 0.05), 0.01),
-    "wckittraysmall": ((0.30, 0.20, 0.04), 0.01),
-}
-"""The WorldController objects a cell file may spawn, as docs/simulator.md gives their sizes:
-each is a box about its centre, or an open container (a floor and four walls, open at the
-top), scaled per axis by the object's ``scale``."""
-
-
-def _wc_pieces(obj: dict[str, Any], where: Array, what: str) -> list[Obstacle]:
-    """The boxes of a WorldController object (``class``, ``scale``) placed at ``where``: the
-    object itself, or ``<name>/floor`` and ``<name>/wall_front`` (+x), ``wall_back``,
-    ``wall_left`` (+y), ``wall_right`` of a container."""
-    cls = str(obj["class"]).rpartition(".")[2].lower()
-    if cls not in WC_OBJECTS:
-        raise ValueError(f"the judge does not know WorldController class {obj['class']!r} "
-                         f"({what})")
-    (x, y, z), wall = WC_OBJECTS[cls]
-    k = _number_list(obj.get("scale", [1.0, 1.0, 1.0]), 3, f"{what}.scale")
-    x, y, z = x * k[0], y * k[1], z * k[2]
-    name = str(obj["name"])
-    if wall == 0.0:
-        return [Obstacle(name, "box", where, {"size": [x, y, z]}, frozenset())]
-    tx, ty, tz = wall * k[0], wall * k[1], wall * k[2]
-    high, up = z - tz, tz / 2  # the walls stand on the floor
-    pieces = {"floor": ((0.0, 0.0, (tz - z) / 2), (x, y, tz)),
-              "wall_front": (((x - tx) / 2, 0.0, up), (tx, y, high)),
-              "wall_back": (((tx - x) / 2, 0.0, up), (tx, y, high)),
-              "wall_left": ((0.0, (y - ty) / 2, up), (x - 2 * tx, ty, high)),
-              "wall_right": ((0.0, (ty - y) / 2, up), (x - 2 * tx, ty, high))}
-    return [Obstacle(f"{name}/{piece}", "box", where @ pose(np.eye(3), centre),
-                     {"size": list(size)}, frozenset()) for piece, (centre, size) in pieces.items()]
-
-
 def read_scene_file(path: str | Path) -> list[Obstacle]:
     """The obstacles of a scene YAML file (``name``, ``objects``: each with a ``name``, one
     shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``, or a WorldController
@@ -285,13 +248,52 @@ def read_scene_file(path: str | Path) -> list[Obstacle]:
         what = f"{path.name} objects[{k}]"
         rpy = _number_list(obj.get("rpy", [0.0, 0.0, 0.0]), 3, f"{what}.rpy")
         where = pose(rpy_matrix(*rpy), _number_list(obj["xyz"], 3, f"{what}.xyz"))
+        allow = frozenset(str(a) for a in obj.get("allow") or [])
         if "class" in obj:
-            out += _wc_pieces(obj, where, what)
+            out += _class_boxes(obj, where, allow, what)
             continue
         kind, params = _yaml_shape(obj, path.parent, what)
-        out.append(Obstacle(str(obj["name"]), kind, where, params,
-                            frozenset(str(a) for a in obj.get("allow") or [])))
+        out.append(Obstacle(str(obj["name"]), kind, where, params, allow))
     return out
+
+
+# The WorldController classes a cell spawns, as the judge knows them (read here from the
+# simulator's documented class table, docs/simulator.md, not from usar-arm's code): outer edges
+# (m) at scale 1 and, for an open container, its wall and floor thickness (m).
+_WC_SIZES: dict[str, tuple[tuple[float, float, float], float]] = {
+    "wccrate": ((0.30, 0.30, 0.25), 0.0), "wccratered": ((0.30, 0.30, 0.25), 0.0),
+    "wccrategreen": ((0.30, 0.30, 0.25), 0.0), "wccrateblue": ((0.30, 0.30, 0.25), 0.0),
+    "wckivapallet": ((0.30, 0.30, 0.25), 0.0), "wcpallet": ((1.20, 0.80, 0.144), 0.0),
+    "wcobjectbin": ((0.40, 0.30, 0.20), 0.015), "wckittray": ((0.50, 0.35, 0.05), 0.01),
+    "wckittraysmall": ((0.30, 0.20, 0.04), 0.01)}
+
+
+def _class_boxes(obj: dict[str, Any], where: Array, allow: frozenset[str],
+                 what: str) -> list[Obstacle]:
+    """A WorldController object of a scene file (``class``, ``scale``; its origin the centre
+    of its outline): one box, or an open container's floor and four walls named
+    ``<name>/floor``, ``<name>/wall_front`` (+x), ``wall_back``, ``wall_left`` (+y),
+    ``wall_right``, as the judge builds them."""
+    key = str(obj["class"]).rpartition(".")[2].lower()
+    if key not in _WC_SIZES:
+        raise ValueError(f"the judge does not know WorldController class {obj['class']!r} "
+                         f"({what})")
+    size, wall = _WC_SIZES[key]
+    scale = _number_list(obj.get("scale", [1.0, 1.0, 1.0]), 3, f"{what}.scale")
+    x, y, z = (size[i] * scale[i] for i in range(3))
+    name = str(obj["name"])
+    if wall == 0.0:
+        return [Obstacle(name, "box", where, {"size": [x, y, z]}, allow)]
+    t = [wall * s for s in scale]
+    h = z - t[2]  # the walls stand on the floor
+    pieces = {"floor": ((0.0, 0.0, (t[2] - z) / 2), (x, y, t[2])),
+              "wall_front": (((x - t[0]) / 2, 0.0, t[2] / 2), (t[0], y, h)),
+              "wall_back": (((t[0] - x) / 2, 0.0, t[2] / 2), (t[0], y, h)),
+              "wall_left": ((0.0, (y - t[1]) / 2, t[2] / 2), (x - 2 * t[0], t[1], h)),
+              "wall_right": ((0.0, (t[1] - y) / 2, t[2] / 2), (x - 2 * t[0], t[1], h))}
+    return [Obstacle(f"{name}/{piece}", "box", where @ pose(np.eye(3), centre),
+                     {"size": list(edges)}, allow)
+            for piece, (centre, edges) in pieces.items()]
 
 
 def scene_obstacles(spec: dict[str, Any], scene: str) -> list[Obstacle]:

@@ -7,13 +7,13 @@ from pathlib import Path
 from tempfile import mkdtemp
 
 from usar_arm import Arm
-from usar_arm.arm.cycle import pick_and_place, run_cycle
+from usar_arm.arm.cycle import pick_and_place, run_cycle, tcp_offset
 from usar_arm.export.bag import write_bag
 from usar_arm.export.render import render_arm, tool_path
 from usar_arm.planning.scene_file import load_scene
 
 with Arm.connect("KR60") as arm:
-    moves = pick_and_place(arm.home)
+    moves = pick_and_place(arm.home, tcp_offset(arm.robot))
     result = run_cycle(arm, moves, scene="table")
 
 print(f"{'move':<9} {'type':<4} {'motion s':>8} {'tool0 mm':>8}")

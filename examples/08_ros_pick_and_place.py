@@ -20,7 +20,7 @@ from tempfile import mkdtemp
 import numpy as np
 
 from usar_arm import Arm
-from usar_arm.arm.cycle import pick_and_place
+from usar_arm.arm.cycle import pick_and_place, tcp_offset
 from usar_arm.ros.build import ensure_importable
 
 ensure_importable()  # tf2_msgs and control_msgs come from the message build
@@ -101,7 +101,7 @@ try:
           f"{'tool0 mm':>8} {'tool0 mrad':>10}")
     worst = 0.0
     failed: list[str] = []
-    for move in pick_and_place(arm.home):
+    for move in pick_and_place(arm.home, tcp_offset(arm.robot)):
         start = np.array(latest["joints"].position)
         plan = arm.plan(joints=move.joints, pose=move.pose, motion=move.motion, scene="table",
                         start=start)

@@ -91,15 +91,42 @@ def _rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
                      [-sp, cp * sr, cp * cr]])
 
 
-def read_scene(path: str) -> list:
-    """The obstacles of a usar-arm scene file, read here (box, cylinder, sphere, mesh; xyz, rpy,
-    allow), each with its 4x4 pose."""
+def class_boxes(o: dict, pose: np.ndarray, classes: dict) -> list:
+    """A WorldController object (``class``, ``scale``) as boxes: one, or an open container's
+    floor and four walls (``<name>/floor``, ``wall_front`` +x, ``wall_back``, ``wall_left`` +y,
+    ``wall_right``), from the class's outer size and wall thickness the request gives."""
+    spec = classes[o["class"]]
+    sx, sy, sz = np.multiply(spec["size"], o.get("scale", [1.0, 1.0, 1.0]))
+    if not spec["wall"]:
+        return [{"name": o["name"], "pose": pose.tolist(), "allow": o.get("allow", []),
+                 "type": "box", "size": [sx, sy, sz]}]
+    tx, ty, tz = np.multiply(spec["wall"], o.get("scale", [1.0, 1.0, 1.0]))
+    pieces = {"floor": ((0, 0, (tz - sz) / 2), (sx, sy, tz)),
+              "wall_front": (((sx - tx) / 2, 0, tz / 2), (tx, sy, sz - tz)),
+              "wall_back": (((tx - sx) / 2, 0, tz / 2), (tx, sy, sz - tz)),
+              "wall_left": ((0, (sy - ty) / 2, tz / 2), (sx - 2 * tx, ty, sz - tz)),
+              "wall_right": ((0, (ty - sy) / 2, tz / 2), (sx - 2 * tx, ty, sz - tz))}
+    out = []
+    for piece, (centre, size) in pieces.items():
+        at = pose.copy()
+        at[:3, 3] = pose[:3, 3] + pose[:3, :3] @ np.asarray(centre, float)
+        out.append({"name": f"{o['name']}/{piece}", "pose": at.tolist(),
+                    "allow": o.get("allow", []), "type": "box", "size": [float(v) for v in size]})
+    return out
+
+
+def read_scene(path: str, classes: dict) -> list:
+    """The obstacles of a usar-arm scene file, read here (box, cylinder, sphere, mesh, a
+    WorldController class; xyz, rpy, allow), each with its 4x4 pose."""
     doc = yaml.safe_load(Path(path).read_text())
     items = []
     for o in doc.get("objects") or []:
         pose = np.eye(4)
         pose[:3, :3] = _rpy(*o.get("rpy", [0.0, 0.0, 0.0]))
         pose[:3, 3] = o["xyz"]
+        if "class" in o:
+            items += class_boxes(o, pose, classes)
+            continue
         item = {"name": o["name"], "pose": pose.tolist(), "allow": o.get("allow", [])}
         if "box" in o:
             item.update(type="box", size=o["box"])
@@ -247,11 +274,13 @@ def main() -> None:
     if "ik" in request:
         out["ik"] = ik(env, request["ik"], root, request.get("ik_restarts", 0))
     if "collisions" in request:
-        out["collisions"] = {name: collisions(case["q"], read_scene(case["scene_file"]), root)
-                             for name, case in request["collisions"].items()}
+        out["collisions"] = {
+            name: collisions(case["q"], read_scene(case["scene_file"], request["classes"]), root)
+            for name, case in request["collisions"].items()}
     if "plans" in request:
         case = request["plans"]
-        out["plans"] = plans(case["problems"], read_scene(case["scene_file"]), root,
+        out["plans"] = plans(case["problems"],
+                             read_scene(case["scene_file"], request["classes"]), root,
                              case["pipeline"])
     Path(sys.argv[2]).write_text(json.dumps(out))
 

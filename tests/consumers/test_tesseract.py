@@ -42,6 +42,7 @@ from tests.consumers.conftest import (
     run_driver,
 )
 from usar_arm.core.errors import NoPathError
+from usar_arm.core.wc_classes import WC_CLASSES
 from usar_arm.planning.ompl_adapter import OmplOptions
 from usar_arm.planning.ptp import plan_to_joints
 from usar_arm.planning.robot import Robot
@@ -110,6 +111,7 @@ def consumed(request: pytest.FixtureRequest, descriptions: dict[str, tuple[Path,
     req["ik"] = [{"pose": robot.kinematics.frame_pose(q, "tool0").tolist(), "seed": s.tolist()}
                  for q, s in zip(truth, seeds, strict=True)]
     req["ik_restarts"] = 0 if config.solver == OPW_SOLVER else IK_RESTARTS
+    req["classes"] = {c.name: {"size": list(c.size), "wall": c.wall} for c in WC_CLASSES.values()}
     if name != SPHERICAL_WRIST:
         req["collisions"] = {s: {"scene_file": str(SCENE_FILES / f"{s}.yaml"),
                                  "q": rng.uniform(lo, hi, (CONTACT_SAMPLES, chain.dof)).tolist()}

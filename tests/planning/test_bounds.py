@@ -260,8 +260,12 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
                                  else load_scene(scene))
     packed = world._compiled._packed  # (the kernel's own arrays, as the world hands them over)
     links = packed[2]
-    assert (links[:, bounds.GROUP] >= 0).all(), "every learnt body is in its link's group"
-    assert len(set(links[:, bounds.GROUP])) == len(set(links[:, bounds.OWNER]))
+    owners, count = np.unique(links[:, bounds.OWNER], return_counts=True)
+    paired = np.isin(links[:, bounds.OWNER], owners[count > 1])
+    assert paired.sum() >= 12, "the six learnt links are a body and a core each"
+    assert (links[paired, bounds.GROUP] >= 0).all(), "every learnt body is in its link's group"
+    assert (links[~paired, bounds.GROUP] == -1).all(), "a one-body link (the tool) is alone"
+    assert len(set(links[paired, bounds.GROUP])) == len(owners[count > 1])
     alone = list(packed)
     alone[2] = links.copy()
     alone[2][:, bounds.GROUP] = -1

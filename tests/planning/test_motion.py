@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from tests.planning.recheck import assert_rechecked
+from usar_arm.arm.cycle import tcp_offset
 from usar_arm.control.motion import MotionOptions, plan_motion
 from usar_arm.control.timing import blended, stop_at_waypoints
 from usar_arm.control.trajectory import MotionLimits, Trajectory
@@ -80,24 +81,29 @@ def test_blending_is_never_slower_than_stopping_on_the_same_path(kr60: Robot) ->
     assert max(ratios) <= 1.0 + 1e-9 and min(ratios) < 0.95
 
 
+def _cup_at(robot: Robot, xyz: tuple[float, float, float]) -> np.ndarray:
+    """tool0's pose putting the gripper's suction cup at ``xyz``, pointing down."""
+    return transform(DOWN, xyz) @ np.linalg.inv(tcp_offset(robot))
+
+
 def test_ptp_to_a_pose_reaches_it(kr60: Robot) -> None:
     world = kr60.collision_world(load_scene("table"))
-    target = transform(DOWN, (1.45, 0.50, 1.10))  # above the bin, the tower in between
-    start = np.array(kr60.ik_solver().solve(transform(DOWN, (1.45, -0.45, 1.0))).best.q)
+    target = _cup_at(kr60, (1.45, 0.50, 1.10))  # above the bin, the tower in between
+    start = np.array(kr60.ik_solver().solve(_cup_at(kr60, (1.45, -0.45, 1.0))).best.q)
     plan = plan_motion(kr60, world, start, pose=target)
     assert_rechecked(kr60, world, plan)
 
 
 def test_lin_follows_a_straight_line(kr60: Robot) -> None:
     world = kr60.collision_world(load_scene("table"))
-    above = transform(DOWN, (1.45, -0.45, 1.0))
+    above = _cup_at(kr60, (1.45, -0.45, 1.0))
     start = np.array(kr60.ik_solver().solve(above).best.q)
-    down = transform(DOWN, (1.45, -0.45, 0.82))
+    down = _cup_at(kr60, (1.45, -0.45, 0.82))  # 2 cm above the part
     plan = plan_motion(kr60, world, start, pose=down, options=MotionOptions(motion="lin"))
     assert_rechecked(kr60, world, plan)
     tips = np.array([kr60.kinematics.frame_pose(q, "tool0")[:3, 3]
                      for q in plan.trajectory.q[:: 20]])
-    off_line = np.linalg.norm(tips[:, :2] - [1.45, -0.45], axis=1)
+    off_line = np.linalg.norm(tips[:, :2] - above[:2, 3], axis=1)
     assert off_line.max() < 1e-3  # the tool stays on the vertical line
 
 

@@ -172,7 +172,7 @@ def cycle(args: argparse.Namespace) -> dict[str, Any]:
     from sensor_msgs.msg import JointState
 
     from usar_arm import Arm
-    from usar_arm.arm.cycle import pick_and_place
+    from usar_arm.arm.cycle import pick_and_place, tcp_offset
 
     rospy.init_node("usar_arm_test_cycle", anonymous=True, disable_signals=True)
     folder = Path(tempfile.mkdtemp(prefix="ros1-cycle-"))
@@ -202,7 +202,7 @@ def cycle(args: argparse.Namespace) -> dict[str, Any]:
                     start=np.array(latest["joints"].position)).trajectory
     _send(client, _trajectory_goal(list(arm.joint_names), home), home.duration + 30)
     time.sleep(0.5)
-    for move in pick_and_place(arm.home):
+    for move in pick_and_place(arm.home, tcp_offset(arm.robot)):
         start = np.array(latest["joints"].position)
         plan = arm.plan(joints=move.joints, pose=move.pose, motion=move.motion,
                         scene=args.scene, start=start)

@@ -3,8 +3,13 @@
 Seven moves, in the KUKA/Pilz vocabulary: PTP to above the part, LIN down to it, LIN up, PTP
 around the tower to above the bin, LIN down into it, LIN up, PTP home. Each move is planned from
 where the arm really is, executed, and measured; :func:`run_cycle` returns one row per move.
+The moves say where the vacuum grips (``then="grip"``, after the pick) and releases
+(``then="release"``, after the place); :mod:`usar_arm.arm.pick_place` acts on them with the
+simulator's vacuum and WorldController, :func:`run_cycle` ignores them (a cycle that mimes).
 
-Poses are tool0 in base_link (m, rad), the tool pointing straight down.
+The targets are the tool's: the suction cup's centre (the description's ``tcp`` frame,
+``KR60gripper_tcp``) pointing straight down; each move's ``pose`` is tool0's (m, rad, base_link),
+taken from the tool's through the tool0 -> TCP transform of the arm's description.
 """
 
 from __future__ import annotations
@@ -21,39 +26,77 @@ from usar_arm.control.executor import ExecutionOptions, ExecutionReport
 from usar_arm.control.motion import MotionOptions, MotionPlan
 from usar_arm.control.splice import join_executed, join_trajectories
 from usar_arm.control.trajectory import ExecutedSamples, Trajectory
-from usar_arm.core.spatial import Array, rpy_to_matrix, transform
+from usar_arm.core.spatial import Array, invert, rpy_to_matrix, transform
+from usar_arm.planning.robot import Robot
 
 TOOL_DOWN = rpy_to_matrix((0.0, np.pi, 0.0))
-"""tool0's orientation with its z axis pointing down (REP-103 base_link)."""
+"""The tool's orientation with its z axis pointing down (REP-103 base_link)."""
 PICK = (1.45, -0.45)
 """The part's centre (x, y; m) on the table scene's table."""
 PLACE = (1.45, 0.50)
-"""The bin's centre (x, y; m)."""
-PICK_Z, PLACE_Z, CLEAR_Z = 0.82, 0.95, 1.10
-"""tool0 heights (m): at the part (its top is at 0.80), in the bin (its rim is at 0.90), and
-clear of both."""
+"""The bin's centre (x, y; m): where the part is put."""
+GAP = 0.02
+"""How far (m) the suction cup stops above the part's top: inside the vacuum's suction zone
+(the cup's centre to 0.125 m below it), clear of the part by the description's 8 mm worst
+tool error on a UDK wire and its 10 mm print step of the tool's length."""
+PART_HEIGHT = 0.10
+"""The part's height (m): the table scene's WCCrate at scale 0.4."""
+PICK_Z = 0.80 + GAP
+"""The cup's height (m) at the pick: the part's top is at 0.80."""
+RELEASE_HEIGHT = 0.015
+"""How far (m) above the bin's inner floor (0.715 m) the part is let go."""
+PLACE_Z = 0.715 + RELEASE_HEIGHT + PART_HEIGHT + GAP
+"""The cup's height (m) at the place, the gripper inside the bin (its rim is at 0.90)."""
+CLEAR_Z = 1.10
+"""The cup's height (m) above the part and the bin: a carried part's bottom 0.08 m above the
+bin's rim."""
+TCP_FRAMES = ("tcp", "KR60gripper_tcp")
+"""Where the tool's centre point is: the description's frame role (a learnt description's
+discovery notes name it), else the KR60's TCP link (a description read from its URDF alone,
+such as a ROS node's ``robot_description``)."""
 
 
 @dataclass(frozen=True)
 class Move:
-    """One move of a cycle: a tool0 ``pose`` (4x4) or joint values ``joints``."""
+    """One move of a cycle: a tool0 ``pose`` (4x4) or joint values ``joints``; ``then``: what
+    the vacuum does once the arm is there (``grip``, ``release`` or nothing)."""
 
     name: str
     motion: str
     pose: Array | None = None
     joints: Array | None = None
+    then: str | None = None
 
 
-def pick_and_place(home: Array) -> list[Move]:
-    """The table scene's cycle, ending at ``home`` (joint values)."""
+def tcp_offset(robot: Robot, frames: tuple[str, ...] = TCP_FRAMES) -> Array:
+    """tool0 -> the tool's centre point (4x4) in ``robot``'s description (the first of
+    ``frames`` it has); identity when it describes no tool (the targets are then tool0's)."""
+    kin = robot.kinematics
+    q = np.array(robot.home())
+    for frame in frames:
+        try:
+            tool = kin.frame_pose(q, frame)
+        except KeyError:
+            continue
+        out: Array = invert(kin.frame_pose(q, "tool0")) @ tool
+        return out
+    return np.eye(4)
+
+
+def pick_and_place(home: Array, tcp: Array | None = None) -> list[Move]:
+    """The table scene's cycle, ending at ``home`` (joint values); ``tcp``: tool0 -> the
+    tool's centre point (:func:`tcp_offset`; identity: the targets are tool0's)."""
+    to_tool0 = invert(np.eye(4) if tcp is None else np.asarray(tcp, float))
+
     def at(xy: tuple[float, float], z: float) -> Array:
-        return transform(TOOL_DOWN, (xy[0], xy[1], z))
+        out: Array = transform(TOOL_DOWN, (xy[0], xy[1], z)) @ to_tool0
+        return out
 
     return [Move("approach", "ptp", at(PICK, CLEAR_Z)),
-            Move("pick", "lin", at(PICK, PICK_Z)),
+            Move("pick", "lin", at(PICK, PICK_Z), then="grip"),
             Move("lift", "lin", at(PICK, CLEAR_Z)),
             Move("transfer", "ptp", at(PLACE, CLEAR_Z)),
-            Move("place", "lin", at(PLACE, PLACE_Z)),
+            Move("place", "lin", at(PLACE, PLACE_Z), then="release"),
             Move("retreat", "lin", at(PLACE, CLEAR_Z)),
             Move("home", "ptp", joints=np.asarray(home, float))]
 

@@ -1,7 +1,10 @@
-"""``usar-arm demo``: the main job, end to end on the embedded simulator.
+"""``usar-arm demo``: the main job, end to end on the embedded simulator (or a server the user
+started, with ``--host``).
 
-Spawn the KR60, discover it, write its description, run a pick-and-place cycle in the table
-scene (planned, executed and measured move by move), and write a table, pictures and a bag.
+Spawn the KR60, discover it, write its description, build the table cell through the
+WorldController (the part and the bin), pick the part with the vacuum and place it in the bin
+(planned, executed and measured move by move, the part carried as an attached object), judge
+the result by the simulator (GetSTA, contacts), and write a table, pictures and a bag.
 """
 
 from __future__ import annotations
@@ -12,8 +15,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from usar_arm.arm.cycle import CycleResult, MoveResult, pick_and_place, run_cycle
+from usar_arm.arm.cell_session import CellSession
+from usar_arm.arm.cycle import MoveResult, pick_and_place, tcp_offset
 from usar_arm.arm.facade import Arm
+from usar_arm.arm.pick_place import PickPlaceResult, run_pick_place
 from usar_arm.arm.tour_calibration import ensure_calibrated, is_calibrated
 from usar_arm.cli.commands import add_command
 from usar_arm.cli.common import add_verbosity, out, print_json, progress, setup_logging, verbosity
@@ -23,7 +28,6 @@ from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.core.fileio import write_atomic
 from usar_arm.description.pipeline import DescribeOptions
 from usar_arm.planning.ompl_adapter import OmplOptions
-from usar_arm.planning.scene_file import load_scene
 
 TARGET_M, TARGET_RAD = 1e-3, 1e-3
 """The demo's accuracy target for tool0 at the end of every move (m, rad)."""
@@ -32,12 +36,19 @@ TARGET_M, TARGET_RAD = 1e-3, 1e-3
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = add_command(
         sub, "demo",
-        description="On the embedded simulator: spawn the KR60, discover it, write its URDF, "
-                    "SRDF and joint limits, then plan and execute a pick-and-place cycle in the "
-                    "table scene (PTP approach, LIN down, LIN up, PTP around the tower, LIN "
-                    "place, LIN retreat, PTP home). Prints a table of the moves; writes the "
-                    "description, pictures, the trajectories and a rosbag2 into --out. "
-                    "Progress goes to stderr.")
+        description="On the embedded simulator (or a USARSim server at --host): spawn the "
+                    "KR60, discover it, write its URDF, SRDF and joint limits, create the part "
+                    "and the bin through the WorldController, then pick the part with the "
+                    "vacuum gripper and place it in the bin (PTP approach, LIN down, grip, LIN "
+                    "up, PTP around the tower carrying it, LIN into the bin, release, LIN "
+                    "retreat, PTP home), planned in the scene the simulator reports. Prints a "
+                    "table of the moves and whether the part is in the bin by the simulator; "
+                    "writes the description, pictures, the trajectories and a rosbag2 into "
+                    "--out. Progress goes to stderr.")
+    p.add_argument("--host", default=None, metavar="HOST",
+                   help="a running USARSim server (such as `usar-arm sim`) instead of the "
+                        "embedded one; the cell stays in it afterwards, for inspection")
+    p.add_argument("--port", type=int, default=3000, help="its port (default 3000)")
     p.add_argument("--out", default="demo-output", metavar="DIR",
                    help="output folder (default demo-output; its files are replaced)")
     p.add_argument("--wire-precision", choices=("udk", "full"), default="udk",
@@ -106,7 +117,7 @@ def _verdict(rows: list[dict[str, Any]], key: str) -> tuple[bool, float, float]:
     return worst_m <= TARGET_M and worst_rad <= TARGET_RAD, worst_m, worst_rad
 
 
-def _outputs(arm: Arm, result: CycleResult, folder: Path, bag: bool) -> dict[str, str]:
+def _outputs(arm: Arm, done: PickPlaceResult, folder: Path, bag: bool) -> dict[str, str]:
     """Write trajectories, pictures and the bag; returns what -> path."""
     # Imported here: matplotlib and the bag writer cost ~0.3 s that other commands never need.
     from usar_arm.export.bag import write_bag
@@ -114,6 +125,7 @@ def _outputs(arm: Arm, result: CycleResult, folder: Path, bag: bool) -> dict[str
     from usar_arm.export.render import render_arm, tool_path
 
     files: dict[str, str] = {}
+    result = done.cycle
     moves = result.moves
     cycle, executed = result.timeline()
     for i, m in enumerate(moves):
@@ -127,9 +139,11 @@ def _outputs(arm: Arm, result: CycleResult, folder: Path, bag: bool) -> dict[str
     progress("  drawing the arm in its scene...")
     picture = folder / "cycle-scene.png"
     chain = arm.robot.chain
-    render_arm(picture, chain, arm.home, load_scene("table"), tool_path(chain, cycle),
-               ghosts=[moves[1].plan.goal, moves[4].plan.goal],
-               title="KR60 pick-and-place in the table scene")
+    carrying = done.carrying_chain or chain
+    shown = done.carried_goals or [arm.home]  # the arm carrying the part, over the bin
+    render_arm(picture, carrying, shown[len(shown) // 2], done.scenes.get("end"),
+               tool_path(chain, cycle), ghosts=[moves[1].plan.goal],
+               title="KR60 pick-and-place: the part carried, and in the bin")
     files["scene picture"] = str(picture)
     progress("  plotting the joints...")
     plot = folder / "cycle-joints.png"
@@ -154,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     if folder.exists() and not folder.is_dir():
         raise InvalidInputError(f"--out {folder}: exists and is not a folder")
     begin = time.perf_counter()
-    if args.wire_precision == "udk" and not args.no_calibrate:
+    if args.wire_precision == "udk" and not args.no_calibrate and args.host is None:
         progress("[0/4] calibrating the KR60 through its tip sensor, once per arm (the "
                  "description cache keeps it; --no-calibrate skips it)...")
         made = ensure_calibrated(DescribeOptions(robot="KR60", wire_precision="udk"),
@@ -167,29 +181,39 @@ def run(args: argparse.Namespace) -> int:
                      f"{f['max_after_m'] * 1e3:.2f} mm at worst")
         else:
             progress("  the cached description is calibrated already")
-    progress(f"[1/4] starting the embedded simulator ({args.wire_precision} numbers) and "
-        "discovering the KR60...")
-    with Arm.connect("KR60", wire_precision=args.wire_precision,
+    where = (f"the server at {args.host}:{args.port}" if args.host else
+             f"the embedded simulator ({args.wire_precision} numbers)")
+    progress(f"[1/4] starting {where} and discovering the KR60..." if args.host is None
+             else f"[1/4] connecting to {where} and discovering the KR60...")
+    with Arm.connect("KR60", host=args.host, port=args.port,
+                     wire_precision=args.wire_precision,
                      calibrated=not args.no_calibrate) as arm:
         written = arm.write_description(folder / "description")
         progress(f"[2/4] wrote its {'calibrated ' if is_calibrated(arm) else ''}description: "
                  f"{', '.join(str(p) for p in written)}")
-        progress("[3/4] pick-and-place in the table scene (the first move starts with a 2 s swing "
-            "that learns the drives' response)" + (", correcting the tool with the tip "
-                                                   "sensor" if args.tip_correction else ""))
-        moves = pick_and_place(arm.home)
-        motion = MotionOptions(speed_scale=args.speed_scale,
-                               ompl=OmplOptions(seed=args.seed))
-        result = run_cycle(arm, moves, "table", motion, execution, args.tip_correction,
-                           _progress(len(moves)))
+        assert arm.client is not None, "a connected arm"
+        with CellSession(arm.client.host, arm.client.port, "table",
+                         permanent=args.host is not None) as cell:
+            spawned = cell.build()
+            progress(f"[3/4] created {', '.join(spawned)} through the WorldController; "
+                     "pick-and-place (the first move starts with a 2 s swing that learns the "
+                     "drives' response)" + (", correcting the tool with the tip sensor"
+                                            if args.tip_correction else ""))
+            moves = pick_and_place(arm.home, tcp_offset(arm.robot))
+            motion = MotionOptions(speed_scale=args.speed_scale,
+                                   ompl=OmplOptions(seed=args.seed))
+            done = run_pick_place(arm, cell, moves, motion, execution, args.tip_correction,
+                                  progress=_progress(len(moves)))
     # The simulator has stopped: drawing no longer competes with its physics.
     progress(f"[4/4] writing pictures{'' if args.no_bag else ', the bag'} and trajectories "
         f"into {folder}/")
-    files = _outputs(arm, result, folder, not args.no_bag)
-    rows = result.rows()
+    files = _outputs(arm, done, folder, not args.no_bag)
+    rows = done.cycle.rows()
     files["description"] = str(folder / "description")
     report = {"wire_precision": args.wire_precision, "tip_correction": args.tip_correction,
-              "moves": rows, "files": files, "seconds": time.perf_counter() - begin}
+              "server": f"{args.host}:{args.port}" if args.host else "embedded",
+              "moves": rows, "placement": done.placement.as_json(), "files": files,
+              "seconds": time.perf_counter() - begin}
     write_atomic(folder / "report.json", json.dumps(report, indent=2, default=float) + "\n")
     files["report"] = str(folder / "report.json")
     if args.json:
@@ -211,6 +235,7 @@ def run(args: argparse.Namespace) -> int:
     out(f"tool0 within 1 mm and 1 mrad of every goal: {'yes' if ok else 'no'} (worst "
         f"{worst_m * 1000:.2f} mm, {worst_rad * 1000:.2f} mrad"
         f"{', simulator truth' if with_truth else ''})")
+    out(done.placement.line())
     if not ok and args.wire_precision == "udk" and not args.tip_correction:
         out("  (a description learnt over UDK's truncated numbers is 2-3 mm off at the tool: "
             "the Tip prints to the centimetre; calibration (the default), --tip-correction or "

@@ -120,9 +120,11 @@ def cut_chain(tree: UrdfTree, srdf: Srdf | None, choice: GroupChoice, where: str
         spec = (srdf.group(choice.group, where) if choice.group is not None
                 else srdf.groups[0])
         group_name = spec.name
-        if choice.group is None and len(srdf.groups) > 1:
+        # (a group of links alone, an end effector's, is no choice: it moves nothing)
+        moving = [g.name for g in srdf.groups if g.chains or g.joints or g.subgroups]
+        if choice.group is None and len(moving) > 1:
             notes.append(f"planning group '{spec.name}', the first of "
-                         f"{', '.join(g.name for g in srdf.groups)} (choose with --group)")
+                         f"{', '.join(moving)} (choose with --group)")
         chains, joints, links = srdf.group_joints(spec, where)
         joints += [j.name for j in chain.joints if j.child in links and j.name not in joints]
         if chains:
