@@ -205,3 +205,22 @@ def test_the_judge_carries_attached_bodies_as_usar_arm_does(kind: str, tmp_path:
     assert (ours == theirs).all(), np.flatnonzero(ours != theirs)
     only_body = theirs & ~bare.colliding(qs)
     assert only_body.sum() > 10  # (configurations where the carried body alone collides)
+
+
+def test_the_carry_stage_gives_the_solver_and_the_judge_the_same_part() -> None:
+    """bench/carry.py's part as usar-arm builds it (``body_of``) and as the judge reads it
+    (``read_attached``) sit at the same pose on the KR60 at random configurations."""
+    import carry
+    from judge_reading import read_attached
+
+    from usar_arm.planning.robot import robot_from_files
+
+    urdf, srdf = ROOT / "robots/generated/KR60.urdf", ROOT / "robots/generated/KR60.srdf"
+    robot = robot_from_files(urdf, srdf).carrying([carry.body_of(carry.PART)])
+    (part,) = read_attached([carry.PART])
+    kin = verify.Kinematics(JudgedRobot.from_files(urdf, srdf), list(robot.chain.joint_names))
+    for q in np.random.default_rng(6).uniform(robot.chain.lower(), robot.chain.upper(), (20, 6)):
+        kin.update(q)
+        np.testing.assert_allclose(robot.kinematics.frame_pose(q, "part"),
+                                   kin.frame(part.link) @ part.body.pose, atol=1e-12)
+    assert part.body.params["size"] == [0.12, 0.12, 0.10] and part.touch_links == {"KR60gripper"}
