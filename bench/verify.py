@@ -54,7 +54,7 @@ def _tf(t: Array) -> fcl.Transform:
     return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
 
 
-def _geometry(o: Obstacle) -> fcl.CollisionGeometry:
+def obstacle_geometry(o: Obstacle) -> fcl.CollisionGeometry:
     """The judge's own python-fcl primitive of an obstacle, in the obstacle's frame (m)."""
     p = o.params
     if o.kind == "box":
@@ -149,7 +149,7 @@ class Judge(PathJudge):
         self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),
                                                   fcl.Transform()) for c in cyl]
         self.bound = np.hypot(self.radius, self.half)
-        self.objects = [fcl.CollisionObject(_geometry(o), _tf(o.pose)) for o in obstacles]
+        self.objects = [fcl.CollisionObject(obstacle_geometry(o), _tf(o.pose)) for o in obstacles]
         self.obstacles = obstacles
         self.centre = np.array([o.pose[:3, 3] for o in obstacles]).reshape(-1, 3)
         self.reach = np.array([o.bounding_radius() for o in obstacles])
@@ -169,7 +169,7 @@ class Judge(PathJudge):
         self.box_half = np.array([np.asarray(o.params["size"]) / 2 if o.kind == "box"
                                   else np.zeros(3) for o in obstacles]).reshape(-1, 3)
         self.request = fcl.CollisionRequest()
-        self.carried_objects = [fcl.CollisionObject(_geometry(c.body), fcl.Transform())
+        self.carried_objects = [fcl.CollisionObject(obstacle_geometry(c.body), fcl.Transform())
                                 for c in self.carried]
         self.carried_pairs = [(k, ("robot", i)) for k, c in enumerate(self.carried)
                               for i in range(n) if self.links[i] != c.link
