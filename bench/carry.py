@@ -3,8 +3,9 @@ the planning stage (``plan_KR60.json``), planned by usar-arm bare and carrying t
 (a 0.12 x 0.12 x 0.10 m box under the tool: centred 5 cm out along the TCP's axis, the gripper
 allowed to touch it), in alternating rounds; every path judged by the independent judge
 (``verify.Judge``), which is given the part (shape, link, grasp, touch links) and places it
-itself. Problems whose start or goal the carried part makes collide (by the judge) are left out
-of both, and counted.
+itself. MPlib plans the same problems carrying the same part (its attached object,
+``bench/peers/run_mplib_plan.py``). Problems whose start or goal the carried part makes collide
+(by the judge) are left out of all, and counted.
 
 As a solver (our side)::
 
@@ -96,7 +97,9 @@ def run(ctx: Context) -> dict[str, Any]:
     common.write_json(path, spec, indent=None, digits=common.PROBLEM_DIGITS)
     solvers = [common.ours("usar-arm", "plan.py", note="plan_to_joints, the bare arm"),
                common.ours("usar-arm carrying", "carry.py",
-                           note="plan_to_joints, the arm carrying the part")]
+                           note="plan_to_joints, the arm carrying the part"),
+               ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify) carrying the "
+                        "part: planning_world.attach_object with its touch links")]
     outcomes = common.run_alternating(spec, solvers, ctx.work, ctx.rounds, "carry_KR60")
     judges = {"usar-arm": verify.Judge.for_scene({**spec, "attached": []}, SCENE),
               "usar-arm carrying": verify.Judge.for_scene(spec, SCENE)}
@@ -147,6 +150,7 @@ def _cost(case: dict[str, Any]) -> dict[str, Any]:
 def _targets(case: dict[str, Any]) -> list[dict[str, Any]]:
     held = case["solvers"]["usar-arm carrying"].get("summary", {})
     cost = case.get("cost", {}).get("all", {})
+    mp = case["ratios"].get("mplib", {}).get("usar-arm carrying", {})
     n = case["problems"]["count"]
     return [
         common.target(f"Plan KR60 carrying the part, {n} table problems: verified (the judge "
@@ -155,6 +159,9 @@ def _targets(case: dict[str, Any]) -> list[dict[str, Any]]:
         common.target("Plan KR60 carrying the part, median time / the bare arm's median "
                       "(same problems, same run)", cost.get("median_ratio"), COST_LIMIT, "<=",
                       "ratio"),
+        common.target("Plan KR60 carrying the part, median time / mplib's median carrying it "
+                      "(same problems, same run)", mp.get("median"), 0.5, "<=", "ratio",
+                      "" if mp else "mplib not run"),
     ]
 
 
