@@ -175,6 +175,36 @@ def read_scene(items: list[dict[str, Any]]) -> list[Obstacle]:
     return out
 
 
+@dataclass(frozen=True)
+class Carried:
+    """An object the arm carries, as the judge reads it: its shape (an :class:`Obstacle` whose
+    pose is the object's in the frame of ``link``, the grasp), the link it is fixed to and the
+    links it may touch (never checked against it, nor is ``link``)."""
+
+    body: Obstacle
+    link: str
+    touch_links: frozenset[str]
+
+    @property
+    def name(self) -> str:
+        """The object's name (a scene obstacle of that name is this object: not checked)."""
+        return self.body.name
+
+
+def read_attached(items: list[dict[str, Any]]) -> list[Carried]:
+    """The carried objects of a problem file's ``attached`` list: each a scene item (type,
+    size/radius/length or mesh file, ``xyz`` and ``quat_wxyz`` in the link's frame) with its
+    ``link`` and ``touch_links``."""
+    out = []
+    for d in items:
+        if not isinstance(d.get("link"), str):
+            raise ValueError(f"the judge expected the link an attached object is fixed to, got "
+                             f"{d!r}")
+        (body,) = read_scene([{k: v for k, v in d.items() if k not in ("link", "touch_links")}])
+        out.append(Carried(body, d["link"], frozenset(d.get("touch_links", []))))
+    return out
+
+
 def _number_list(value: Any, count: int, what: str) -> list[float]:
     if not isinstance(value, list) or len(value) != count:
         raise ValueError(f"the judge expected {count} numbers for {what}, got {value!r}")
@@ -207,7 +237,8 @@ def _yaml_shape(obj: dict[str, Any], base: Path, what: str) -> tuple[str, dict[s
 
 def read_scene_file(path: str | Path) -> list[Obstacle]:
     """The obstacles of a scene YAML file (``name``, ``objects``: each with a ``name``, one
-    shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``), read by the judge."""
+    shape, ``xyz``, optional ``rpy`` (URDF's fixed axes) and ``allow``, or a WorldController
+    ``class`` and ``scale`` instead of a shape), read by the judge."""
     import yaml
 
     path = Path(path)

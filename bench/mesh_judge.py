@@ -26,8 +26,8 @@ import numpy as np
 import pinocchio as pin
 import trimesh
 import yaml
-from judge_reading import pose, quat_matrix, rpy_matrix
-from verify import PathJudge
+from judge_reading import Carried, pose, quat_matrix, rpy_matrix
+from verify import PathJudge, obstacle_geometry
 
 Array = np.ndarray
 
@@ -172,10 +172,26 @@ class MeshRobot:
 
 
 class MeshJudge(PathJudge):
-    """Brute-force collision check of a :class:`MeshRobot` among obstacles."""
+    """Brute-force collision check of a :class:`MeshRobot` among obstacles, carrying
+    ``carried`` objects (each at its link's pose times its grasp, checked against every
+    collision element but those of its own link and its touch links, the other carried objects
+    unless one holds or may touch the other, and every obstacle)."""
 
-    def __init__(self, robot: MeshRobot, obstacles: list[tuple[fcl.CollisionGeometry, Array]]):
+    def __init__(self, robot: MeshRobot, obstacles: list[tuple[fcl.CollisionGeometry, Array]],
+                 carried: list[Carried] | None = None):
         self.robot = robot
+        self.carried = list(carried or [])
+        self.held = [fcl.CollisionObject(obstacle_geometry(c.body), fcl.Transform())
+                     for c in self.carried]
+        links = [e[0] for e in robot.elements]
+        self.held_pairs = [(k, i) for k, c in enumerate(self.carried)
+                           for i, name in enumerate(links)
+                           if name != c.link and name not in c.touch_links]
+        self.held_each = [(k, m) for k, m in itertools.combinations(range(len(self.carried)), 2)
+                          if not {self.carried[k].link, *self.carried[k].touch_links}
+                          & {self.carried[m].name}
+                          and not {self.carried[m].link, *self.carried[m].touch_links}
+                          & {self.carried[k].name}]
         self.parts = [fcl.CollisionObject(g, fcl.Transform()) for _, _, g in robot.elements]
         self.env = [fcl.CollisionObject(g, _tf(t)) for g, t in obstacles]
         self.env_manager = fcl.DynamicAABBTreeCollisionManager()
@@ -193,12 +209,26 @@ class MeshJudge(PathJudge):
         for i, j in self.robot.self_pairs:
             if fcl.collide(self.parts[i], self.parts[j], self.request, fcl.CollisionResult()):
                 return True
+        if self.carried and self._held_collides():
+            return True
         if not self.env:
             return False
         self.robot_manager.update()
         data = fcl.CollisionData(self.request, fcl.CollisionResult())
         self.robot_manager.collide(self.env_manager, data, fcl.defaultCollisionCallback)
         return bool(data.result.is_collision)
+
+    def _held_collides(self) -> bool:
+        """True when a carried object touches what it may not (after the robot was placed)."""
+        frames: dict[str, Array] = {}
+        for obj, c in zip(self.held, self.carried, strict=True):
+            base = frames[c.link] if c.link in frames else self.robot.frame(c.link)
+            frames[c.name] = base @ c.body.pose
+            obj.setTransform(_tf(frames[c.name]))
+        others = [(self.held[k], self.parts[i]) for k, i in self.held_pairs]
+        others += [(self.held[k], self.held[m]) for k, m in self.held_each]
+        others += [(h, e) for h in self.held for e in self.env]
+        return any(fcl.collide(a, b, self.request, fcl.CollisionResult()) for a, b in others)
 
     def inside(self, q: Array, slack: float = 1e-6) -> bool:
         return bool(np.all(q >= self.robot.lower - slack) and np.all(q <= self.robot.upper

@@ -29,11 +29,12 @@ from report_format import (
     table,
 )
 from report_pick import pick_place_section
-from report_plan import plan_section, planners_section, timing_section
+from report_plan import carry_section, plan_section, planners_section, timing_section
 from report_summary import summary_lines
 
 STAGE_TITLES = {"ik": "Inverse kinematics", "collision": "Collision checking",
-                "plan": "Motion planning", "timing": "Time-parameterisation",
+                "plan": "Motion planning", "carry": "Planning with a carried part",
+                "timing": "Time-parameterisation",
                 "discovery": "Discovery + URDF", "execution": "Execution (embedded simulator)",
                 "calibrate": "Calibration on the wire",
                 "workspace": "Workspace: reachability maps and base placement",
@@ -431,6 +432,7 @@ def _vamp_lines(doc: dict[str, Any]) -> list[str]:
 
 
 SECTIONS = {"ik": ik_section, "collision": collision_section, "plan": plan_section,
+            "carry": carry_section,
             "timing": timing_section, "discovery": describe_section,
             "execution": execution_section, "calibrate": calibrate_section,
             "workspace": workspace_section, "planners": planners_section,

@@ -195,3 +195,22 @@ def planners_section(doc: dict[str, Any]) -> list[str]:
             "by design: over budget counts calls that ended after it.",
             "", *table(["rank", "planner (MoveIt)", "OMPL class", "verified", "median", "p90",
                         "over budget", "paths in collision"], rows), *free_row]
+
+
+def carry_section(doc: dict[str, Any]) -> list[str]:
+    """Planning with an attached part against the bare arm, on the same problems."""
+    out = ["The planning stage's KR60 `table` problems, planned bare and carrying the table's "
+           "part (a box under the tool, the gripper allowed to touch it); each path judged by "
+           "the independent judge with what that solver carried (the judge places the part "
+           "itself from its shape, link and grasp).", ""]
+    for name, case in doc["cases"].items():
+        out += [f"### {name}: {case['problems']['count']} start/goal pairs "
+                f"({case.get('left_out', 0)} left out: the carried part collides at their "
+                "start or goal)", "",
+                *table([*HEAD, NOTES], solver_rows("carry", case))]
+        for label, c in (case.get("cost") or {}).items():
+            out.append(f"* carrying / bare, {label.replace('_', ' ')} ({c['problems']} "
+                       f"problems): ratio of the medians {fmt_x(c['median_ratio'])}, median of "
+                       f"the per-problem ratios {fmt_x(c['per_problem_median'])}")
+        out.append("")
+    return out

@@ -1,7 +1,8 @@
 """Run the benchmarks: usar-arm beside its peers, stage by stage, on one shared problem set.
 
-    python bench/run.py [--quick] [--stages ik,collision,plan,timing,discovery,execution,
-                                            calibrate,workspace,planners,ros,robots,pickplace]
+    python bench/run.py [--quick] [--stages ik,collision,plan,carry,timing,discovery,execution,
+                                            calibrate,workspace,planners,ros,robots,
+                                            pickplace]
                         [--out bench/results] [--problems DIR] [--rounds R] [--peers a,b]
 
 1. Writes the problem set (``bench/problems.py``; default ``bench/problems/<quick|full>``).
@@ -32,12 +33,12 @@ from typing import Any
 import common
 import problems as problem_sets
 
-STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate",
+STAGES = ("ik", "collision", "plan", "carry", "timing", "discovery", "execution", "calibrate",
           "workspace", "planners", "ros", "robots", "pickplace")
-MODULES = {"ik": "ik", "collision": "collision", "plan": "plan", "timing": "timing",
-           "discovery": "discovery", "execution": "execution", "calibrate": "calibrate",
-           "workspace": "workspace", "planners": "planners", "ros": "ros",
-           "robots": "robots", "pickplace": "pick_place"}
+MODULES = {"ik": "ik", "collision": "collision", "plan": "plan", "carry": "carry",
+           "timing": "timing", "discovery": "discovery", "execution": "execution",
+           "calibrate": "calibrate", "workspace": "workspace", "planners": "planners",
+           "ros": "ros", "robots": "robots", "pickplace": "pick_place"}
 ROUNDS = {"quick": 1, "full": 3}
 
 

@@ -26,7 +26,15 @@ from typing import Any
 import fcl
 import numpy as np
 import pinocchio as pin
-from judge_reading import JudgedRobot, Obstacle, pose, quat_matrix, scene_obstacles
+from judge_reading import (
+    Carried,
+    JudgedRobot,
+    Obstacle,
+    pose,
+    quat_matrix,
+    read_attached,
+    scene_obstacles,
+)
 
 Array = np.ndarray
 
@@ -46,7 +54,7 @@ def _tf(t: Array) -> fcl.Transform:
     return fcl.Transform(np.ascontiguousarray(t[:3, :3]), np.ascontiguousarray(t[:3, 3]))
 
 
-def _geometry(o: Obstacle) -> fcl.CollisionGeometry:
+def obstacle_geometry(o: Obstacle) -> fcl.CollisionGeometry:
     """The judge's own python-fcl primitive of an obstacle, in the obstacle's frame (m)."""
     p = o.params
     if o.kind == "box":
@@ -121,9 +129,17 @@ class Judge(PathJudge):
         robot: the URDF's cylinders and the SRDF's disabled pairs, as the judge read them.
         obstacles: the scene's; an obstacle's ``allow`` exempts those links from it.
         joint_names: the order of the joint values the judge is given.
+        carried: objects fixed to links (each placed at its link's pose times its grasp):
+            checked against every link but its own and its touch links, every other carried
+            object, and every obstacle; an obstacle of a carried object's name is that object
+            and is not checked.
     """
 
-    def __init__(self, robot: JudgedRobot, obstacles: list[Obstacle], joint_names: list[str]):
+    def __init__(self, robot: JudgedRobot, obstacles: list[Obstacle], joint_names: list[str],
+                 carried: list[Carried] | None = None):
+        self.carried = list(carried or [])
+        names = {c.name for c in self.carried}
+        obstacles = [o for o in obstacles if o.name not in names]
         self.kin = Kinematics(robot, joint_names)
         cyl = robot.cylinders
         self.links = [c.link for c in cyl]
@@ -133,7 +149,7 @@ class Judge(PathJudge):
         self.robot_objects = [fcl.CollisionObject(fcl.Cylinder(c.radius, c.length),
                                                   fcl.Transform()) for c in cyl]
         self.bound = np.hypot(self.radius, self.half)
-        self.objects = [fcl.CollisionObject(_geometry(o), _tf(o.pose)) for o in obstacles]
+        self.objects = [fcl.CollisionObject(obstacle_geometry(o), _tf(o.pose)) for o in obstacles]
         self.obstacles = obstacles
         self.centre = np.array([o.pose[:3, 3] for o in obstacles]).reshape(-1, 3)
         self.reach = np.array([o.bounding_radius() for o in obstacles])
@@ -153,13 +169,30 @@ class Judge(PathJudge):
         self.box_half = np.array([np.asarray(o.params["size"]) / 2 if o.kind == "box"
                                   else np.zeros(3) for o in obstacles]).reshape(-1, 3)
         self.request = fcl.CollisionRequest()
+        self.carried_objects = [fcl.CollisionObject(obstacle_geometry(c.body), fcl.Transform())
+                                for c in self.carried]
+        self.carried_pairs = [(k, ("robot", i)) for k, c in enumerate(self.carried)
+                              for i in range(n) if self.links[i] != c.link
+                              and self.links[i] not in c.touch_links]
+        self.carried_pairs += [(k, ("carried", m)) for k, m in itertools.combinations(
+            range(len(self.carried)), 2) if not self._holds(k, m)]
+        self.carried_pairs += [(k, ("scene", j)) for k, c in enumerate(self.carried)
+                               for j, o in enumerate(obstacles) if c.name not in o.allow]
+
+    def _holds(self, k: int, m: int) -> bool:
+        """Carried objects k and m may touch: one is fixed to, or a touch link of, the other."""
+        a, b = self.carried[k], self.carried[m]
+        return a.link == b.name or b.link == a.name or a.name in b.touch_links \
+            or b.name in a.touch_links
 
     @classmethod
     def for_scene(cls, spec: dict[str, Any], scene: str) -> Judge:
         """The judge of a problem file's robot (``urdf``, ``srdf``, ``joint_names``) in its
-        scene ``scene`` (read from the scene's YAML file, ``scene_files``)."""
+        scene ``scene`` (read from the scene's YAML file, ``scene_files``), carrying the
+        file's ``attached`` objects when it has them."""
         robot = JudgedRobot.from_files(spec["urdf"], spec.get("srdf"))
-        return cls(robot, scene_obstacles(spec, scene), list(spec["joint_names"]))
+        return cls(robot, scene_obstacles(spec, scene), list(spec["joint_names"]),
+                   read_attached(spec.get("attached", [])))
 
     def poses(self, q: Array) -> Array:
         """World poses (L, 4, 4) of the link cylinders at one configuration."""
@@ -199,6 +232,21 @@ class Judge(PathJudge):
                 return True
         for i, k in (self.rs if self.every_pair else self._near(poses[:, :3, 3])):
             if fcl.collide(self.robot_objects[i], self.objects[k], self.request,
+                           fcl.CollisionResult()) > 0:
+                return True
+        return self._carried_collides()
+
+    def _carried_collides(self) -> bool:
+        """True when a carried object touches what it may not (after :meth:`poses`)."""
+        frames: dict[str, Array] = {}
+        for obj, c in zip(self.carried_objects, self.carried, strict=True):
+            base = frames[c.link] if c.link in frames else self.kin.frame(c.link)
+            frames[c.name] = base @ c.body.pose
+            obj.setTransform(_tf(frames[c.name]))
+        groups = {"robot": self.robot_objects, "carried": self.carried_objects,
+                  "scene": self.objects}
+        for k, (group, j) in self.carried_pairs:
+            if fcl.collide(self.carried_objects[k], groups[group][j], self.request,
                            fcl.CollisionResult()) > 0:
                 return True
         return False

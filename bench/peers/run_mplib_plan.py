@@ -12,6 +12,11 @@ clipped to the limits, range=0.1, simplify=True; time = time_limit_s), so that "
 planning + simplification alone; "topp_seconds" and "duration_s" come from the following
 planner.TOPP(path, step=0.01). RNG: mplib.set_global_seed(problem seed) before each problem.
 
+A problem file's "attached" objects (the carry stage: type and sizes, xyz and quat_wxyz in the
+frame of their "link", "touch_links") are attached with planning_world.attach_object(name,
+geometry, robot, link index, pose, touch_links), MPlib's attached body (update_attached_box
+attaches to the move group's link only), and a scene object of the same name is left out.
+
 A problem file's "urdf_mplib" (the robots stage), when present, is read instead of "urdf": the
 same URDF text with mesh paths relative to its folder (mplib joins every mesh path to the
 URDF's folder, an absolute one included).
@@ -21,7 +26,7 @@ import mp_scene
 import mplib
 import numpy as np
 import peerio
-from mplib import Planner
+from mplib import Planner, Pose
 
 spec, out = peerio.args()
 names = spec["joint_names"]
@@ -40,7 +45,20 @@ idx = planner.move_group_joint_indices
 mp_names = [planner.user_joint_names[i] for i in idx]
 if len(idx) != len(planner.user_joint_names):
     raise SystemExit("the robot has joints outside the move group; padding is not handled")
-obstacles = mp_scene.Obstacles(planner, spec["scenes"])
+carried = spec.get("attached", [])
+held = {item["name"] for item in carried}
+obstacles = mp_scene.Obstacles(  # (a scene object of a carried object's name is that object)
+    planner, {k: [o for o in v if o.get("name") not in held] for k, v in spec["scenes"].items()}
+)
+for item in carried:  # MPlib's attached object: fixed to the link, its touch links allowed
+    planner.planning_world.attach_object(
+        item["name"],
+        mp_scene.shape(item),
+        planner.robot.get_name(),
+        planner.user_link_names.index(item["link"]),
+        Pose(p=np.array(item["xyz"], float), q=np.array(item["quat_wxyz"], float)),
+        list(item.get("touch_links", [])),
+    )
 
 
 def solve(p):
@@ -76,7 +94,7 @@ peerio.write(
     out,
     peer="mplib",
     dist="mplib",
-    stage="plan",
+    stage="carry" if carried else "plan",
     results=peerio.solve_by_scene(spec["problems"], obstacles.enter, solve),
     notes="seconds = OMPL RRTConnect + path simplification (planner.planner.plan); "
     "duration_s from planner.TOPP (TOPP-RA on a spline through the path, "

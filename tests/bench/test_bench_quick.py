@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-STAGES = ("ik", "collision", "plan", "timing", "discovery", "execution", "calibrate")
+STAGES = ("ik", "collision", "plan", "carry", "timing", "discovery", "execution", "calibrate")
 PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"},
          "collision": {"mplib", "roboplan", "tesseract"},
-         "plan": {"mplib", "roboplan", "tesseract", "tesseract trajopt"},
+         "plan": {"mplib", "roboplan", "tesseract", "tesseract trajopt"}, "carry": set(),
          "timing": {"toppra", "roboplan"},
          "discovery": set(), "execution": set(), "calibrate": set()}
 PNG = b"\x89PNG\r\n\x1a\n"

@@ -157,3 +157,70 @@ def test_the_judge_of_a_problem_file_reads_the_scene_file_not_the_solvers_list(
     assert verify.Judge.for_scene(spec, "s").colliding(np.array([[0.0]]))[0]
     assert not verify.Judge.for_scene({**spec, "scene_files": {}}, "s").colliding(
         np.array([[0.0]]))[0]
+
+
+FIXTURE = ROOT / "usar_arm" / "data" / "scenes" / "meshes" / "fixture.stl"
+CARRIED = {  # the judge's items (type and sizes, grasp in the link frame), as a problem file
+    "box": {"type": "box", "size": [0.5, 0.12, 0.1]},
+    "cylinder": {"type": "cylinder", "radius": 0.06, "length": 0.6},
+    "sphere": {"type": "sphere", "radius": 0.15},
+    "mesh": {"type": "mesh", "file": str(FIXTURE), "scale": 1.5},
+}
+
+
+@pytest.mark.parametrize("kind", sorted(CARRIED))
+def test_the_judge_carries_attached_bodies_as_usar_arm_does(kind: str, tmp_path: Path) -> None:
+    """A body under the KR60's gripper (box, cylinder, sphere or mesh, tilted): the judge,
+    given its shape, link, grasp and touch links, finds the contacts usar-arm's carrying arm
+    finds on random configurations in the table scene, the body's own included."""
+    import scenes
+
+    from usar_arm.core.spatial import quat_from_matrix, transform_from_xyz_rpy
+    from usar_arm.planning.attach_file import parse_attach
+    from usar_arm.planning.robot import robot_from_files
+
+    urdf, srdf = ROOT / "robots/generated/KR60.urdf", ROOT / "robots/generated/KR60.srdf"
+    robot = robot_from_files(urdf, srdf)
+    grasp = transform_from_xyz_rpy((0.0, 0.05, 0.2), (0.3, 0.2, 0.1))
+    item = {"name": "part", **CARRIED[kind], "xyz": grasp[:3, 3].tolist(),
+            "quat_wxyz": quat_from_matrix(grasp[:3, :3]).tolist(),
+            "link": "KR60gripper_tcp", "touch_links": ["KR60gripper"]}
+    shape = ({"mesh": {"file": str(FIXTURE), "scale": 1.5}} if kind == "mesh" else
+             {"box": CARRIED["box"]["size"]} if kind == "box" else
+             {kind: {k: v for k, v in CARRIED[kind].items() if k != "type"}})
+    body = parse_attach({"name": "part", "link": "KR60gripper_tcp", **shape,
+                         "xyz": grasp[:3, 3].tolist(), "touch_links": ["KR60gripper"]},
+                        "part", tmp_path).body()
+    body = type(body)(body.name, body.link, body.shape, grasp, body.touch_links)
+    carrying = robot.carrying([body])
+    sc = scenes.shipped("table")
+    spec = {"urdf": str(urdf), "srdf": str(srdf), "joint_names": list(robot.chain.joint_names),
+            "scenes": {"table": scenes.to_json(sc, tmp_path)},
+            "scene_files": {"table": str(scenes.shipped_file("table"))}, "attached": [item]}
+    judge = verify.Judge.for_scene(spec, "table")
+    bare = verify.Judge.for_scene({**spec, "attached": []}, "table")
+    world = carrying.collision_world(sc)
+    qs = np.random.default_rng(5).uniform(robot.chain.lower(), robot.chain.upper(), (400, 6))
+    ours, theirs = world.in_collision_many(qs), judge.colliding(qs)
+    assert (ours == theirs).all(), np.flatnonzero(ours != theirs)
+    only_body = theirs & ~bare.colliding(qs)
+    assert only_body.sum() > 10  # (configurations where the carried body alone collides)
+
+
+def test_the_carry_stage_gives_the_solver_and_the_judge_the_same_part() -> None:
+    """bench/carry.py's part as usar-arm builds it (``body_of``) and as the judge reads it
+    (``read_attached``) sit at the same pose on the KR60 at random configurations."""
+    import carry
+    from judge_reading import read_attached
+
+    from usar_arm.planning.robot import robot_from_files
+
+    urdf, srdf = ROOT / "robots/generated/KR60.urdf", ROOT / "robots/generated/KR60.srdf"
+    robot = robot_from_files(urdf, srdf).carrying([carry.body_of(carry.PART)])
+    (part,) = read_attached([carry.PART])
+    kin = verify.Kinematics(JudgedRobot.from_files(urdf, srdf), list(robot.chain.joint_names))
+    for q in np.random.default_rng(6).uniform(robot.chain.lower(), robot.chain.upper(), (20, 6)):
+        kin.update(q)
+        np.testing.assert_allclose(robot.kinematics.frame_pose(q, "part"),
+                                   kin.frame(part.link) @ part.body.pose, atol=1e-12)
+    assert part.body.params["size"] == [0.12, 0.12, 0.10] and part.touch_links == {"KR60gripper"}

@@ -11,6 +11,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -275,3 +276,25 @@ def test_each_plan_depends_on_its_problem_alone() -> None:
     paths = {r["id"]: r["path"] for r in forward}
     assert all(r["success"] for r in forward + backward)
     assert all(np.array_equal(paths[r["id"]], r["path"]) for r in backward)
+
+
+def _carried(xyz: list[float], touch: list[str]) -> list[Any]:
+    from judge_reading import read_attached
+
+    return read_attached([{"name": "part", "type": "box", "size": [0.1, 0.1, 0.1], "xyz": xyz,
+                           "link": "tool", "touch_links": touch}])
+
+
+def test_the_mesh_judge_carries_attached_bodies(probe: Path) -> None:
+    # a box held 0.15 m beyond the tool (world x 1.15..1.25 at j1 = 0, past the bar's end at
+    # 1.1) and a ball from x = 1.24: only the held box touches it, and only at j1 = 0
+    ball = {"type": "sphere", "xyz": [1.3, 0.0, 0.5], "radius": 0.06}
+    robot = mj.MeshRobot(probe, None, ["j1"])
+    qs = np.array([[0.0], [np.pi / 2]])
+    assert not mj.MeshJudge(robot, mj.obstacles_from_dicts([ball])).colliding(qs).any()
+    held = mj.MeshJudge(robot, mj.obstacles_from_dicts([ball]), _carried([0.15, 0, 0], []))
+    assert held.colliding(qs).tolist() == [True, False]
+    # held inside the bar's end: a contact with link_1, unless link_1 is a touch link (the
+    # tool's own cube, its parent link's, never counts)
+    assert mj.MeshJudge(robot, [], _carried([0.0, 0, 0], [])).colliding(qs).all()
+    assert not mj.MeshJudge(robot, [], _carried([0.0, 0, 0], ["link_1"])).colliding(qs).any()

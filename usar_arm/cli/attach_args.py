@@ -20,7 +20,7 @@ def add_attach_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--attach", default=None, metavar="OBJECT",
                    help="carry an object: a --scene object's name (grasped where it stands at "
                         "the start configuration) or a JSON/YAML file of a body (name, link, "
-                        "shape, xyz/rpy in the link frame, touch_links; docs/planning.md)")
+                        "shape, xyz/rpy in the link frame, touch_links; docs/library.md)")
     p.add_argument("--attach-link", default=None, metavar="LINK",
                    help=f"the link it is fixed to (default: the file's, else {DEFAULT_LINK})")
     p.add_argument("--touch-links", default="", metavar="A,B",

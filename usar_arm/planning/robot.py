@@ -150,8 +150,10 @@ class Robot:
         Cached per set of bodies; an empty ``bodies`` is the bare arm.
 
         What it costs: the kinematics and, on first use, one collision world per padding (the
-        compiled verdicts' arrays and FCL's objects of the links; the never-in-contact proof of
-        the arm's own pairs is taken from the bare arm's world, only the bodies' are proven).
+        compiled verdicts' arrays, FCL's objects and the never-in-contact proof of the links,
+        the bodies' included: the kernels are compiled once for every chain, so this is
+        milliseconds, not the first world's compile time); a mesh body also costs its ball
+        cover (:mod:`.ball_cover`, once per mesh in a process, growing with its area).
 
         Raises:
             AttachError: an unknown link, a name that is a link's or another body's.
