@@ -12,12 +12,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-STAGES = ("ik", "collision", "plan", "carry", "timing", "discovery", "execution", "calibrate")
+STAGES = ("ik", "collision", "plan", "carry", "timing", "discovery", "execution", "calibrate",
+          "pickplace")
 PEERS = {"ik": {"pytracik", "mplib", "roboplan", "ikpy"},
          "collision": {"mplib", "roboplan", "tesseract"},
          "plan": {"mplib", "roboplan", "tesseract", "tesseract trajopt"}, "carry": set(),
          "timing": {"toppra", "roboplan"},
-         "discovery": set(), "execution": set(), "calibrate": set()}
+         "discovery": set(), "execution": set(), "calibrate": set(), "pickplace": set()}
 PNG = b"\x89PNG\r\n\x1a\n"
 VENVS = ROOT / "bench" / ".venvs"
 
