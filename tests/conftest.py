@@ -77,3 +77,18 @@ def fast_sim() -> Iterator[SimServer]:
     server.start()
     yield server
     server.stop()
+
+
+@pytest.fixture(autouse=True)
+def _package_loggers_enabled() -> Iterator[None]:
+    """A library configuring logging in this process (``logging.config.dictConfig`` disables
+    every logger that exists then, unless told not to) must not silence usar-arm's own for the
+    tests that read what it logged: two tests of the WorldController's logged refusals found
+    nothing in the full suite, and passed alone. Each test starts with usar-arm's loggers
+    enabled and propagating to the root (where pytest's capture listens)."""
+    logging.disable(logging.NOTSET)
+    for name, found in list(logging.root.manager.loggerDict.items()):
+        if name.startswith("usar_arm") and isinstance(found, logging.Logger):
+            found.disabled = False
+            found.propagate = True
+    yield

@@ -12,7 +12,7 @@ usar-arm checks:
   checks two bodies that are both fixed: the base against a fixed obstacle; the judge's such
   pairs are counted apart and must be none);
 * its default inverse kinematics (OPW or KDL) on 100 poses, every solution put on the pose by
-  usar-arm's FK (OPW 1e-9; KDL within its own stopping tolerance, 1e-5 m / 1e-4 rad). The seed
+  usar-arm's FK (OPW 3e-9, the file's 1e-9 precision through six joints; KDL within its own stopping tolerance, 1e-5 m / 1e-4 rad). The seed
   is the true configuration moved up to 0.3 rad per joint; KDL (local) gets up to
   :data:`IK_RESTARTS` random seeds after a miss, as a user would (the 7-joint Fanuc misses 5 of
   100 on the first seed: Tesseract drops solutions outside the limits);
@@ -172,7 +172,10 @@ def test_tesseract_ik_solves_100_poses_and_usar_arm_s_fk_confirms_them(consumed:
     kin = consumed.robot.kinematics
     lo, hi = consumed.robot.chain.lower(), consumed.robot.chain.upper()
     exact = consumed.config.solver == OPW_SOLVER
-    tolerance = (1e-9, 1e-9) if exact else KDL_TOLERANCE
+    # OPW: exact up to the description's own precision. The URDF writes its numbers to 1e-9 m
+    # and rad (core.precision), and a 100-pose IK through six of them lands a few of those off:
+    # measured 1.30e-9 m, 1.0e-9 rad, over the 1e-9 this bound was before the writer rounded.
+    tolerance = (3e-9, 3e-9) if exact else KDL_TOLERANCE
     solved, worst_p, worst_r = 0, 0.0, 0.0
     for problem, solutions in zip(consumed.request["ik"], consumed.answer["ik"]["solutions"],
                                   strict=True):

@@ -137,6 +137,7 @@ def test_refusals_keep_the_connection(wc: WorldControllerClient, caplog) -> None
 
 def test_a_malformed_vector_reads_as_udks_parse_vector_and_is_logged(
         wc: WorldControllerClient, caplog) -> None:
+    caplog.set_level(logging.INFO, "usar_arm.sim")
     wc.send_line("CONTROL {Type Create} {ClassName WCCrate} {Name v} {Location -3} "
                  "{Physics None}")  # ParseVector("-3") is (0, 0, -3): 3 m up...
     wc.send_line("CONTROL {Type Create} {ClassName WCCrate} {Name w} {Location 2,-3} "
@@ -151,6 +152,7 @@ def test_a_malformed_vector_reads_as_udks_parse_vector_and_is_logged(
 
 
 def test_control_from_a_robots_connection_is_ignored(server: SimServer, caplog) -> None:
+    caplog.set_level(logging.INFO, "usar_arm.sim")
     with UsarClient(port=server.port) as robot, WorldControllerClient(port=server.port) as wc:
         robot.spawn("USARBot.KR60", start="RobotStart1")
         robot.send_line("CONTROL {Type Create} {ClassName WCCrate} {Name r} {Location 0,3,-1}")
