@@ -159,6 +159,7 @@ def _tf_key(fields: Any) -> Any:
     return lambda m: json.dumps([e[:3] for e in fields("tf", m)])
 
 
+@pytest.mark.slow  # (about 2 minutes per robot: make test-slow and CI run it)
 @pytest.mark.parametrize("robot", ["KR60", "P3AT"])
 def test_one_session_replayed_into_both_nodes_gives_the_same_messages(
         robot: str, ros1_env: ros1_setup.Ros1Environment, tmp_path: Path) -> None:
