@@ -27,12 +27,12 @@ import numpy as np
 
 from usar_arm.core.spatial import Array
 from usar_arm.planning.screw import (
+    PARALLEL,
+    PERPENDICULAR,
     V,
     closest_point,
     cross,
     dot,
-    parallel_deviation,
-    require,
     rodrigues,
     six_axes,
     sub,
@@ -42,6 +42,10 @@ from usar_arm.planning.screw import (
 )
 from usar_arm.planning.two_link import TwoLink
 from usar_arm.urdf.opw_fit import OpwLengths
+
+STRUCTURE = (PERPENDICULAR, PARALLEL, PERPENDICULAR, PERPENDICULAR, PERPENDICULAR)
+"""How each joint's axis stands to the next's on an ortho-parallel arm (joints 4 to 6 meet
+too: the spherical wrist)."""
 
 
 class NotOrthoParallel(ValueError):
@@ -72,13 +76,7 @@ class OrthoParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w, p = six_axes(axes, points, NotOrthoParallel)
-        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
-                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
-                 ("joint 3 perpendicular to joint 4", abs(dot(w[2], w[3]))),
-                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
-                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
-                tolerance, NotOrthoParallel)
+        w, p = six_axes(axes, points, STRUCTURE, tolerance, NotOrthoParallel)
         wrist, miss = closest_point(np.array(w[3:]), np.array(p[3:]))
         if miss > max(tolerance, 0.05):
             raise NotOrthoParallel(f"wrist axes miss a common point by {miss:.4f} m")

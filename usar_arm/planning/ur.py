@@ -33,12 +33,12 @@ import numpy as np
 from usar_arm.core.spatial import Array
 from usar_arm.planning.opw import NotOrthoParallel
 from usar_arm.planning.screw import (
+    PARALLEL,
+    PERPENDICULAR,
     V,
     closest_point,
     cross,
     dot,
-    parallel_deviation,
-    require,
     rodrigues,
     six_axes,
     sub,
@@ -56,6 +56,9 @@ SINGULAR_WRIST = 1e-8
 takes the caller's value: the rotation then fixes it only to eps / |sin q5|, and that error
 moves the position (theta turns p56 about axis 4); 1e-8 balances the two, a few 1e-8 at worst
 (Newton finishes)."""
+STRUCTURE = (PERPENDICULAR, PARALLEL, PARALLEL, PERPENDICULAR, PERPENDICULAR)
+"""How each joint's axis stands to the next's on a three-parallel arm (axes 5 and 6 meet
+too)."""
 
 
 class NotThreeParallel(NotOrthoParallel):
@@ -91,13 +94,7 @@ class ThreeParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w, p = six_axes(axes, points, NotThreeParallel)
-        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
-                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
-                 ("joint 3 parallel to joint 4", parallel_deviation(w[2], w[3])),
-                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
-                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
-                tolerance, NotThreeParallel)
+        w, p = six_axes(axes, points, STRUCTURE, tolerance, NotThreeParallel)
         meet, miss = closest_point(np.array(w[4:]), np.array(p[4:]))  # (half their gap)
         if 2.0 * miss > max(tolerance, 0.05):
             raise NotThreeParallel(f"axes 5 and 6 miss each other by {2 * miss:.4f} m")
