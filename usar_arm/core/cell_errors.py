@@ -1,4 +1,11 @@
-"""Failures of a physical cell: a WorldController that did not do what it was asked."""
+"""The errors of a physical cell (:mod:`usar_arm.usarsim.world_controller`, the pick and place
+of :mod:`usar_arm.arm.pick_place`): a WorldController command that was not carried out, a grip
+that did not take or let go, a part that is not where it was put.
+
+A branch of the error tree of :mod:`usar_arm.core.errors`: what only a cell with simulated
+objects can fail at, judged by what the server reports (GetSTA, the vacuum's status); each
+carries its evidence as attributes.
+"""
 
 from __future__ import annotations
 

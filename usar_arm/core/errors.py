@@ -1,9 +1,10 @@
 """The usar-arm error tree.
 
-Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`,
-the exit codes) and the errors of the arm's pipeline, from the wire to an executed motion, are
-here; the errors of a ground vehicle are in :mod:`.vehicle_errors` and those of workspace jobs
-in :mod:`.job_errors`, beside the layers that raise them. Each carries its evidence as
+Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`:
+the exit codes, and the one way an error declares its evidence) and the errors of the arm's
+pipeline, from the wire to an executed motion, are here. The other branches are cut by who
+raises them, beside nothing else: a ground vehicle's (:mod:`.vehicle_errors`), workspace jobs'
+(:mod:`.job_errors`) and a physical cell's (:mod:`.cell_errors`). Each carries its evidence as
 attributes (the offending line, the joint, the numbers, the names a user could have meant) and a
 message that says what was wrong and what was expected. Each class also names the process exit
 code the CLI uses for it, so that a script can tell failures apart without parsing text.
