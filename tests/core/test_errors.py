@@ -11,10 +11,10 @@ import pickle
 import numpy as np
 import pytest
 
-from usar_arm.core import cell_errors, errors, job_errors, vehicle_errors
+from usar_arm.core import attach_errors, cell_errors, errors, job_errors, vehicle_errors
 from usar_arm.core.errors import UsarArmError
 
-MODULES = (errors, vehicle_errors, job_errors, cell_errors)
+MODULES = (errors, vehicle_errors, job_errors, cell_errors, attach_errors)
 SAMPLES: list[UsarArmError] = [
     errors.FileFormatError("scene.yaml", "expected a mapping", 3, "objects"),
     errors.ProtocolError("ASTA {Time 1" + "x" * 300, 250, "expected '}'"),
@@ -27,6 +27,7 @@ SAMPLES: list[UsarArmError] = [
     vehicle_errors.NonFiniteCommandError({"v": float("inf"), "w": 0.5}),
     job_errors.ResumeMismatchError("out", None, "k2", ["problems"]),
     cell_errors.GripError("vacuum", "pick", "a part on the cup", "nothing"),
+    attach_errors.AttachError("box", "no link 'tool9' to attach it to", ["tool0"]),
     cell_errors.PlacementError("the part lies 4.0 mm from its place"),
     errors.TimingError("ruckig: limits inconsistent"),
 ]

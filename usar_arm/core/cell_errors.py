@@ -20,7 +20,6 @@ class WorldControllerError(UsarArmError):
     from GetSTA): the command, what was expected, and what GetSTA showed instead."""
 
     exit_code = EXIT_UNAVAILABLE
-
     command: str
     expected: str
     seen: str
@@ -38,7 +37,6 @@ class GripError(UsarArmError):
     when a grip fails."""
 
     exit_code = EXIT_UNAVAILABLE
-
     vacuum: str
     move: str
     expected: str

@@ -3,11 +3,12 @@
 Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`:
 the exit codes, and the one way an error declares its evidence) and the errors of the arm's
 pipeline, from the wire to an executed motion, are here. The other branches are cut by who
-raises them, beside nothing else: a ground vehicle's (:mod:`.vehicle_errors`), workspace jobs'
-(:mod:`.job_errors`) and a physical cell's (:mod:`.cell_errors`). Each carries its evidence as
-attributes (the offending line, the joint, the numbers, the names a user could have meant) and a
-message that says what was wrong and what was expected. Each class also names the process exit
-code the CLI uses for it, so that a script can tell failures apart without parsing text.
+raises them: a ground vehicle's (:mod:`.vehicle_errors`), workspace jobs' (:mod:`.job_errors`),
+a carried body's (:mod:`.attach_errors`) and a physical cell's (:mod:`.cell_errors`). Each
+carries its evidence as attributes (the offending line, the joint, the numbers, the names a user
+could have meant) and a message that says what was wrong and what was expected. Each class also
+names the process exit code the CLI uses for it, so that a script can tell failures apart
+without parsing text.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ EXIT_INTERNAL = 70  # sysexits EX_SOFTWARE
 EXIT_INTERRUPTED = 130
 
 
-def _names(names: Sequence[str]) -> str:
+def names_or_none(names: Sequence[str]) -> str:
+    """Names for a message, comma-separated, or ``(none)``."""
     return ", ".join(names) if names else "(none)"
 
 
@@ -124,7 +126,6 @@ class ProtocolError(UsarArmError):
     """
 
     exit_code = EXIT_BAD_DESCRIPTION
-
     line: str
     position: int
     reason: str
@@ -146,7 +147,6 @@ class ConnectionFailedError(UsarArmError):
     """No TCP connection could be made to the USARSim server."""
 
     exit_code = EXIT_UNAVAILABLE
-
     host: str
     port: int
     reason: str
@@ -162,7 +162,6 @@ class ResponseTimeoutError(UsarArmError):
     """The server did not send what was waited for within the timeout."""
 
     exit_code = EXIT_UNAVAILABLE
-
     waiting_for: str
     timeout_s: float
     hint: str = ""
@@ -183,7 +182,7 @@ class UnknownComponentError(ResponseTimeoutError):
             f"reply to `{request}`",
             timeout_s,
             "USARSim sends nothing when no component matches the Type/Name asked for. "
-            f"Components this server has reported: {_names(self.known)}",
+            f"Components this server has reported: {names_or_none(self.known)}",
         )
 
 
@@ -192,7 +191,6 @@ class ConnectionLostError(UsarArmError):
     """The server closed the connection (or it broke) while the client still needed it."""
 
     exit_code = EXIT_CONNECTION_LOST
-
     while_doing: str
     detail: str = ""
 
@@ -209,7 +207,6 @@ class UnknownRobotError(UsarArmError):
     """The server did not spawn the requested robot class."""
 
     exit_code = EXIT_UNKNOWN_ROBOT
-
     class_name: str
     known: Sequence[str] = ()
     detail: str = ""
@@ -217,7 +214,7 @@ class UnknownRobotError(UsarArmError):
     def message(self) -> str:
         text = f"no robot of class '{self.class_name}' appeared" + aside(self.detail)
         if self.known:
-            text += f"; robot classes the server offers: {_names(self.known)}"
+            text += f"; robot classes the server offers: {names_or_none(self.known)}"
         return text
 
 
@@ -226,12 +223,12 @@ class UnknownStartError(UsarArmError):
     """The requested start position is not one the server offers."""
 
     exit_code = EXIT_UNKNOWN_START
-
     start: str
     known: Sequence[str]
 
     def message(self) -> str:
-        return f"unknown start position '{self.start}'; the server offers: {_names(self.known)}"
+        known = names_or_none(self.known)
+        return f"unknown start position '{self.start}'; the server offers: {known}"
 
 
 class DescriptionError(UsarArmError):
@@ -311,7 +308,6 @@ class AllSolutionsInCollisionError(IKError):
     """Every IK solution inside the limits is in collision."""
 
     exit_code = EXIT_IN_COLLISION
-
     n_solutions: int
     pairs: Sequence[tuple[str, str]]
 
@@ -337,7 +333,6 @@ class _EndInCollisionError(PlanningError):
 
     exit_code = EXIT_IN_COLLISION
     end = ""
-
     pairs: Sequence[tuple[str, str]]
 
     def message(self) -> str:
@@ -362,7 +357,6 @@ class OutOfLimitsError(PlanningError):
     """A start or goal configuration lies outside the joint limits."""
 
     exit_code = EXIT_INVALID_INPUT
-
     what: str
     joint: str
     value: float
@@ -409,48 +403,6 @@ class TimingError(PlanningError):
     """Time-parameterisation failed (limits inconsistent, Ruckig error)."""
 
 
-@dataclass(eq=False, repr=False)
-class AttachError(InvalidInputError):
-    """An object cannot be attached to (or detached from) the arm: an unknown link, a name
-    that is already a link or a carried object, an object the scene lacks, nothing carried
-    by that name.
-
-    Attributes:
-        body: the object's name. problem: what was wrong. known: the names that would have
-            been accepted (links, objects, carried bodies).
-    """
-
-    body: str
-    problem: str
-    known: Sequence[str] = ()
-
-    def message(self) -> str:
-        text = f"cannot attach '{self.body}': {self.problem}"
-        if self.known:
-            text += f" (known: {_names(self.known)})"
-        return text
-
-
-@dataclass(eq=False, repr=False)
-class AttachedCollisionError(PlanningError):
-    """An object to attach is in collision, at the configuration it is attached at, with
-    something other than its parent and touch links.
-
-    Attributes:
-        body: the object's name. contacts: (body, other, depth m) of each pair in contact.
-    """
-
-    exit_code = EXIT_IN_COLLISION
-
-    body: str
-    contacts: Sequence[tuple[str, str, float]]
-
-    def message(self) -> str:
-        shown = ", ".join(f"{a}–{b} ({d * 1000:.1f} mm deep)" for a, b, d in self.contacts)
-        return (f"'{self.body}' is in collision where it would be attached: {shown}; "
-                "name the links it may touch (touch_links) or attach it elsewhere")
-
-
 # --------------------------------------------------------------------------- execution
 
 
@@ -459,7 +411,6 @@ class ExecutionAbortedError(UsarArmError):
     """Execution on the arm stopped before the motion completed; the arm holds where it is."""
 
     exit_code = EXIT_EXECUTION_ABORTED
-
     reason: str
     joint: str | None = None
     error_rad: float | None = None
@@ -483,7 +434,6 @@ class CalibrationError(UsarArmError):
     convergence); nothing was written and the as-learnt description is kept."""
 
     exit_code = EXIT_INVALID_INPUT
-
     problem: str
     readings: int | None = None
     needed: int | None = None

@@ -27,7 +27,6 @@ class ChunkFailedError(UsarArmError):
     so far are kept, and ``--resume`` continues from them."""
 
     exit_code = EXIT_WORKER_FAILED
-
     chunk: int
     attempts: int
     reason: str
@@ -43,7 +42,6 @@ class ClusterUnavailableError(UsarArmError):
     installed."""
 
     exit_code = EXIT_UNAVAILABLE
-
     address: str
     reason: str
 
