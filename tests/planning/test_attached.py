@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usar_arm.core.errors import AttachedCollisionError, AttachError
+from usar_arm.core.attach_errors import AttachedCollisionError, AttachError
 from usar_arm.planning.attached import AttachedBody
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene import Box

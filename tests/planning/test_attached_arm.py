@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from usar_arm import Arm
-from usar_arm.core.errors import AttachedCollisionError, AttachError, StartInCollisionError
+from usar_arm.core.attach_errors import AttachedCollisionError, AttachError
+from usar_arm.core.errors import StartInCollisionError
 from usar_arm.planning.scene import Box, Scene, SceneObject
 from usar_arm.planning.scene_file import load_scene
 

@@ -1,17 +1,20 @@
 """The usar-arm error tree.
 
-Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`,
-the exit codes) and the errors of the arm's pipeline, from the wire to an executed motion, are
-here; the errors of a ground vehicle are in :mod:`.vehicle_errors` and those of workspace jobs
-in :mod:`.job_errors`, beside the layers that raise them. Each carries its evidence as
-attributes (the offending line, the joint, the numbers, the names a user could have meant) and a
-message that says what was wrong and what was expected. Each class also names the process exit
-code the CLI uses for it, so that a script can tell failures apart without parsing text.
+Every failure the library reports is an exception of this tree: its root (:class:`UsarArmError`:
+the exit codes, and the one way an error declares its evidence) and the errors of the arm's
+pipeline, from the wire to an executed motion, are here. The other branches are cut by who
+raises them: a ground vehicle's (:mod:`.vehicle_errors`), workspace jobs' (:mod:`.job_errors`),
+a carried body's (:mod:`.attach_errors`) and a physical cell's (:mod:`.cell_errors`). Each
+carries its evidence as attributes (the offending line, the joint, the numbers, the names a user
+could have meant) and a message that says what was wrong and what was expected. Each class also
+names the process exit code the CLI uses for it, so that a script can tell failures apart
+without parsing text.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, fields
 
 # Exit codes of the `usar-arm` command (documented in `usar-arm --help`).
 EXIT_OK = 0
@@ -31,14 +34,56 @@ EXIT_INTERNAL = 70  # sysexits EX_SOFTWARE
 EXIT_INTERRUPTED = 130
 
 
-def _names(names: Sequence[str]) -> str:
+def names_or_none(names: Sequence[str]) -> str:
+    """Names for a message, comma-separated, or ``(none)``."""
     return ", ".join(names) if names else "(none)"
 
 
+def aside(detail: str) -> str:
+    """`` (detail)``, to follow a message, or nothing when there is no detail."""
+    return f" ({detail})" if detail else ""
+
+
+def _restored(cls: type[UsarArmError], args: tuple[object, ...], evidence: dict[str, object]
+              ) -> UsarArmError:
+    """An error rebuilt from its text and attributes, its constructor not called (pickle)."""
+    error = cls.__new__(cls, *args)
+    error.args = args
+    error.__dict__.update(evidence)
+    return error
+
+
 class UsarArmError(Exception):
-    """Base class of every error usar-arm raises on purpose."""
+    """Base class of every error usar-arm raises on purpose.
+
+    An error that carries evidence declares it once, as the fields of a dataclass
+    (``@dataclass(eq=False, repr=False)``: equality and repr stay the exception's), and says it
+    in :meth:`message`. The generated constructor takes the fields in order and stores each as
+    an attribute; :meth:`__post_init__` keeps a field declared ``Sequence[...]`` as a tuple
+    and one declared ``dict[...]`` as a copy (the evidence is what the caller had when it
+    raised), then makes the message the exception's text. An error without evidence takes its
+    message as its only argument. Pickled (a worker's error on its way to the parent), an
+    error comes back with its text and every attribute, its constructor not called again.
+    """
 
     exit_code: int = EXIT_INTERNAL
+
+    def __post_init__(self) -> None:
+        for field in fields(self):  # type: ignore[arg-type]
+            declared = str(field.type)
+            if "Sequence[" in declared:
+                setattr(self, field.name, tuple(getattr(self, field.name)))
+            elif declared.startswith("dict["):
+                setattr(self, field.name, dict(getattr(self, field.name)))
+        super().__init__(self.message())
+
+    def message(self) -> str:
+        """What was wrong and what was expected, from the evidence (an error with evidence says
+        it here; one without has its text as its argument)."""
+        return " ".join(str(a) for a in self.args)
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (_restored, (type(self), self.args, dict(self.__dict__)))
 
 
 # --------------------------------------------------------------------------- input and files
@@ -50,23 +95,26 @@ class InvalidInputError(UsarArmError):
     exit_code = EXIT_INVALID_INPUT
 
 
+@dataclass(eq=False, repr=False)
 class FileFormatError(InvalidInputError):
     """A file (scene, trajectory, limits table) has an error at a known place."""
 
-    def __init__(self, path: str, problem: str, line: int | None = None, field: str | None = None):
-        self.path = path
-        self.problem = problem
-        self.line = line
-        self.field = field
-        where = path if line is None else f"{path}:{line}"
-        if field:
-            where += f" (field '{field}')"
-        super().__init__(f"{where}: {problem}")
+    path: str
+    problem: str
+    line: int | None = None
+    field: str | None = None
+
+    def message(self) -> str:
+        where = self.path if self.line is None else f"{self.path}:{self.line}"
+        if self.field:
+            where += f" (field '{self.field}')"
+        return f"{where}: {self.problem}"
 
 
 # --------------------------------------------------------------------------- the wire
 
 
+@dataclass(eq=False, repr=False)
 class ProtocolError(UsarArmError):
     """A line is not USARSim: not UTF-8 text, control characters, longer than the line limit,
     or not following the grammar.
@@ -78,11 +126,12 @@ class ProtocolError(UsarArmError):
     """
 
     exit_code = EXIT_BAD_DESCRIPTION
+    line: str
+    position: int
+    reason: str
 
-    def __init__(self, line: str, position: int, reason: str):
-        self.line = line
-        self.position = position
-        self.reason = reason
+    def message(self) -> str:
+        line, position = self.line, self.position
         start = 0 if position < 150 else position - 100  # show the text around the problem
         shown = line[start:start + 200]
         pointer = " " * (position - start) + "^"
@@ -90,40 +139,41 @@ class ProtocolError(UsarArmError):
             shown, pointer = "..." + shown, "   " + pointer
         if start + 200 < len(line):
             shown += "..."
-        super().__init__(f"{reason} at column {position + 1}:\n  {shown}\n  {pointer}")
+        return f"{self.reason} at column {position + 1}:\n  {shown}\n  {pointer}"
 
 
+@dataclass(eq=False, repr=False)
 class ConnectionFailedError(UsarArmError):
     """No TCP connection could be made to the USARSim server."""
 
     exit_code = EXIT_UNAVAILABLE
+    host: str
+    port: int
+    reason: str
 
-    def __init__(self, host: str, port: int, reason: str):
-        self.host = host
-        self.port = port
-        self.reason = reason
-        super().__init__(
-            f"cannot connect to a USARSim server at {host}:{port}: {reason}. "
-            f"Is the simulator running? (start one with `usar-arm sim --port {port}`, "
-            f"or leave out --host to use the embedded simulator)"
-        )
+    def message(self) -> str:
+        return (f"cannot connect to a USARSim server at {self.host}:{self.port}: {self.reason}. "
+                f"Is the simulator running? (start one with `usar-arm sim --port {self.port}`, "
+                f"or leave out --host to use the embedded simulator)")
 
 
+@dataclass(eq=False, repr=False)
 class ResponseTimeoutError(UsarArmError):
     """The server did not send what was waited for within the timeout."""
 
     exit_code = EXIT_UNAVAILABLE
+    waiting_for: str
+    timeout_s: float
+    hint: str = ""
 
-    def __init__(self, waiting_for: str, timeout_s: float, hint: str = ""):
-        self.waiting_for = waiting_for
-        self.timeout_s = timeout_s
-        self.hint = hint
-        text = f"no {waiting_for} within {timeout_s:g} s"
-        super().__init__(text + (f": {hint}" if hint else ""))
+    def message(self) -> str:
+        text = f"no {self.waiting_for} within {self.timeout_s:g} s"
+        return text + (f": {self.hint}" if self.hint else "")
 
 
 class UnknownComponentError(ResponseTimeoutError):
-    """A GETCONF/GETGEO matched nothing (UDK then sends no reply at all)."""
+    """A GETCONF/GETGEO matched nothing (UDK then sends no reply at all): a timeout whose hint
+    names the request and the components the server has reported."""
 
     def __init__(self, request: str, timeout_s: float, known: Sequence[str]):
         self.request = request
@@ -132,52 +182,53 @@ class UnknownComponentError(ResponseTimeoutError):
             f"reply to `{request}`",
             timeout_s,
             "USARSim sends nothing when no component matches the Type/Name asked for. "
-            f"Components this server has reported: {_names(self.known)}",
+            f"Components this server has reported: {names_or_none(self.known)}",
         )
 
 
+@dataclass(eq=False, repr=False)
 class ConnectionLostError(UsarArmError):
     """The server closed the connection (or it broke) while the client still needed it."""
 
     exit_code = EXIT_CONNECTION_LOST
+    while_doing: str
+    detail: str = ""
 
-    def __init__(self, while_doing: str, detail: str = ""):
-        self.while_doing = while_doing
-        self.detail = detail
-        msg = f"the USARSim server closed the connection while {while_doing}"
-        super().__init__(msg + (f" ({detail})" if detail else ""))
+    def message(self) -> str:
+        return (f"the USARSim server closed the connection while {self.while_doing}"
+                + aside(self.detail))
 
 
 # --------------------------------------------------------------------------- discovery
 
 
+@dataclass(eq=False, repr=False)
 class UnknownRobotError(UsarArmError):
     """The server did not spawn the requested robot class."""
 
     exit_code = EXIT_UNKNOWN_ROBOT
+    class_name: str
+    known: Sequence[str] = ()
+    detail: str = ""
 
-    def __init__(self, class_name: str, known: Sequence[str] = (), detail: str = ""):
-        self.class_name = class_name
-        self.known = tuple(known)
-        text = f"no robot of class '{class_name}' appeared"
-        if detail:
-            text += f" ({detail})"
+    def message(self) -> str:
+        text = f"no robot of class '{self.class_name}' appeared" + aside(self.detail)
         if self.known:
-            text += f"; robot classes the server offers: {_names(self.known)}"
-        super().__init__(text)
+            text += f"; robot classes the server offers: {names_or_none(self.known)}"
+        return text
 
 
+@dataclass(eq=False, repr=False)
 class UnknownStartError(UsarArmError):
     """The requested start position is not one the server offers."""
 
     exit_code = EXIT_UNKNOWN_START
+    start: str
+    known: Sequence[str]
 
-    def __init__(self, start: str, known: Sequence[str]):
-        self.start = start
-        self.known = tuple(known)
-        super().__init__(
-            f"unknown start position '{start}'; the server offers: {_names(self.known)}"
-        )
+    def message(self) -> str:
+        known = names_or_none(self.known)
+        return f"unknown start position '{self.start}'; the server offers: {known}"
 
 
 class DescriptionError(UsarArmError):
@@ -186,23 +237,29 @@ class DescriptionError(UsarArmError):
     exit_code = EXIT_BAD_DESCRIPTION
 
 
+@dataclass(eq=False, repr=False)
 class ValidationError(DescriptionError):
     """A generated description failed one or more checks; every problem is listed."""
 
-    def __init__(self, subject: str, problems: Sequence[str]):
-        self.subject = subject
-        self.problems = tuple(problems)
+    subject: str
+    problems: Sequence[str]
+
+    def message(self) -> str:
         lines = "\n".join(f"  - {p}" for p in self.problems)
-        super().__init__(f"{subject} failed {len(self.problems)} check(s):\n{lines}")
+        return f"{self.subject} failed {len(self.problems)} check(s):\n{lines}"
 
 
+@dataclass(eq=False, repr=False)
 class RobotStructureError(DescriptionError):
     """A URDF (+ SRDF, options) has no serial chain to plan: a floating or planar joint, a
     closed loop, a branched robot without a group, an unknown base or tip link."""
 
-    def __init__(self, what: str, where: str, expected: str):
-        self.what, self.where, self.expected = what, where, expected
-        super().__init__(f"{where}: {what}; expected {expected}")
+    what: str
+    where: str
+    expected: str
+
+    def message(self) -> str:
+        return f"{self.where}: {self.what}; expected {self.expected}"
 
 
 # --------------------------------------------------------------------------- kinematics
@@ -214,44 +271,50 @@ class IKError(UsarArmError):
     exit_code = EXIT_NO_IK
 
 
+@dataclass(eq=False, repr=False)
 class UnreachableError(IKError):
     """The target is outside the arm's workspace (or no solver converged)."""
 
-    def __init__(self, distance_m: float, detail: str = ""):
-        self.distance_m = distance_m
-        text = f"target pose is unreachable: out of reach by {distance_m * 1000:.1f} mm"
-        super().__init__(text + (f" ({detail})" if detail else ""))
+    distance_m: float
+    detail: str = ""
+
+    def message(self) -> str:
+        return (f"target pose is unreachable: out of reach by {self.distance_m * 1000:.1f} mm"
+                + aside(self.detail))
 
 
+@dataclass(eq=False, repr=False)
 class JointLimitError(IKError):
     """Solutions exist, but each needs a joint beyond its limits."""
 
-    def __init__(self, joint: str, value: float, lower: float, upper: float):
-        self.joint = joint
-        self.value = value
-        self.lower = lower
-        self.upper = upper
-        excess = value - upper if value > upper else lower - value
-        self.excess = excess
-        super().__init__(
-            f"every solution violates a joint limit; closest: {joint} = {value:.4f} is "
-            f"{excess:.4f} outside [{lower:.4f}, {upper:.4f}]"
-        )
+    joint: str
+    value: float
+    lower: float
+    upper: float
+
+    @property
+    def excess(self) -> float:
+        """How far (rad or m) ``value`` lies outside [lower, upper]."""
+        return self.value - self.upper if self.value > self.upper else self.lower - self.value
+
+    def message(self) -> str:
+        return (f"every solution violates a joint limit; closest: {self.joint} = "
+                f"{self.value:.4f} is {self.excess:.4f} outside [{self.lower:.4f}, "
+                f"{self.upper:.4f}]")
 
 
+@dataclass(eq=False, repr=False)
 class AllSolutionsInCollisionError(IKError):
     """Every IK solution inside the limits is in collision."""
 
     exit_code = EXIT_IN_COLLISION
+    n_solutions: int
+    pairs: Sequence[tuple[str, str]]
 
-    def __init__(self, n_solutions: int, pairs: Sequence[tuple[str, str]]):
-        self.n_solutions = n_solutions
-        self.pairs = tuple(pairs)
+    def message(self) -> str:
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs[:6])
-        super().__init__(
-            f"all {n_solutions} IK solution(s) inside the joint limits are in collision "
-            f"(contacts: {shown})"
-        )
+        return (f"all {self.n_solutions} IK solution(s) inside the joint limits are in "
+                f"collision (contacts: {shown})")
 
 
 # --------------------------------------------------------------------------- planning
@@ -263,17 +326,18 @@ class PlanningError(UsarArmError):
     exit_code = EXIT_NO_PLAN
 
 
+@dataclass(eq=False, repr=False)
 class _EndInCollisionError(PlanningError):
     """An end of the motion (``end``: start or goal) is in collision; ``pairs`` are the
     colliding (link or obstacle) name pairs."""
 
     exit_code = EXIT_IN_COLLISION
     end = ""
+    pairs: Sequence[tuple[str, str]]
 
-    def __init__(self, pairs: Sequence[tuple[str, str]]):
-        self.pairs = tuple(pairs)
+    def message(self) -> str:
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
-        super().__init__(f"the {self.end} configuration is in collision: {shown}")
+        return f"the {self.end} configuration is in collision: {shown}"
 
 
 class StartInCollisionError(_EndInCollisionError):
@@ -288,126 +352,94 @@ class GoalInCollisionError(_EndInCollisionError):
     end = "goal"
 
 
+@dataclass(eq=False, repr=False)
 class OutOfLimitsError(PlanningError):
     """A start or goal configuration lies outside the joint limits."""
 
     exit_code = EXIT_INVALID_INPUT
+    what: str
+    joint: str
+    value: float
+    lower: float
+    upper: float
 
-    def __init__(self, what: str, joint: str, value: float, lower: float, upper: float):
-        self.what = what
-        self.joint = joint
-        self.value = value
-        self.lower = lower
-        self.upper = upper
-        super().__init__(
-            f"the {what} configuration puts {joint} at {value:.4f}, outside its limits "
-            f"[{lower:.4f}, {upper:.4f}]"
-        )
+    def message(self) -> str:
+        return (f"the {self.what} configuration puts {self.joint} at {self.value:.4f}, "
+                f"outside its limits [{self.lower:.4f}, {self.upper:.4f}]")
 
 
+@dataclass(eq=False, repr=False)
 class NoPathError(PlanningError):
     """The planner found no collision-free path within its budget."""
 
-    def __init__(self, planner: str, time_limit_s: float, detail: str = ""):
-        self.planner = planner
-        self.time_limit_s = time_limit_s
-        text = f"{planner} found no collision-free path within {time_limit_s:g} s"
-        super().__init__(text + (f" ({detail})" if detail else ""))
+    planner: str
+    time_limit_s: float
+    detail: str = ""
+
+    def message(self) -> str:
+        return (f"{self.planner} found no collision-free path within {self.time_limit_s:g} s"
+                + aside(self.detail))
 
 
+@dataclass(eq=False, repr=False)
 class LinBlockedError(PlanningError):
     """A straight-line (LIN) motion cannot be followed."""
 
-    def __init__(self, fraction: float, point_m: Iterable[float], reason: str):
-        self.fraction = fraction
-        self.point_m = tuple(float(x) for x in point_m)
-        self.reason = reason
+    fraction: float
+    point_m: Iterable[float]
+    reason: str
+
+    def __post_init__(self) -> None:
+        self.point_m = tuple(float(x) for x in self.point_m)
+        super().__post_init__()
+
+    def message(self) -> str:
         x, y, z = self.point_m
-        super().__init__(
-            f"LIN motion blocked at {fraction * 100:.1f} % of the line, tool0 at "
-            f"({x:.4f}, {y:.4f}, {z:.4f}) m: {reason}"
-        )
+        return (f"LIN motion blocked at {self.fraction * 100:.1f} % of the line, tool0 at "
+                f"({x:.4f}, {y:.4f}, {z:.4f}) m: {self.reason}")
 
 
 class TimingError(PlanningError):
     """Time-parameterisation failed (limits inconsistent, Ruckig error)."""
 
 
-class AttachError(InvalidInputError):
-    """An object cannot be attached to (or detached from) the arm: an unknown link, a name
-    that is already a link or a carried object, an object the scene lacks, nothing carried
-    by that name.
-
-    Attributes:
-        body: the object's name. problem: what was wrong. known: the names that would have
-            been accepted (links, objects, carried bodies).
-    """
-
-    def __init__(self, body: str, problem: str, known: Sequence[str] = ()):
-        self.body = body
-        self.problem = problem
-        self.known = tuple(known)
-        text = f"cannot attach '{body}': {problem}"
-        if self.known:
-            text += f" (known: {_names(self.known)})"
-        super().__init__(text)
-
-
-class AttachedCollisionError(PlanningError):
-    """An object to attach is in collision, at the configuration it is attached at, with
-    something other than its parent and touch links.
-
-    Attributes:
-        body: the object's name. contacts: (body, other, depth m) of each pair in contact.
-    """
-
-    exit_code = EXIT_IN_COLLISION
-
-    def __init__(self, body: str, contacts: Sequence[tuple[str, str, float]]):
-        self.body = body
-        self.contacts = tuple(contacts)
-        shown = ", ".join(f"{a}–{b} ({d * 1000:.1f} mm deep)" for a, b, d in self.contacts)
-        super().__init__(f"'{body}' is in collision where it would be attached: {shown}; "
-                         "name the links it may touch (touch_links) or attach it elsewhere")
-
-
 # --------------------------------------------------------------------------- execution
 
 
+@dataclass(eq=False, repr=False)
 class ExecutionAbortedError(UsarArmError):
     """Execution on the arm stopped before the motion completed; the arm holds where it is."""
 
     exit_code = EXIT_EXECUTION_ABORTED
+    reason: str
+    joint: str | None = None
+    error_rad: float | None = None
+    at_time_s: float | None = None
 
-    def __init__(self, reason: str, joint: str | None = None, error_rad: float | None = None,
-                 at_time_s: float | None = None):
-        self.reason = reason
-        self.joint = joint
-        self.error_rad = error_rad
-        self.at_time_s = at_time_s
-        text = f"execution aborted: {reason}"
-        if joint is not None and error_rad is not None:
-            text += f" ({joint} off by {error_rad:.4f})"
-        if at_time_s is not None:
-            text += f" at t = {at_time_s:.2f} s"
-        super().__init__(text + "; the arm was told to hold its current position")
+    def message(self) -> str:
+        text = f"execution aborted: {self.reason}"
+        if self.joint is not None and self.error_rad is not None:
+            text += f" ({self.joint} off by {self.error_rad:.4f})"
+        if self.at_time_s is not None:
+            text += f" at t = {self.at_time_s:.2f} s"
+        return text + "; the arm was told to hold its current position"
 
 
 # --------------------------------------------------------------------------- calibration
 
 
+@dataclass(eq=False, repr=False)
 class CalibrationError(UsarArmError):
     """A kinematic calibration cannot be made (too few readings, nothing identifiable, no
     convergence); nothing was written and the as-learnt description is kept."""
 
     exit_code = EXIT_INVALID_INPUT
+    problem: str
+    readings: int | None = None
+    needed: int | None = None
 
-    def __init__(self, problem: str, readings: int | None = None,
-                 needed: int | None = None):
-        self.problem = problem
-        self.readings = readings
-        self.needed = needed
-        text = f"calibration failed: {problem}"
-        if readings is not None and needed is not None:
-            text += f" ({readings} readings, at least {needed} needed)"
-        super().__init__(text + "; nothing was written")
+    def message(self) -> str:
+        text = f"calibration failed: {self.problem}"
+        if self.readings is not None and self.needed is not None:
+            text += f" ({self.readings} readings, at least {self.needed} needed)"
+        return text + "; nothing was written"

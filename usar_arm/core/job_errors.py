@@ -9,6 +9,7 @@ arm's pipeline, raised only there; each carries its evidence as attributes.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from usar_arm.core.errors import (
     EXIT_UNAVAILABLE,
@@ -16,35 +17,39 @@ from usar_arm.core.errors import (
     IKError,
     InvalidInputError,
     UsarArmError,
+    aside,
 )
 
 
+@dataclass(eq=False, repr=False)
 class ChunkFailedError(UsarArmError):
     """A chunk of a distributed job failed twice (its worker died or raised); the chunks done
     so far are kept, and ``--resume`` continues from them."""
 
     exit_code = EXIT_WORKER_FAILED
+    chunk: int
+    attempts: int
+    reason: str
 
-    def __init__(self, chunk: int, attempts: int, reason: str):
-        self.chunk = chunk
-        self.attempts = attempts
-        self.reason = reason
-        super().__init__(f"chunk {chunk} failed {attempts} times ({reason}); the finished "
-                         "chunks are kept: run again with --resume to continue")
+    def message(self) -> str:
+        return (f"chunk {self.chunk} failed {self.attempts} times ({self.reason}); the "
+                "finished chunks are kept: run again with --resume to continue")
 
 
+@dataclass(eq=False, repr=False)
 class ClusterUnavailableError(UsarArmError):
     """The execution backend cannot be used: a Ray cluster that does not answer, or Ray not
     installed."""
 
     exit_code = EXIT_UNAVAILABLE
+    address: str
+    reason: str
 
-    def __init__(self, address: str, reason: str):
-        self.address = address
-        self.reason = reason
-        super().__init__(f"cannot use the Ray cluster at '{address}': {reason}")
+    def message(self) -> str:
+        return f"cannot use the Ray cluster at '{self.address}': {self.reason}"
 
 
+@dataclass(eq=False, repr=False)
 class ResumeMismatchError(InvalidInputError):
     """``--resume`` found finished chunks of another job in the output folder (another robot,
     scene, problems file or setting): they are not used, and nothing is computed.
@@ -55,42 +60,45 @@ class ResumeMismatchError(InvalidInputError):
             does not say.
     """
 
-    def __init__(self, folder: str, found_key: str | None, key: str,
-                 differences: Sequence[str] = ()):
-        self.folder = folder
-        self.found_key = found_key
-        self.key = key
-        self.differences = tuple(differences)
+    folder: str
+    found_key: str | None
+    key: str
+    differences: Sequence[str] = ()
+
+    def message(self) -> str:
         what = (f"its {' and '.join(self.differences)} differ" if self.differences
                 else "the robot, scene, input or settings differ")
-        super().__init__(
-            f"{folder} holds finished chunks of another job ({what}; kept key {found_key}, "
-            f"this job's {key}): they would give another job's answers. Run without --resume "
-            "to start over, or resume with the same input and settings")
+        return (f"{self.folder} holds finished chunks of another job ({what}; kept key "
+                f"{self.found_key}, this job's {self.key}): they would give another job's "
+                "answers. Run without --resume to start over, or resume with the same input "
+                "and settings")
 
 
+@dataclass(eq=False, repr=False)
 class MapTooLargeError(InvalidInputError):
     """A reachability map would not fit in this machine's memory; nothing was computed."""
 
-    def __init__(self, voxels: int, need_bytes: int, available_bytes: int,
-                 resolution_that_fits_m: float):
-        self.voxels = voxels
-        self.need_bytes = need_bytes
-        self.available_bytes = available_bytes
-        self.resolution_that_fits_m = resolution_that_fits_m
-        super().__init__(
-            f"a map of {voxels:,} voxels needs about {need_bytes / 2**30:.1f} GiB, more than "
-            f"half of the {available_bytes / 2**30:.1f} GiB available; use a resolution of at "
-            f"least {resolution_that_fits_m:g} m (or restrict the map)")
+    voxels: int
+    need_bytes: int
+    available_bytes: int
+    resolution_that_fits_m: float
+
+    def message(self) -> str:
+        return (f"a map of {self.voxels:,} voxels needs about {self.need_bytes / 2**30:.1f} "
+                f"GiB, more than half of the {self.available_bytes / 2**30:.1f} GiB "
+                f"available; use a resolution of at least {self.resolution_that_fits_m:g} m "
+                "(or restrict the map)")
 
 
+@dataclass(eq=False, repr=False)
 class UnreachableTargetError(IKError):
     """A target pose of a placement study is reachable (collision-free) from no candidate
     base; the others may be."""
 
-    def __init__(self, target: str, candidates: int, detail: str = ""):
-        self.target = target
-        self.candidates = candidates
-        text = (f"target '{target}' is reachable collision-free from none of the {candidates} "
-                f"candidate base poses")
-        super().__init__(text + (f" ({detail})" if detail else ""))
+    target: str
+    candidates: int
+    detail: str = ""
+
+    def message(self) -> str:
+        return (f"target '{self.target}' is reachable collision-free from none of the "
+                f"{self.candidates} candidate base poses" + aside(self.detail))

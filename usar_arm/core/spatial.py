@@ -104,6 +104,25 @@ def angle_between(u: Vector, v: Vector) -> float:
     return float(np.arctan2(s, c))
 
 
+def rotation_onto(axis: Vector, direction: Vector, half_turn_about: Vector) -> Array:
+    """The smallest rotation (3x3) taking the unit vector ``axis`` onto ``direction`` (any
+    length): the identity within 1.4 urad of ``axis`` (1 - cos below 1e-12), and where
+    ``direction`` is as near opposite, the half turn about the unit vector ``half_turn_about``
+    (normal to ``axis``)."""
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    a = np.asarray(axis, dtype=float)
+    c = float(a @ d)
+    if c > 1 - 1e-12:
+        return np.eye(3)
+    if c < -1 + 1e-12:
+        n = np.asarray(half_turn_about, dtype=float)
+        return 2.0 * np.outer(n, n) - np.eye(3)
+    v = np.cross(a, d)
+    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + vx + vx @ vx / (1 + c)
+
+
 def log_so3(rot: Array) -> Array:
     """Rotation vector (axis * angle, rad) of a rotation matrix."""
     angle = rotation_angle(rot)

@@ -11,6 +11,7 @@ arm's pipeline never raises. Subclasses of :class:`~usar_arm.core.errors.Invalid
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from usar_arm.core.errors import DescriptionError, InvalidInputError
 
@@ -20,6 +21,7 @@ class UnsupportedSteeringError(DescriptionError):
     steering type and the supported ones)."""
 
 
+@dataclass(eq=False, repr=False)
 class NonFiniteCommandError(InvalidInputError):
     """A velocity command (or a vehicle parameter it is mapped with) is NaN or infinite.
 
@@ -27,12 +29,14 @@ class NonFiniteCommandError(InvalidInputError):
         values: name -> the value given (m/s, rad/s, m), every one that was checked.
     """
 
-    def __init__(self, values: dict[str, float]):
-        self.values = dict(values)
+    values: dict[str, float]
+
+    def message(self) -> str:
         bad = ", ".join(f"{k} = {v}" for k, v in self.values.items() if not math.isfinite(v))
-        super().__init__(f"a drive command needs finite numbers; got {bad}")
+        return f"a drive command needs finite numbers; got {bad}"
 
 
+@dataclass(eq=False, repr=False)
 class VehicleParameterError(InvalidInputError):
     """A vehicle parameter (wheel radius, separation, maximum wheel speed) is not positive.
 
@@ -40,12 +44,14 @@ class VehicleParameterError(InvalidInputError):
         name: the parameter. value: what it was (m or rad/s).
     """
 
-    def __init__(self, name: str, value: float):
-        self.name = name
-        self.value = value
-        super().__init__(f"the vehicle's {name} must be a positive number, got {value}")
+    name: str
+    value: float
+
+    def message(self) -> str:
+        return f"the vehicle's {self.name} must be a positive number, got {self.value}"
 
 
+@dataclass(eq=False, repr=False)
 class NotAVehicleError(InvalidInputError):
     """The spawned robot is no ground vehicle (its CONF {Type Robot} says what it is instead):
     it can be neither described as a platform nor driven.
@@ -54,14 +60,16 @@ class NotAVehicleError(InvalidInputError):
         robot: the class asked for. platform_type: what the robot's CONF says it is.
     """
 
-    def __init__(self, robot: str, platform_type: str):
-        self.robot = robot
-        self.platform_type = platform_type
-        super().__init__(f"{robot} is a {platform_type}, not a ground vehicle: describe an arm "
-                         "with usar-arm urdf; usar-arm drives ground vehicles such as "
-                         "USARBot.P3AT and USARBot.FrontAckerman")
+    robot: str
+    platform_type: str
+
+    def message(self) -> str:
+        return (f"{self.robot} is a {self.platform_type}, not a ground vehicle: describe an "
+                "arm with usar-arm urdf; usar-arm drives ground vehicles such as "
+                "USARBot.P3AT and USARBot.FrontAckerman")
 
 
+@dataclass(eq=False, repr=False)
 class OutsideWorldError(InvalidInputError):
     """A waypoint lies outside the world's walls or inside one of its boxes.
 
@@ -70,8 +78,10 @@ class OutsideWorldError(InvalidInputError):
         where: what it is outside of, or inside.
     """
 
-    def __init__(self, index: int, point: tuple[float, float], where: str):
-        self.index = index
-        self.point = point
-        self.where = where
-        super().__init__(f"waypoint {index} ({point[0]:g}, {point[1]:g}) m lies {where}")
+    index: int
+    point: tuple[float, float]
+    where: str
+
+    def message(self) -> str:
+        return (f"waypoint {self.index} ({self.point[0]:g}, {self.point[1]:g}) m lies "
+                f"{self.where}")

@@ -27,7 +27,7 @@ from usar_arm.core.model import (
     Origin,
 )
 from usar_arm.core.shapes import CylinderShape
-from usar_arm.core.spatial import Array, matrix_to_rpy, transform
+from usar_arm.core.spatial import Array, matrix_to_rpy, rotation_onto, transform
 from usar_arm.discover.frames import ArmFrames
 from usar_arm.discover.limits import MotionLimits
 from usar_arm.discover.naming import Naming
@@ -113,17 +113,8 @@ def link_collisions(start: Array, end: Array, frame: Array | None = None,
 
 def flange_rotation(direction: Array) -> Array:
     """Rotation whose x axis is ``direction`` (REP-199: flange x+ points away from the arm),
-    turned from the base frame by the smallest rotation."""
-    d = direction / np.linalg.norm(direction)
-    x = np.array([1.0, 0.0, 0.0])
-    c = float(x @ d)
-    if c > 1 - 1e-12:
-        return np.eye(3)
-    if c < -1 + 1e-12:
-        return np.diag([-1.0, -1.0, 1.0])  # half turn about z
-    v = np.cross(x, d)
-    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + vx + vx @ vx / (1 + c)
+    turned from the base frame by the smallest rotation (a half turn about z for -x)."""
+    return rotation_onto((1.0, 0.0, 0.0), direction, (0.0, 0.0, 1.0))
 
 
 def build_chain(arm: WireArm, frames: ArmFrames, limits: Sequence[MotionLimits],

@@ -20,7 +20,7 @@ import numpy as np
 
 from usar_arm.core.model import Collision, Joint, JointType, KinematicChain, Link, Origin
 from usar_arm.core.shapes import CylinderShape
-from usar_arm.core.spatial import Array, invert, matrix_to_rpy, transform
+from usar_arm.core.spatial import Array, invert, matrix_to_rpy, rotation_onto, transform
 from usar_arm.discover.build import segment_origin
 from usar_arm.discover.tool_frames import EffectorFrame
 
@@ -54,17 +54,8 @@ def _origin(t: Array) -> Origin:
 
 
 def z_along(direction: Array) -> Array:
-    """The smallest rotation taking z onto ``direction`` (3x3)."""
-    d = direction / np.linalg.norm(direction)
-    z = np.array([0.0, 0.0, 1.0])
-    c = float(z @ d)
-    if c > 1 - 1e-12:
-        return np.eye(3)
-    if c < -1 + 1e-12:
-        return np.diag([1.0, -1.0, -1.0])  # half turn about x
-    v = np.cross(z, d)
-    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + vx + vx @ vx / (1 + c)
+    """The smallest rotation taking z onto ``direction`` (3x3; a half turn about x for -z)."""
+    return rotation_onto((0.0, 0.0, 1.0), direction, (1.0, 0.0, 0.0))
 
 
 def tool_links(frames: tuple[EffectorFrame, ...], link_frames: dict[int, tuple[str, Array]]

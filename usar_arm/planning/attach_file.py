@@ -25,12 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from usar_arm.core.cell import SHAPES, CellReader, MeshFile, read_yaml_file
+from usar_arm.core.cell import SHAPES, CellReader, read_yaml_file
 from usar_arm.core.errors import FileFormatError
-from usar_arm.core.shapes import Box, CylinderShape, Mesh, ObstacleShape, Sphere
+from usar_arm.core.shapes import Box, CylinderShape, ObstacleShape, Sphere
 from usar_arm.core.spatial import Array, matrix_to_rpy
 from usar_arm.core.yamlio import line_of
 from usar_arm.planning.attached import AttachedBody
+from usar_arm.planning.cell_scene import solid
 
 KEYS = {"name", "link", "xyz", "rpy", "touch_links", *SHAPES}
 DEFAULT_LINK = "tool0"
@@ -58,17 +59,6 @@ class AttachRequest:
         assert self.shape is not None and self.pose is not None
         return AttachedBody(self.name, self.link or DEFAULT_LINK, self.shape, self.pose,
                             self.touch_links)
-
-
-def _load_mesh(shape: MeshFile, path: str) -> Mesh:
-    from usar_arm.urdf.meshes import load_mesh  # trimesh: only when a body is a mesh
-
-    try:
-        mesh = load_mesh(shape.path, (shape.scale, shape.scale, shape.scale))
-    except ValueError as exc:
-        raise FileFormatError(path, f"cannot load mesh {shape.path}: {exc}", line=shape.line,
-                              field=shape.field) from None
-    return Mesh(mesh.vertices, mesh.faces, shape.given or str(shape.path))
 
 
 def parse_attach(data: Any, path: str, base: Path, field: str = "") -> AttachRequest:
@@ -107,9 +97,9 @@ def parse_attach(data: Any, path: str, base: Path, field: str = "") -> AttachReq
                               f"{at}{extra[0]}")
         return AttachRequest(name, link, tuple(touch))
     shape = reader.shape(data, kinds[0], field or name)
-    solid = _load_mesh(shape, path) if isinstance(shape, MeshFile) else shape
+    body = solid(shape, path)
     pose = reader.pose(data, name, field or name)
-    return AttachRequest(name, link, tuple(touch), solid, pose)
+    return AttachRequest(name, link, tuple(touch), body, pose)
 
 
 def read_attach(path: str | Path) -> AttachRequest:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from usar_arm.core.errors import AttachError
+from usar_arm.core.attach_errors import AttachError
 from usar_arm.core.model import Collision, Joint, JointType, KinematicChain, Link, Origin
 from usar_arm.core.shapes import Box, CylinderShape, ObstacleShape, Sphere
 from usar_arm.core.spatial import Array, matrix_to_rpy

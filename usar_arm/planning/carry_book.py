@@ -12,7 +12,8 @@ attached. The objects it touches no deeper than :data:`SUPPORT_DEPTH` are its su
 that starts with it resting on them (the lift) may touch them; the first plan that starts with
 it clear of them ends that allowance (MoveIt's pick allows the support surface the same way
 during the retreat). Deeper contacts, and any contact with a robot link other than its parent
-and touch links, refuse the attachment (:class:`~usar_arm.core.errors.AttachedCollisionError`).
+and touch links, refuse the attachment
+(:class:`~usar_arm.core.attach_errors.AttachedCollisionError`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from usar_arm.core.errors import AttachedCollisionError, AttachError
+from usar_arm.core.attach_errors import AttachedCollisionError, AttachError
 from usar_arm.core.shapes import ObstacleShape
 from usar_arm.core.spatial import Array, invert
 from usar_arm.planning.attached import AttachedBody

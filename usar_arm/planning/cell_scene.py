@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from usar_arm.core.cell import Cell, MeshFile, Sighting, StaticPiece
+from usar_arm.core.cell import Cell, CellShape, MeshFile, Sighting
 from usar_arm.core.errors import FileFormatError
 from usar_arm.core.spatial import FLIP_X, Array, invert, transform
 from usar_arm.core.wc_classes import WcClass
@@ -24,11 +24,17 @@ _FLIP = transform(FLIP_X)
 """USARSim (z down) <-> REP-103 (z up): the same 4x4 both ways."""
 
 
-def _shape(piece: StaticPiece, path: str) -> Shape:
-    shape = piece.shape
+def solid(shape: CellShape, path: str) -> Shape:
+    """A cell file's shape as the planner's: a mesh file loaded (trimesh, only then), the
+    others as they are.
+
+    Raises:
+        FileFormatError: the mesh cannot be loaded, at the line and field of ``path`` (the file
+            the shape was read from) that named it.
+    """
     if not isinstance(shape, MeshFile):
         return shape
-    from usar_arm.urdf.meshes import load_mesh  # trimesh: only when a scene has a mesh
+    from usar_arm.urdf.meshes import load_mesh  # trimesh: only when a file has a mesh
 
     try:
         mesh = load_mesh(shape.path, (shape.scale, shape.scale, shape.scale))
@@ -51,7 +57,7 @@ def wc_object_pieces(name: str, wc_class: WcClass, pose: Array,
 
 def static_objects(cell: Cell, path: str = "") -> tuple[SceneObject, ...]:
     """A cell's static scenery (meshes loaded; ``path`` names the file in errors)."""
-    return tuple(SceneObject(p.name, _shape(p, path or cell.name), p.pose, p.allow)
+    return tuple(SceneObject(p.name, solid(p.shape, path or cell.name), p.pose, p.allow)
                  for p in cell.static)
 
 

@@ -21,8 +21,10 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.planning import two_link
 from usar_arm.planning.jit import inline_kernel, kernel
 from usar_arm.planning.opw import OrthoParallelArm
+from usar_arm.planning.two_link import elbow
 
 SOLVED, FALLBACK = 0, 1
 """Statuses of :func:`nearest`."""
@@ -30,14 +32,15 @@ SOLVED, FALLBACK = 0, 1
 TWO_PI = 2.0 * math.pi
 
 # Offsets into the constant vector (3-vectors unless noted).
-(C_W, C_P, C_U, C_TW, C_W1XU, C_EA, C_EB, C_P1_2D, C_P2, C_E, C_P3P2, C_M6, C_MV, C_W4XW5,
- C_V) = (0, 18, 36, 39, 42, 45, 48, 51, 53, 55, 57, 59, 62, 65, 68)
-"""w (6x3) and p (6x3) of the joints, u, tool-to-wrist, w1 x u, the plane basis ea/eb, the 2-D
-points p1, p2 (2 each), e and p3 - p2 (2 each), the wrist's m6, mv, w4 x w5 and v."""
-(C_LATERAL, C_SLACK, C_L2SQ, C_L3SQ, C_MAG, C_REACH, C_PHASE, C_S3, C_C45, C_W5W6, C_CR2) = (
-    71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81)
+(C_W, C_P, C_U, C_TW, C_W1XU, C_P1_2D, C_M6, C_MV, C_W4XW5, C_V) = (
+    0, 18, 36, 39, 42, 45, 47, 50, 53, 56)
+"""w (6x3) and p (6x3) of the joints, u, tool-to-wrist, w1 x u, p1 in the elbow's plane (2),
+the wrist's m6, mv, w4 x w5 and v."""
+(C_LATERAL, C_SLACK, C_C45, C_W5W6, C_CR2) = (59, 60, 61, 62, 63)
 """Scalars of the closed form (see :class:`.opw.OrthoParallelArm`)."""
-C_SIZE = 82
+C_ELBOW = 64
+"""Where the elbow's block starts (:meth:`.two_link.TwoLink.packed`)."""
+C_SIZE = C_ELBOW + two_link.SIZE
 
 
 def pack(arm: OrthoParallelArm) -> Array:
@@ -45,14 +48,13 @@ def pack(arm: OrthoParallelArm) -> Array:
     c = np.zeros(C_SIZE)
     c[C_W:C_W + 18] = np.ravel(arm.w)
     c[C_P:C_P + 18] = np.ravel(arm.p)
-    for offset, value in ((C_U, arm.u), (C_TW, arm._tw), (C_W1XU, arm._w1xu), (C_EA, arm.ea),
-                          (C_EB, arm.eb), (C_P1_2D, arm._p1_2d), (C_P2, arm.p2), (C_E, arm.e),
-                          (C_P3P2, arm._p3p2), (C_M6, arm._m6), (C_MV, arm._mv),
+    for offset, value in ((C_U, arm.u), (C_TW, arm._tw), (C_W1XU, arm._w1xu),
+                          (C_P1_2D, arm._p1_2d), (C_M6, arm._m6), (C_MV, arm._mv),
                           (C_W4XW5, arm._w4xw5), (C_V, arm._v)):
         c[offset:offset + len(value)] = value
-    c[C_LATERAL], c[C_SLACK], c[C_L2SQ], c[C_L3SQ] = arm.lateral, arm.slack, arm.L2sq, arm.L3sq
-    c[C_MAG], c[C_REACH], c[C_PHASE], c[C_S3] = arm._mag, arm._reach, arm._phase, arm.s3
+    c[C_LATERAL], c[C_SLACK] = arm.lateral, arm.slack
     c[C_C45], c[C_W5W6], c[C_CR2] = arm._c45, arm._w5w6, arm._cr2
+    c[C_ELBOW:] = arm.two_link.packed()
     return c
 
 
@@ -115,30 +117,19 @@ def branches(rot: Array, pos: Array, c: Array, out: Array) -> int:
     rv = np.empty(3)
     z = np.empty(3)
     mv6 = np.empty(3)
+    elbows = np.empty((2, 2))
     count = 0
-    mag = c[C_MAG]
     c45, w5w6 = c[C_C45], c[C_W5W6]
     den = c45 * c45 - 1.0
+    ea, eb = C_ELBOW + two_link.EA, C_ELBOW + two_link.EB
     for sign1 in (1.0, -1.0):
         q1 = base + sign1 * spread
         rodrigues(c, C_W, -q1, d, back)
-        x = (c[C_EA] * back[0] + c[C_EA + 1] * back[1] + c[C_EA + 2] * back[2]
-             + c[C_P1_2D])
-        y = (c[C_EB] * back[0] + c[C_EB + 1] * back[1] + c[C_EB + 2] * back[2]
-             + c[C_P1_2D + 1])
-        dx, dy = x - c[C_P2], y - c[C_P2 + 1]
-        rhs = (dx * dx + dy * dy - c[C_L2SQ] - c[C_L3SQ]) / 2.0
-        if mag < 1e-12 or abs(rhs) > mag + c[C_SLACK] * c[C_REACH]:
-            continue
-        delta = math.acos(max(-1.0, min(1.0, rhs / mag)))
-        for sign3 in (1.0, -1.0):
-            t3 = c[C_PHASE] + sign3 * delta
-            c3, s3 = math.cos(t3), math.sin(t3)
-            ex = c[C_P3P2] + c3 * c[C_E] - s3 * c[C_E + 1]
-            ey = c[C_P3P2 + 1] + s3 * c[C_E] + c3 * c[C_E + 1]
-            q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-            q1w, q2w, q3w = wrap(q1), wrap(q2), wrap(c[C_S3] * t3)
-            theta = q2w + c[C_S3] * q3w
+        x = c[ea] * back[0] + c[ea + 1] * back[1] + c[ea + 2] * back[2] + c[C_P1_2D]
+        y = c[eb] * back[0] + c[eb + 1] * back[1] + c[eb + 2] * back[2] + c[C_P1_2D + 1]
+        for r in range(elbow(c, C_ELBOW, x, y, elbows)):
+            q1w, q2w, q3w = wrap(q1), wrap(elbows[r, 0]), wrap(elbows[r, 1])
+            theta = q2w + c[C_ELBOW + two_link.S3] * q3w
             rodrigues(c, C_W, -q1w, t6, tmp)
             rodrigues(c, C_U, -theta, tmp, target)
             rodrigues(c, C_W, -q1w, tv, tmp)

@@ -27,13 +27,12 @@ import numpy as np
 
 from usar_arm.core.spatial import Array
 from usar_arm.planning.screw import (
+    PARALLEL,
+    PERPENDICULAR,
     V,
     closest_point,
     cross,
     dot,
-    parallel_deviation,
-    plane_basis,
-    require,
     rodrigues,
     six_axes,
     sub,
@@ -41,7 +40,12 @@ from usar_arm.planning.screw import (
     v3,
     wrap,
 )
+from usar_arm.planning.two_link import TwoLink
 from usar_arm.urdf.opw_fit import OpwLengths
+
+STRUCTURE = (PERPENDICULAR, PARALLEL, PERPENDICULAR, PERPENDICULAR, PERPENDICULAR)
+"""How each joint's axis stands to the next's on an ortho-parallel arm (joints 4 to 6 meet
+too: the spherical wrist)."""
 
 
 class NotOrthoParallel(ValueError):
@@ -72,13 +76,7 @@ class OrthoParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w, p = six_axes(axes, points, NotOrthoParallel)
-        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
-                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
-                 ("joint 3 perpendicular to joint 4", abs(dot(w[2], w[3]))),
-                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
-                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
-                tolerance, NotOrthoParallel)
+        w, p = six_axes(axes, points, STRUCTURE, tolerance, NotOrthoParallel)
         wrist, miss = closest_point(np.array(w[3:]), np.array(p[3:]))
         if miss > max(tolerance, 0.05):
             raise NotOrthoParallel(f"wrist axes miss a common point by {miss:.4f} m")
@@ -94,26 +92,13 @@ class OrthoParallelArm:
         self._rm_t = rm.T
         self._tool_to_wrist = rm.T @ (wrist - pm)  # wrist centre in the tool frame
         self.u: V = w[1]
-        self.s3 = 1.0 if dot(w[2], self.u) > 0 else -1.0
-        # Basis of the plane normal to u with ea x eb = u.
-        self.ea, self.eb = plane_basis(self.u)
+        self.two_link = TwoLink.of(self.u, w[2], p[1], p[2], self.W0, self.slack)
+        """Joints 2 and 3 carrying the wrist centre."""
         self.lateral = dot(self.u, sub(self.W0, p[0]))
-        p2, p3, w0 = self._2d(p[1]), self._2d(p[2]), self._2d(self.W0)
-        self.p2, self.p3 = p2, p3
-        c = (p3[0] - p2[0], p3[1] - p2[1])
-        e = (w0[0] - p3[0], w0[1] - p3[1])
-        self.e = e
-        self.L2sq, self.L3sq = c[0] ** 2 + c[1] ** 2, e[0] ** 2 + e[1] ** 2
-        self.K = c[0] * e[0] + c[1] * e[1]
-        self.J = c[0] * (-e[1]) + c[1] * e[0]
         # Constants of the per-query maths.
         self._tw = v3(self._tool_to_wrist)
         self._w1xu = cross(w[0], self.u)
-        self._p1_2d = self._2d(p[0])
-        self._p3p2 = (p3[0] - p2[0], p3[1] - p2[1])
-        self._mag = math.hypot(self.K, self.J)
-        self._phase = math.atan2(self.J, self.K)
-        self._reach = math.sqrt(self.L2sq + self.L3sq)
+        self._p1_2d = self.two_link.plane(p[0])
         v = cross(w[5], (1.0, 0.0, 0.0))
         if dot(v, v) < 1e-6:
             v = cross(w[5], (0.0, 1.0, 0.0))
@@ -127,10 +112,6 @@ class OrthoParallelArm:
         self._cr2 = dot(self._w4xw5, self._w4xw5)
         self.wrist_coupling = 1.0 if dot(w[3], w[5]) > 0 else -1.0
         """At q5 = 0 joints 4 and 6 turn about one line: only q4 + coupling * q6 matters."""
-
-
-    def _2d(self, x: V) -> tuple[float, float]:
-        return (dot(self.ea, x), dot(self.eb, x))
 
     def parameters(self) -> OpwParameters:
         """The classical OPW parameters, measured from the foot of joint 1's axis.
@@ -149,7 +130,7 @@ class OrthoParallelArm:
         sign = 1.0 if dot(across, sub(self.W0, foot)) >= 0 else -1.0
         return OpwParameters(
             a1=sign * dot(across, rel2), a2=-dot(w1, fore), b=self.lateral,
-            c1=dot(w1, rel2), c2=math.sqrt(self.L2sq), c3=sign * dot(across, fore),
+            c1=dot(w1, rel2), c2=math.sqrt(self.two_link.l2sq), c3=sign * dot(across, fore),
             c4=float(np.linalg.norm(self._tool_to_wrist)), wrist_offset=self.wrist_offset)
 
     def arm_branches(self, rot: Array | list[list[float]], pos: Array
@@ -171,23 +152,13 @@ class OrthoParallelArm:
             return []
         base = math.atan2(b, a)
         spread = math.acos(max(-1.0, min(1.0, self.lateral / rad)))
-        out = []
-        mag = self._mag
+        out: list[tuple[float, float, float]] = []
+        two = self.two_link
         for q1 in (base + spread, base - spread):
             back = rodrigues(w1, -q1, d)
-            x = dot(self.ea, back) + self._p1_2d[0]
-            y = dot(self.eb, back) + self._p1_2d[1]
-            dx, dy = x - self.p2[0], y - self.p2[1]
-            rhs = (dx * dx + dy * dy - self.L2sq - self.L3sq) / 2.0
-            if mag < 1e-12 or abs(rhs) > mag + self.slack * self._reach:
-                continue  # beyond the reach (slightly beyond: clamped, Newton finishes it)
-            delta = math.acos(max(-1.0, min(1.0, rhs / mag)))
-            for t3 in (self._phase + delta, self._phase - delta):
-                c3, s3 = math.cos(t3), math.sin(t3)
-                ex = self._p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
-                ey = self._p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
-                q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-                out.append((wrap(q1), wrap(q2), wrap(self.s3 * t3)))
+            x = dot(two.ea, back) + self._p1_2d[0]
+            y = dot(two.eb, back) + self._p1_2d[1]
+            out.extend((wrap(q1), wrap(q2), wrap(q3)) for q2, q3 in two.angles(x, y))
         return out
 
     def wrist_branches(self, rot: Array | list[list[float]], q1: float, q2: float, q3: float
@@ -206,7 +177,7 @@ class OrthoParallelArm:
         tv = (r[0][0] * mv[0] + r[0][1] * mv[1] + r[0][2] * mv[2],
               r[1][0] * mv[0] + r[1][1] * mv[1] + r[1][2] * mv[2],
               r[2][0] * mv[0] + r[2][1] * mv[1] + r[2][2] * mv[2])
-        theta = q2 + self.s3 * q3
+        theta = q2 + self.two_link.s3 * q3
         w1, u = self.w[0], self.u
         target = rodrigues(u, -theta, rodrigues(w1, -q1, t6))
         rv = rodrigues(u, -theta, rodrigues(w1, -q1, tv))

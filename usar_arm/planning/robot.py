@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from usar_arm.core.errors import AttachedCollisionError, FileFormatError
+from usar_arm.core.attach_errors import AttachedCollisionError
+from usar_arm.core.errors import FileFormatError
 from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning.acm import adjacent_pairs, default_state

@@ -96,26 +96,34 @@ def parallel_deviation(a: V, b: V) -> float:
     return math.sqrt(max(0.0, 1.0 - dot(a, b) ** 2))
 
 
-def six_axes(axes: Array, points: Array, error: type[ValueError]) -> tuple[list[V], list[V]]:
+PERPENDICULAR, PARALLEL = "perpendicular", "parallel"
+"""How one joint's axis stands to the next's in a closed form's structure."""
+
+
+def six_axes(axes: Array, points: Array, structure: Sequence[str], tolerance: float,
+             error: type[ValueError]) -> tuple[list[V], list[V]]:
     """An arm's zero-configuration joint axes, normalised, and a point on each (m), as
-    3-vectors.
+    3-vectors, checked against a closed form's structure.
+
+    Args:
+        axes: (6, 3) joint axes at q = 0 (any length).
+        points: (6, 3) a point on each axis (m).
+        structure: how each joint's axis stands to the next's (5 of :data:`PERPENDICULAR`,
+            :data:`PARALLEL`): joint 1 to 2, 2 to 3, ... 5 to 6.
+        tolerance: how far from it an axis may be (the sine or cosine of their angle).
+        error: the closed form's refusal.
 
     Raises:
-        error: the arm does not have six joints (the message says how many it has).
+        error: the arm does not have six joints (the message says how many it has), or the
+            first condition off by more than ``tolerance`` (``joint 3 parallel to joint 4: off
+            by 1.0000``).
     """
     w = [v3(a / np.linalg.norm(a)) for a in np.asarray(axes, float)]
     if len(w) != 6:
         raise error(f"needs 6 revolute joints, has {len(w)}")
-    return w, [v3(pt) for pt in np.asarray(points, float)]
-
-
-def require(checks: Sequence[tuple[str, float]], tolerance: float,
-            error: type[ValueError]) -> None:
-    """Each ``(condition, deviation)`` of a structure holds within ``tolerance`` (rad, or m).
-
-    Raises:
-        error: the first condition off by more, with its deviation.
-    """
-    for what, deviation in checks:
+    for i, relation in enumerate(structure):
+        a, b = w[i], w[i + 1]
+        deviation = parallel_deviation(a, b) if relation == PARALLEL else abs(dot(a, b))
         if deviation > tolerance:
-            raise error(f"{what}: off by {deviation:.4f}")
+            raise error(f"joint {i + 1} {relation} to joint {i + 2}: off by {deviation:.4f}")
+    return w, [v3(pt) for pt in np.asarray(points, float)]

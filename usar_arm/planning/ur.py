@@ -33,13 +33,12 @@ import numpy as np
 from usar_arm.core.spatial import Array
 from usar_arm.planning.opw import NotOrthoParallel
 from usar_arm.planning.screw import (
+    PARALLEL,
+    PERPENDICULAR,
     V,
     closest_point,
     cross,
     dot,
-    parallel_deviation,
-    plane_basis,
-    require,
     rodrigues,
     six_axes,
     sub,
@@ -48,6 +47,7 @@ from usar_arm.planning.screw import (
     v3,
     wrap,
 )
+from usar_arm.planning.two_link import TwoLink
 
 Matrix = Array | list[list[float]]
 """A 3x3 matrix as an array or nested lists."""
@@ -56,6 +56,9 @@ SINGULAR_WRIST = 1e-8
 takes the caller's value: the rotation then fixes it only to eps / |sin q5|, and that error
 moves the position (theta turns p56 about axis 4); 1e-8 balances the two, a few 1e-8 at worst
 (Newton finishes)."""
+STRUCTURE = (PERPENDICULAR, PARALLEL, PARALLEL, PERPENDICULAR, PERPENDICULAR)
+"""How each joint's axis stands to the next's on a three-parallel arm (axes 5 and 6 meet
+too)."""
 
 
 class NotThreeParallel(NotOrthoParallel):
@@ -91,13 +94,7 @@ class ThreeParallelArm:
     """
 
     def __init__(self, axes: Array, points: Array, tool: Array, tolerance: float = 0.02):
-        w, p = six_axes(axes, points, NotThreeParallel)
-        require([("joint 1 perpendicular to joint 2", abs(dot(w[0], w[1]))),
-                 ("joint 2 parallel to joint 3", parallel_deviation(w[1], w[2])),
-                 ("joint 3 parallel to joint 4", parallel_deviation(w[2], w[3])),
-                 ("joint 4 perpendicular to joint 5", abs(dot(w[3], w[4]))),
-                 ("joint 5 perpendicular to joint 6", abs(dot(w[4], w[5])))],
-                tolerance, NotThreeParallel)
+        w, p = six_axes(axes, points, STRUCTURE, tolerance, NotThreeParallel)
         meet, miss = closest_point(np.array(w[4:]), np.array(p[4:]))  # (half their gap)
         if 2.0 * miss > max(tolerance, 0.05):
             raise NotThreeParallel(f"axes 5 and 6 miss each other by {2 * miss:.4f} m")
@@ -112,7 +109,6 @@ class ThreeParallelArm:
         self.m6: V = v3(self.tool[:3, :3].T @ np.array(w[5]))
         u = w[1]
         self.u: V = u
-        self.s3 = 1.0 if dot(w[2], u) > 0 else -1.0
         self.s4 = 1.0 if dot(w[3], u) > 0 else -1.0
         self.w1xu: V = cross(w[0], u)
         self.lateral = dot(u, sub(self.p56, p[0]))
@@ -130,20 +126,8 @@ class ThreeParallelArm:
         self.x: V = unit(sub(w[4], tuple(dot(w[4], u) * c for c in u)))  # type: ignore[arg-type]
         """A unit vector normal to u (w5's part normal to u): turned to find theta."""
         self.r4: V = sub(self.p56, p[3])
-        # The planar two-link problem in the plane normal to u (basis ea x eb = u).
-        self.ea, self.eb = plane_basis(u)
-        p2, p3, p4 = self._2d(p[1]), self._2d(p[2]), self._2d(p[3])
-        self.p2 = p2
-        c = (p3[0] - p2[0], p3[1] - p2[1])
-        self.e = (p4[0] - p3[0], p4[1] - p3[1])
-        self.p3p2 = c
-        self.l2sq, self.l3sq = c[0] ** 2 + c[1] ** 2, self.e[0] ** 2 + self.e[1] ** 2
-        k, j = c[0] * self.e[0] + c[1] * self.e[1], -c[0] * self.e[1] + c[1] * self.e[0]
-        self.mag, self.phase = math.hypot(k, j), math.atan2(j, k)
-        self.reach = math.sqrt(self.l2sq + self.l3sq)
-
-    def _2d(self, x: V) -> tuple[float, float]:
-        return (dot(self.ea, x), dot(self.eb, x))
+        self.two_link = TwoLink.of(u, w[2], p[1], p[2], p[3], self.slack)
+        """Joints 2 and 3 carrying joint 4's point."""
 
     def shoulder(self, r: Matrix, pos: Array) -> tuple[V, list[float]]:
         """P56 - p1 (m) and the q1 (rad, up to 2) keeping P56's offset along u."""
@@ -191,21 +175,9 @@ class ThreeParallelArm:
         back = rodrigues(self.w[0], -q1, d)
         turned = rodrigues(self.u, theta, self.r4)
         p1 = self.p[0]
-        x, y = self._2d((back[0] - turned[0] + p1[0], back[1] - turned[1] + p1[1],
-                         back[2] - turned[2] + p1[2]))
-        dx, dy = x - self.p2[0], y - self.p2[1]
-        rhs = (dx * dx + dy * dy - self.l2sq - self.l3sq) / 2.0
-        if self.mag < 1e-12 or abs(rhs) > self.mag + self.slack * self.reach:
-            return []
-        delta = math.acos(max(-1.0, min(1.0, rhs / self.mag)))
-        out = []
-        for t3 in (self.phase + delta, self.phase - delta):
-            c3, s3 = math.cos(t3), math.sin(t3)
-            ex = self.p3p2[0] + c3 * self.e[0] - s3 * self.e[1]
-            ey = self.p3p2[1] + s3 * self.e[0] + c3 * self.e[1]
-            q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-            out.append((q2, self.s3 * t3))
-        return out
+        x, y = self.two_link.plane((back[0] - turned[0] + p1[0], back[1] - turned[1] + p1[1],
+                                 back[2] - turned[2] + p1[2]))
+        return self.two_link.angles(x, y)
 
     def solve(self, rot: Array, pos: Array, q6_free: float = 0.0) -> list[list[float]]:
         """Every branch (up to 8) of joint values (rad, wrapped to (-pi, pi]) for a tool pose
@@ -216,6 +188,6 @@ class ThreeParallelArm:
         for q1 in q1s:
             for q5, q6, theta in self.wrist(r, q1, q6_free):
                 for q2, q3 in self.elbow(d, q1, theta):
-                    q4 = self.s4 * (theta - q2 - self.s3 * q3)
+                    q4 = self.s4 * (theta - q2 - self.two_link.s3 * q3)
                     out.append([wrap(v) for v in (q1, q2, q3, q4, q5, q6)])
         return out

@@ -20,20 +20,21 @@ import math
 import numpy as np
 
 from usar_arm.core.spatial import Array
+from usar_arm.planning import two_link
 from usar_arm.planning.ik_kernel import pick_nearest, rodrigues, subproblem1, wrap
 from usar_arm.planning.jit import kernel
+from usar_arm.planning.two_link import elbow
 from usar_arm.planning.ur import SINGULAR_WRIST, ThreeParallelArm
 
 # Offsets into the constant vector (3-vectors unless noted).
-(C_W, C_P, C_U, C_W1XU, C_T56, C_M6, C_RM, C_X, C_R4, C_EA, C_EB, C_P2, C_E, C_P3P2) = (
-    0, 18, 36, 39, 42, 45, 48, 57, 60, 63, 66, 69, 71, 73)
+(C_W, C_P, C_U, C_W1XU, C_T56, C_M6, C_RM, C_X, C_R4) = (0, 18, 36, 39, 42, 45, 48, 57, 60)
 """w (6x3) and p (6x3) of the joints, u, w1 x u, p56 and w6 in the tool frame, the tool's
-rotation at zero (3x3, row-major), x, p56 - p4, the plane basis ea/eb, and the 2-D p2, e and
-p3 - p2 (2 each)."""
-(C_LATERAL, C_SLACK, C_D5, C_MAG5, C_PHASE5, C_M2M1, C_L2SQ, C_L3SQ, C_MAG, C_PHASE, C_REACH,
- C_S3, C_S4) = range(75, 88)
+rotation at zero (3x3, row-major), x and p56 - p4."""
+(C_LATERAL, C_SLACK, C_D5, C_MAG5, C_PHASE5, C_M2M1, C_S4) = range(63, 70)
 """Scalars of the closed form (see :class:`.ur.ThreeParallelArm`)."""
-C_SIZE = 88
+C_ELBOW = 70
+"""Where the elbow's block starts (:meth:`.two_link.TwoLink.packed`)."""
+C_SIZE = C_ELBOW + two_link.SIZE
 C_W5, C_W6 = C_W + 12, C_W + 15
 
 
@@ -44,11 +45,11 @@ def pack(arm: ThreeParallelArm) -> Array:
     c[C_P:C_P + 18] = np.ravel(arm.p)
     c[C_RM:C_RM + 9] = np.ravel(arm.rm)
     for offset, value in ((C_U, arm.u), (C_W1XU, arm.w1xu), (C_T56, arm.t56), (C_M6, arm.m6),
-                          (C_X, arm.x), (C_R4, arm.r4), (C_EA, arm.ea), (C_EB, arm.eb),
-                          (C_P2, arm.p2), (C_E, arm.e), (C_P3P2, arm.p3p2)):
+                          (C_X, arm.x), (C_R4, arm.r4)):
         c[offset:offset + len(value)] = value
-    c[C_LATERAL:C_SIZE] = (arm.lateral, arm.slack, arm.d5, arm.mag5, arm.phase5, arm.m2m1,
-                           arm.l2sq, arm.l3sq, arm.mag, arm.phase, arm.reach, arm.s3, arm.s4)
+    c[C_LATERAL:C_ELBOW] = (arm.lateral, arm.slack, arm.d5, arm.mag5, arm.phase5, arm.m2m1,
+                            arm.s4)
+    c[C_ELBOW:] = arm.two_link.packed()
     return c
 
 
@@ -90,7 +91,8 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
     base = math.atan2(b, a)
     spread = math.acos(max(-1.0, min(1.0, lateral / rad)))
     _mul(rot, c[C_M6:C_M6 + 3], False, w6t)
-    mag5, mag = c[C_MAG5], c[C_MAG]
+    mag5 = c[C_MAG5]
+    elbows = np.empty((2, 2))
     count = 0
     for sign1 in (1.0, -1.0):
         q1 = base + sign1 * spread
@@ -124,19 +126,10 @@ def branches_free(rot: Array, pos: Array, c: Array, q6_free: float, out: Array) 
             rodrigues(c, C_U, theta, c[C_R4:C_R4 + 3], turned)
             for i in range(3):
                 tmp[i] = back[i] - turned[i] + c[C_P + i]
-            dx, dy = _dot(c, C_EA, tmp) - c[C_P2], _dot(c, C_EB, tmp) - c[C_P2 + 1]
-            rhs = (dx * dx + dy * dy - c[C_L2SQ] - c[C_L3SQ]) / 2.0
-            if mag < 1e-12 or abs(rhs) > mag + c[C_SLACK] * c[C_REACH]:
-                continue
-            delta = math.acos(max(-1.0, min(1.0, rhs / mag)))
-            for sign3 in (1.0, -1.0):
-                t3 = c[C_PHASE] + sign3 * delta
-                c3, s3 = math.cos(t3), math.sin(t3)
-                ex = c[C_P3P2] + c3 * c[C_E] - s3 * c[C_E + 1]
-                ey = c[C_P3P2 + 1] + s3 * c[C_E] + c3 * c[C_E + 1]
-                q2 = math.atan2(ex * dy - ey * dx, ex * dx + ey * dy)
-                q3 = c[C_S3] * t3
-                q4 = c[C_S4] * (theta - q2 - c[C_S3] * q3)
+            px, py = _dot(c, C_ELBOW + two_link.EA, tmp), _dot(c, C_ELBOW + two_link.EB, tmp)
+            for r in range(elbow(c, C_ELBOW, px, py, elbows)):
+                q2, q3 = elbows[r, 0], elbows[r, 1]
+                q4 = c[C_S4] * (theta - q2 - c[C_ELBOW + two_link.S3] * q3)
                 out[count, 0], out[count, 1], out[count, 2] = wrap(q1), wrap(q2), wrap(q3)
                 out[count, 3], out[count, 4], out[count, 5] = wrap(q4), wrap(q5), wrap(q6)
                 count += 1
