@@ -12,8 +12,9 @@ usar-arm checks:
   checks two bodies that are both fixed: the base against a fixed obstacle; the judge's such
   pairs are counted apart and must be none);
 * its default inverse kinematics (OPW or KDL) on 100 poses, every solution put on the pose by
-  usar-arm's FK (OPW 3e-9, the file's 1e-9 precision through six joints; KDL within its own stopping tolerance, 1e-5 m / 1e-4 rad). The seed
-  is the true configuration moved up to 0.3 rad per joint; KDL (local) gets up to
+  usar-arm's FK (OPW 3e-9, the file's 1e-9 precision through six joints; KDL within its own
+  stopping tolerance, 1e-5 m / 1e-4 rad). The seed is the true configuration moved up to
+  0.3 rad per joint; KDL (local) gets up to
   :data:`IK_RESTARTS` random seeds after a miss, as a user would (the 7-joint Fanuc misses 5 of
   100 on the first seed: Tesseract drops solutions outside the limits);
 * 5 plans through its task composer (OMPLPipeline, Tesseract's default profiles) in the table
