@@ -57,6 +57,9 @@ from usar_arm.urdf.discovery_file import wire_facts
 log = logging.getLogger(__name__)
 _usarsim_axes, _fold_base = usarsim_axes, fold_base  # the names the tests knew them by
 
+EMBEDDED_SCENE = "table"
+"""The scene a tour on the embedded simulator avoids when none is given: its world's cell."""
+
 
 @dataclass(frozen=True)
 class CalibrationSettings:
@@ -136,6 +139,10 @@ def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
     start = time.monotonic()
     chain = arm.robot.chain
     mount_joint(arm.urdf, str(arm.robot.tip_sensor))  # a sensor the fit can use, first
+    if scene is None and arm.server is not None:
+        # The embedded simulator's world is the table cell (sim/worlds/default.yaml), and the
+        # arm's links hit its scenery: a tour through the table stops at its first contact.
+        scene = EMBEDDED_SCENE
     configurations = choose_configurations(arm, poses, scene, seed)
     sensor.read()  # the platform's pose, for the base guess
     readings = collect(arm, configurations, scene, progress)
