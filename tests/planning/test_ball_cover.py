@@ -99,7 +99,7 @@ def test_a_ball_gap_is_never_more_than_fcls_distance(toy: Robot) -> None:
     for q in rng.uniform(toy.chain.lower(), toy.chain.upper(), (1000, toy.chain.dof)):
         poses = bounds.check(q[None], *packed, bounds.EPS, bounds.MARGIN)[0][0]
         seg = np.empty((6, len(links), 3))
-        bounds._segments(poses, links, seg)
+        bounds.axis_segments(poses, links, seg)
         wg, wl, placed = bounds.ball_scratch(links, groups, leaves)
         for k in meshes:
             bounds_balls.place(poses, links, groups, leaves, k, wg, wl, placed)

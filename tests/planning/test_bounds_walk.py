@@ -72,7 +72,7 @@ def _bound_here(world: object, a: np.ndarray, per_step: np.ndarray, horizon: int
     frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
     poses_into(a, joints, zero, links, frames, poses)
     seg = np.empty((6, zero.shape[0], 3))
-    bounds._segments(poses, links, seg)
+    bounds.axis_segments(poses, links, seg)
     cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
     bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
                             cum, move)
@@ -262,7 +262,7 @@ def test_a_capped_judge_gives_the_same_verdicts_and_the_smaller_of_cap_and_gap(
     below = above = self_below = self_above = 0
     for q in rng.uniform(lo, hi, (300, len(lo))):
         poses = bounds.check(q[None], *packed, bounds.EPS, bounds.MARGIN)[0][0]
-        bounds._segments(poses, links, seg)
+        bounds.axis_segments(poses, links, seg)
         move = rng.uniform(1e-4, 4e-3, n_link)
         cum = np.cumsum(rng.uniform(0.0, 0.02, (n_link, len(lo) + 1)), axis=1)
         row, (self_gap, scene_gap) = _judged(packed, poses, seg, move, cum, np.inf)
@@ -284,7 +284,7 @@ def _judged(packed: tuple, poses: np.ndarray, seg: np.ndarray, move: np.ndarray,
     """The compiled judge's verdicts and gaps (self, scene) at one configuration, capped."""
     row = np.zeros(len(packed[3]), dtype=np.int8)
     stack = np.empty(max(1, len(packed[9])), dtype=np.int64)
-    gaps = bounds._judge(seg, poses, *packed[2:14], bounds.EPS, bounds.MARGIN, move, cum,
+    gaps = bounds.judge_pairs(seg, poses, *packed[2:14], bounds.EPS, bounds.MARGIN, move, cum,
                          bounds.REFINE, cap, row, np.empty((8, 3)), np.empty(3), stack,
                          bounds.ball_scratch(packed[2], packed[12], packed[13]))
     return row, gaps

@@ -89,8 +89,10 @@ __all__ = [
     "SOLID",
     "SPHERE",
     "UNDECIDED",
+    "axis_segments",
     "check",
     "classify",
+    "judge_pairs",
     "link_poses",
     "pack",
     "segment_distance",
@@ -113,7 +115,7 @@ MARGIN = 1e-4
 
 
 @kernel
-def _segments(world: Array, links: Array, seg: Array) -> None:
+def axis_segments(world: Array, links: Array, seg: Array) -> None:
     """Fill ``seg`` (6, L, 3) from one configuration's link poses ``world`` (L, 3, 4): each
     cylinder's axis segment (start, direction), its inner balls' segment, its axis, its centre."""
     for k in range(world.shape[0]):
@@ -129,7 +131,7 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 
 
 @inline_kernel
-def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
+def judge_pairs(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
            kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
            order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
            margin: float, move: Array, cum: Array, refine: float, cap: float, out: VerdictArray,
@@ -167,7 +169,7 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                  groups: Array, leaves: Array, eps: float, margin: float, cum: Array,
                  cap: float, out: VerdictArray, scratch: Array,
                  balls: tuple[Array, Array, np.ndarray]) -> float:
-    """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
+    """:func:`judge_pairs` on the link-link pairs (the first ``n_rr``): their verdicts and the
     smallest cleared gap per unit of closing motion (0 when a pair is not cleared; at most
     ``cap``). A pair's gap is the larger of two lower bounds, the spheres about the two bodies
     and the capsules about their cylinders; the spheres alone clear a pair they show apart by
@@ -233,7 +235,7 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
 def _closing(cum: Array, links: Array, i: int, j: int) -> float:
     """How far bodies ``i`` and ``j`` can close per unit of motion: the joints that move both
     move them together (the first ``MOVED`` joints move a body), so only those between them
-    count, by how far they move the farther body's points (``cum`` as :func:`_judge`)."""
+    count, by how far they move the farther body's points (``cum`` as :func:`judge_pairs`)."""
     a, b = int(links[i, MOVED]), int(links[j, MOVED])
     if a <= b:
         return cum[j, b] - cum[j, a]
@@ -242,7 +244,7 @@ def _closing(cum: Array, links: Array, i: int, j: int) -> float:
 
 def ball_scratch(links: Array, groups: Array, leaves: Array
                  ) -> tuple[Array, Array, np.ndarray]:
-    """The scratch of :func:`_judge`'s balls: their world centres (groups, leaves) and the
+    """The scratch of :func:`judge_pairs`'s balls: their world centres (groups, leaves) and the
     flags of what is placed (bodies' groups, then groups' leaves: see :mod:`.bounds_balls`)."""
     return (np.empty((groups.shape[0], 3)), np.empty((leaves.shape[0], 3)),
             np.zeros(links.shape[0] + groups.shape[0], dtype=np.int8))
@@ -253,7 +255,7 @@ ball_scratch_kernel = kernel(ball_scratch)
 
 @kernel
 def _still(links: Array) -> tuple[Array, Array]:
-    """``move`` and ``cum`` of :func:`_judge` for a single configuration: zeros (nothing moves,
+    """``move`` and ``cum`` of :func:`judge_pairs` for a single configuration: zeros (nothing moves,
     so only whether a pair is cleared matters, and the sphere tree prunes every subtree its
     bound clears by ``eps``; the gaps returned are then inf)."""
     depth = 0
@@ -281,8 +283,8 @@ def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: In
     move, cum = _still(links)
     balls = ball_scratch_kernel(links, groups, leaves)
     for c in range(n_cfg):
-        _segments(world[c], links, seg)
-        _judge(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
+        axis_segments(world[c], links, seg)
+        judge_pairs(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
                pair_of, groups, leaves, eps, margin, move, cum, 0.0, math.inf, out[c], cand,
                scratch, stack, balls)
         overall[c] = _row_verdict(out[c])
@@ -355,9 +357,9 @@ def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Arra
     row[:] = CLEAR
     stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
     poses_into(q, joints, zero, links, frames, world)
-    _segments(world, links, seg)
+    axis_segments(world, links, seg)
     move, cum = _still(links)
-    _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
+    judge_pairs(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
            groups, leaves, eps, margin, move, cum, 0.0, math.inf, row, np.empty((8, 3)),
            np.empty(3), stack, ball_scratch_kernel(links, groups, leaves))
     return _row_verdict(row)

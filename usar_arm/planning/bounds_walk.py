@@ -7,7 +7,7 @@ the evaluated ones leave unproven, breadth first (the middle, the quarters...): 
 segment ends at one of its first evaluations, wherever the block lies, and a free one needs
 only the evaluations whose proven runs cover it. At a configuration whose pairs are all
 cleared, each pair's clearance bound divided by how far the pair can close per step
-(:func:`.bounds._judge`) is how many steps, forwards and backwards alike, cannot bring it into
+(:func:`.bounds.judge_pairs`) is how many steps, forwards and backwards alike, cannot bring it into
 contact; the smallest over the pairs is that configuration's proven run.
 
 How far a body's points can move per step is bounded twice, and the smaller bound is taken,
@@ -35,7 +35,13 @@ from collections.abc import Callable
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.bounds import REFINE, VerdictArray, _judge, _segments, ball_scratch_kernel
+from usar_arm.planning.bounds import (
+    REFINE,
+    VerdictArray,
+    axis_segments,
+    ball_scratch_kernel,
+    judge_pairs,
+)
 from usar_arm.planning.bounds_arrays import BOUND, MOVED, IndexArray, Packed, poses_into
 from usar_arm.planning.bounds_scene import CONTACT, UNDECIDED
 from usar_arm.planning.jit import inline_kernel, kernel
@@ -84,7 +90,7 @@ def motion_here(seg: Array, frames: Array, joints: Array, links: Array, per_step
                 ) -> None:
     """Per body k, how far joints 0 .. j - 1 can move its points per step within ``horizon``
     steps of this configuration, into ``cum`` (L, n + 1) and ``move`` (L,) (as
-    :func:`.bounds._judge` reads them; m per step): per joint, the smaller of the global bound
+    :func:`.bounds.judge_pairs` reads them; m per step): per joint, the smaller of the global bound
     (``global_cum``'s increments) and the body centre's distance from the joint's axis here
     (``seg[5]``, ``frames`` (n + 1, 3, 4) of :func:`.bounds_arrays.poses_into`) plus the body's
     extent (``BOUND``) plus ``growth[j, k]`` (m per step) times half the horizon, times the
@@ -163,10 +169,10 @@ def walk(a: Array, b: Array, steps: int, levers: Array, proven: IndexArray, queu
         for j in range(n):
             q[j] = a[j] + (b[j] - a[j]) * (k / steps)
         poses_into(q, joints, zero, links, frames, world)
-        _segments(world, links, seg)
+        axis_segments(world, links, seg)
         motion_here(seg, frames, joints, links, per_step, growth, float(horizon),
                     global_cum, cum, move)
-        self_gap, scene_gap = _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes,
+        self_gap, scene_gap = judge_pairs(seg, world, links, pairs, n_rr, kind, obstacles, axes,
                                      tree, nodes, order, pair_of, groups, leaves, eps, margin,
                                      move, cum, REFINE, horizon + 1.0, row, cand, scratch,
                                      stack, balls)

@@ -19,7 +19,7 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds, bounds_walk
 from usar_arm.planning.bounds import IndexArray
-from usar_arm.planning.bounds_arrays import Cover
+from usar_arm.planning.bounds_arrays import Cover, Packed
 from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
 
@@ -179,6 +179,12 @@ class CompiledVerdicts:
             self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
             self._packed[2][~self._exact, bounds.REACH] = 0.0
         self._packed[2][:, bounds.SOLID] = self._solid
+
+    @property
+    def packed(self) -> Packed:
+        """The arrays the kernels take (:class:`.bounds_arrays.Packed`), as :meth:`check_pairs`
+        prepared them: the kernels' own, not a copy (never write to them)."""
+        return self._packed
 
     def check(self, qs: Array) -> tuple[Array, NDArray[np.int8], NDArray[np.int8]]:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n),
