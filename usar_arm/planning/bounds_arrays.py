@@ -122,15 +122,15 @@ def poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array
     frames[0] = 0.0
     frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
     for i in range(n):
-        w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
-        if joints[i, 6] > 0.5:
+        w0, w1, w2 = joints[i, J_AXIS], joints[i, J_AXIS + 1], joints[i, J_AXIS + 2]
+        if joints[i, J_REVOLUTE] > 0.5:
             a = q[i]
             sn, co = math.sin(a), math.cos(a)
             v = 1.0 - co
             e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
             e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
             e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
-            p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
+            p0, p1, p2 = joints[i, J_POINT], joints[i, J_POINT + 1], joints[i, J_POINT + 2]
             # t += R p - (R E) p = R (p - E p)
             d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
             d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
@@ -166,9 +166,10 @@ def poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array
 def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
 
-    ``joints`` (n, 7): each joint's axis and a point on it at the zero configuration, then 1
-    for revolute or 0 for prismatic; ``zero`` (L, 4, 4) each body's pose at zero; ``links``
-    (L, LINK_WIDTH) with how many joints (a prefix of the chain) move each body at MOVED.
+    ``joints`` (n, JOINT_WIDTH): each joint's axis and a point on it at the zero configuration,
+    then 1 for revolute or 0 for prismatic (columns ``J_AXIS``, ``J_POINT``, ``J_REVOLUTE``);
+    ``zero`` (L, 4, 4) each body's pose at zero; ``links`` (L, LINK_WIDTH) with how many
+    joints (a prefix of the chain) move each body at MOVED.
     """
     n_cfg, n = qs.shape
     out = np.empty((n_cfg, zero.shape[0], 3, 4))
@@ -251,7 +252,7 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
          covers: list[Cover | None] | None = None) -> Packed:
     """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once;
     ``covers``: per body, its ball cover or None (see :func:`pack_covers`; default none)."""
-    joints = np.ascontiguousarray(np.hstack([
+    joints = np.ascontiguousarray(np.hstack([  # (columns J_AXIS, J_POINT, J_REVOLUTE)
         axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))
     links = prepare_links(np.ascontiguousarray(radius, dtype=float),
                           np.ascontiguousarray(half, dtype=float),

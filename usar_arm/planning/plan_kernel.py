@@ -72,9 +72,7 @@ def edge_clear(a: Array, b: Array, arm_levers: Array, link_levers: Array, resolu
     poses = np.empty((1, packed.zero.shape[0], 3, 4))
     rows = np.empty((1, packed.pairs.shape[0]), dtype=np.int8)
     code, count = walk(a, b, steps, link_levers, proven, queue, control, 1, poses, rows,
-                       packed.joints, packed.zero, packed.links, packed.pairs, packed.n_rr,
-                       packed.kind, packed.obstacles, packed.axes, packed.tree, packed.nodes,
-                       packed.order, packed.pair_of, packed.groups, packed.leaves, eps, margin)
+                       packed, eps, margin)
     evaluated[0] += control[EVALUATED]
     return code == DONE and count == 0
 
