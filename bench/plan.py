@@ -81,10 +81,16 @@ def scene_solver(spec: dict[str, Any], options: OmplOptions,
 
 
 def solver_main(argv: list[str] | None = None) -> int:
+    planner = None
+    if len(sys.argv) > 2 and sys.argv[1] == "--planner":  # (the A/B's OMPL side)
+        planner = sys.argv[2]
+        del sys.argv[1:3]
     spec, out = peerio.args()
     chain = robot_from_files(spec["urdf"], spec["srdf"]).chain
     limits = MotionLimits.from_chain(chain, 1.0)
     options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
+    if planner:
+        options = replace(options, planner=planner)
 
     def timing(plan: PtpPlan) -> dict[str, Any]:
         timed, topp = peerio.timed(stop_at_waypoints, chain.joint_names, plan.waypoints, limits)
@@ -113,7 +119,11 @@ def _solvers(ctx: Context, case: str) -> list[common.Solver]:
     if case != "KR60":
         ompl = replace(ompl, skip=ompl.skip or "run on the KR60 problem set only")
         trajopt = replace(trajopt, skip=trajopt.skip or "run on the KR60 problem set only")
-    return [common.ours("usar-arm", "plan.py", note="plan_to_joints: RRTConnect + simplify"),
+    return [common.ours("usar-arm", "plan.py", note="plan_to_joints: the compiled RRT-Connect "
+                        "+ shortcut (OMPL's RRTConnect where it finds nothing)"),
+            common.ours("usar-arm ompl", "plan.py", "--planner", "RRTConnect",
+                        note="plan_to_joints with OMPL's RRTConnect + simplify (the A/B of "
+                             "the default)"),
             ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify), as plan_qpos; "
                      "checks edges at discrete states only"),
             ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter"), ompl, trajopt]

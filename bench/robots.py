@@ -67,6 +67,8 @@ TASKS = ("collision", "ik", "plan")
 TOLERANCE = {"position_m": 1e-5, "orientation_rad": 1e-5}
 IK_TIMEOUT_S = 0.005
 PLAN_TIME_LIMIT_S = 2.0
+OMPL_PLANNER = "RRTConnect"
+"""The OMPL planner run beside the default (the compiled one) as its A/B."""
 SEED_SPREAD = 0.3
 """rad: an IK seed is the pose's configuration plus U(-SPREAD, SPREAD) per joint (clipped)."""
 SIZES = {"quick": {"collision_scenes": 3, "collision_per_scene": 30, "ik": 100,
@@ -152,7 +154,8 @@ def _solve_ik(spec: dict[str, Any], checked: bool = True
                      "method": ik.method, "tip": tip, "usar_tip": str(usar_tip)}
 
 
-def _solve_plan(spec: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+def _solve_plan(spec: dict[str, Any], planner: str | None = None
+                ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     from plan import scene_solver  # (the plan stage's solver; imports usar-arm)
 
     from usar_arm.planning.ompl_adapter import OmplOptions, reseed
@@ -160,6 +163,8 @@ def _solve_plan(spec: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, A
     robot = _robot(spec)
     _check_order(robot, spec)
     options = OmplOptions(time_limit=float(spec["time_limit_s"]), seed=0)
+    if planner:
+        options = OmplOptions(planner=planner, time_limit=options.time_limit, seed=0)
     enter, solve = scene_solver(spec, options, lambda plan: {
         "planner": "direct" if plan.ompl is None else plan.ompl.planner}, robot)
 
@@ -177,11 +182,13 @@ def solver_main(argv: list[str] | None = None) -> int:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--task", choices=("collision", "ik", "ik-unchecked", "plan"),
                     required=True)
+    ap.add_argument("--planner", help="the plan task's planner (default: OmplOptions')")
     ap.add_argument("problems")
     ap.add_argument("results")
     a = ap.parse_args(argv)
     spec = common.read_json(Path(a.problems))
-    solve = {"collision": _solve_collision, "ik": _solve_ik, "plan": _solve_plan,
+    solve = {"collision": _solve_collision, "ik": _solve_ik,
+             "plan": lambda spec: _solve_plan(spec, a.planner),
              "ik-unchecked": lambda spec: _solve_ik(spec, checked=False)}[a.task]
     results, settings = solve(spec)
     peerio.write(a.results, peer="usar-arm", dist="usar-arm", stage=f"robots {a.task}",
@@ -308,8 +315,9 @@ def _solvers(ctx: Context, task: str) -> list[common.Solver]:
                        note={"collision": "CollisionWorld.in_collision(q)",
                              "ik": "IKSolver.solve(pose, seed, collision=self-collision "
                                    "world)",
-                             "plan": "plan_to_joints: straight line, else RRTConnect + "
-                                     "simplify"}[task])
+                             "plan": "plan_to_joints: straight line, else the compiled "
+                                     "RRT-Connect + shortcut (OMPL's RRTConnect where it "
+                                     "finds nothing)"}[task])
     if task == "collision":
         return [ours, ctx.peer("roboplan", "collision", "scene.hasCollisions (coal)"),
                 ctx.peer("mplib", "collision", "set_qpos + is_state_colliding (FCL)"),
@@ -324,7 +332,10 @@ def _solvers(ctx: Context, task: str) -> list[common.Solver]:
                 ctx.peer("pytracik", "ik", "no collision check; TRAC-IK Speed, 5 ms"),
                 ctx.peer("roboplan", "ik", "collision-checked; SimpleIk"),
                 ctx.peer("mplib", "ik", "collision-checked; Planner.IK, 20 CLIK starts")]
-    return [ours, ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter"),
+    ompl = common.ours("usar-arm ompl", "robots.py", "--task", "plan", "--planner",
+                       OMPL_PLANNER, note="plan_to_joints with OMPL's RRTConnect + simplify "
+                       "(the A/B of the default, the compiled planner)")
+    return [ours, ompl, ctx.peer("roboplan", "plan", "RRT-Connect + PathShortcutter"),
             ctx.peer("mplib", "plan", "planner.plan (RRTConnect + simplify)"),
             robots_vamp.solver(ctx)]
 

@@ -11,13 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-ALLOWED = {
-    # The compiled collision path's walk still calls the per-configuration judge's kernels by
-    # their private names; they go public when its positional data is reworked (issue 39, item
-    # 6, with the attached bodies). Empty this set then.
-    ("usar_arm/planning/bounds_walk.py", "usar_arm.planning.bounds._judge"),
-    ("usar_arm/planning/bounds_walk.py", "usar_arm.planning.bounds._segments"),
-}
+ALLOWED: set[tuple[str, str]] = set()
 
 
 def _private(name: str) -> bool:

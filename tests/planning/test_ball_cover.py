@@ -88,18 +88,18 @@ def test_a_ball_gap_is_never_more_than_fcls_distance(toy: Robot) -> None:
     the balls' gap is at most python-fcl's distance of the shapes (and at most ``eps`` when
     they touch)."""
     world = toy.collision_world(_scene())
-    packed = world._compiled._packed  # (the kernel's own arrays, as the world hands them over)
-    links, kind, obstacles, axes, groups, leaves = (packed[2], packed[5], packed[6], packed[7],
-                                                    packed[12], packed[13])
+    packed = world.verdicts.packed  # (the kernel's own arrays, as the world hands them over)
+    links, kind, obstacles, axes, groups, leaves = (packed.links, packed.kind, packed.obstacles,
+                                                    packed.axes, packed.groups, packed.leaves)
     rr, rs = world._rr, world._rs
     meshes = [k for k in range(len(links)) if bounds_balls.has_balls(links, k)]
     assert meshes, "the test arm has mesh bodies"
     rng = np.random.default_rng(4)
     compared = 0
     for q in rng.uniform(toy.chain.lower(), toy.chain.upper(), (1000, toy.chain.dof)):
-        poses = bounds.check(q[None], *packed, bounds.EPS, bounds.MARGIN)[0][0]
+        poses = bounds.check(q[None], packed, bounds.EPS, bounds.MARGIN)[0][0]
         seg = np.empty((6, len(links), 3))
-        bounds._segments(poses, links, seg)
+        bounds.axis_segments(poses, links, seg)
         wg, wl, placed = bounds.ball_scratch(links, groups, leaves)
         for k in meshes:
             bounds_balls.place(poses, links, groups, leaves, k, wg, wl, placed)
@@ -127,14 +127,13 @@ def test_the_balls_only_clear_pairs_the_cylinders_left_undecided(toy: Robot) -> 
     """The same verdicts with and without the balls, except undecided pairs the balls clear:
     there are such pairs on the test arm, and none of them is in contact."""
     world = toy.collision_world(_scene())
-    packed = world._compiled._packed
-    bare = list(packed)
-    bare[2] = packed[2].copy()
-    bare[2][:, bounds.COVER_FROM] = bare[2][:, bounds.COVER_TO] = 0
+    packed = world.verdicts.packed
+    bare = packed._replace(links=packed.links.copy())
+    bare.links[:, bounds.COVER_FROM] = bare.links[:, bounds.COVER_TO] = 0
     qs = np.random.default_rng(8).uniform(toy.chain.lower(), toy.chain.upper(),
                                           (2000, toy.chain.dof))
-    poses, with_balls, _ = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)
-    _, without, _ = bounds.check(qs, *tuple(bare), bounds.EPS, bounds.MARGIN)
+    poses, with_balls, _ = bounds.check(qs, packed, bounds.EPS, bounds.MARGIN)
+    _, without, _ = bounds.check(qs, bare, bounds.EPS, bounds.MARGIN)
     changed = with_balls != without
     assert (without[changed] == bounds.UNDECIDED).all()
     assert (with_balls[changed] == bounds.CLEAR).all()

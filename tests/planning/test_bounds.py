@@ -258,21 +258,20 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
     verdicts, and where a walk first meets a contact, are those of testing every body alone."""
     world = kr60.collision_world(_random_scene(np.random.default_rng(9), 40) if scene == "boxes"
                                  else load_scene(scene))
-    packed = world._compiled._packed  # (the kernel's own arrays, as the world hands them over)
-    links = packed[2]
+    packed = world.verdicts.packed  # (the kernel's own arrays, as the world hands them over)
+    links = packed.links
     owners, count = np.unique(links[:, bounds.OWNER], return_counts=True)
     paired = np.isin(links[:, bounds.OWNER], owners[count > 1])
     assert paired.sum() >= 12, "the six learnt links are a body and a core each"
     assert (links[paired, bounds.GROUP] >= 0).all(), "every learnt body is in its link's group"
     assert (links[~paired, bounds.GROUP] == -1).all(), "a one-body link (the tool) is alone"
     assert len(set(links[paired, bounds.GROUP])) == len(owners[count > 1])
-    alone = list(packed)
-    alone[2] = links.copy()
-    alone[2][:, bounds.GROUP] = -1
-    alone[2][:, bounds.NEXT] = -1
+    alone = packed._replace(links=links.copy())
+    alone.links[:, bounds.GROUP] = -1
+    alone.links[:, bounds.NEXT] = -1
     qs = np.random.default_rng(5).uniform(kr60.chain.lower(), kr60.chain.upper(), (3000, 6))
-    grouped_verdicts = bounds.check(qs, *packed, bounds.EPS, bounds.MARGIN)[1]
-    alone_verdicts = bounds.check(qs, *alone, bounds.EPS, bounds.MARGIN)[1]
+    grouped_verdicts = bounds.check(qs, packed, bounds.EPS, bounds.MARGIN)[1]
+    alone_verdicts = bounds.check(qs, alone, bounds.EPS, bounds.MARGIN)[1]
     assert (grouped_verdicts == alone_verdicts).all()
     assert (grouped_verdicts != CLEAR).any()
     levers = np.ascontiguousarray(world._compiled.link_levers())
@@ -282,7 +281,7 @@ def test_a_learnt_links_bodies_are_one_group_that_changes_no_verdict(kr60: Robot
     for a, b in zip(qs[:150], qs[150:300], strict=True):
         grouped = bounds_walk.segment_free(a, b, 200, levers, packed, bounds.EPS, bounds.MARGIN,
                                            decide)
-        single = bounds_walk.segment_free(a, b, 200, levers, tuple(alone), bounds.EPS,
+        single = bounds_walk.segment_free(a, b, 200, levers, alone, bounds.EPS,
                                           bounds.MARGIN, decide)
         assert grouped[0] == single[0], (a.tolist(), b.tolist())
         hits += not grouped[0]

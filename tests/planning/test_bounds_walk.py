@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from usar_arm.planning import bounds, bounds_walk
-from usar_arm.planning.bounds_arrays import MOVED, poses_into
+from usar_arm.planning.bounds_arrays import MOVED, Packed, poses_into
 from usar_arm.planning.robot import Robot, robot_from_files
 from usar_arm.planning.scene import Box, Scene, SceneObject, Sphere
 
@@ -64,7 +64,8 @@ def _bound_here(world: object, a: np.ndarray, per_step: np.ndarray, horizon: int
     segment of 200 steps) for ``horizon`` steps: the global cumulative bound (L, n + 1), the
     bound here (L, n + 1), each body's motion per step (L,), and the bodies' poses (L, 3, 4)."""
     compiled = world._compiled  # type: ignore[attr-defined]
-    joints, zero, links = compiled._packed[:3]
+    packed = compiled.packed
+    joints, zero, links = packed.joints, packed.zero, packed.links
     n = len(a)
     levers = np.ascontiguousarray(compiled.link_levers())
     step, global_cum, growth, _ = bounds_walk.segment_levers(a, a + per_step * 200, 200, levers,
@@ -72,7 +73,7 @@ def _bound_here(world: object, a: np.ndarray, per_step: np.ndarray, horizon: int
     frames, poses = np.empty((n + 1, 3, 4)), np.empty((zero.shape[0], 3, 4))
     poses_into(a, joints, zero, links, frames, poses)
     seg = np.empty((6, zero.shape[0], 3))
-    bounds._segments(poses, links, seg)
+    bounds.axis_segments(poses, links, seg)
     cum, move = np.zeros_like(global_cum), np.zeros(zero.shape[0])
     bounds_walk.motion_here(seg, frames, joints, links, step, growth, float(horizon), global_cum,
                             cum, move)
@@ -93,7 +94,7 @@ def _bound_holds_from(robot: Robot, a: np.ndarray, per_step: np.ndarray, horizon
     and each body's points move relative to an earlier body within step x what the joints
     between them allow."""
     world = robot.collision_world()
-    n, links = len(a), world._compiled._packed[2]
+    n, links = len(a), world.verdicts.packed.links
     global_cum, cum, move, poses = _bound_here(world, a, per_step, horizon)
     assert (cum <= global_cum + 1e-15).all() and (move <= global_cum[:, n] + 1e-15).all()
     here = _bodies_at(world, a)
@@ -129,7 +130,7 @@ def test_each_joints_lever_arm_here_holds_over_the_horizon(kr60: Robot, seed: in
     resolution. The joints after j move the body away from its axis as the steps go on, which
     the bound must include: without that term it fails here."""
     world = kr60.collision_world()
-    links = world._compiled._packed[2]
+    links = world.verdicts.packed.links
     rng = np.random.default_rng(seed)
     n = len(kr60.chain.lower())
     a = rng.uniform(kr60.chain.lower(), kr60.chain.upper())
@@ -254,15 +255,15 @@ def test_a_capped_judge_gives_the_same_verdicts_and_the_smaller_of_cap_and_gap(
         objects.append(SceneObject(f"o{k}", shape,
                                    _pose(reach * np.cos(angle), reach * np.sin(angle), z)))
     world = robot.collision_world(Scene("test", tuple(objects)))
-    packed = world._compiled._packed  # type: ignore[attr-defined]
-    links = packed[2]
+    packed = world.verdicts.packed
+    links = packed.links
     n_link = len(links)
     seg = np.empty((6, n_link, 3))
     lo, hi = robot.chain.lower(), robot.chain.upper()
     below = above = self_below = self_above = 0
     for q in rng.uniform(lo, hi, (300, len(lo))):
-        poses = bounds.check(q[None], *packed, bounds.EPS, bounds.MARGIN)[0][0]
-        bounds._segments(poses, links, seg)
+        poses = bounds.check(q[None], packed, bounds.EPS, bounds.MARGIN)[0][0]
+        bounds.axis_segments(poses, links, seg)
         move = rng.uniform(1e-4, 4e-3, n_link)
         cum = np.cumsum(rng.uniform(0.0, 0.02, (n_link, len(lo) + 1)), axis=1)
         row, (self_gap, scene_gap) = _judged(packed, poses, seg, move, cum, np.inf)
@@ -279,12 +280,12 @@ def test_a_capped_judge_gives_the_same_verdicts_and_the_smaller_of_cap_and_gap(
     assert self_below > 100 and self_above > 100, (self_below, self_above)
 
 
-def _judged(packed: tuple, poses: np.ndarray, seg: np.ndarray, move: np.ndarray,
+def _judged(packed: Packed, poses: np.ndarray, seg: np.ndarray, move: np.ndarray,
             cum: np.ndarray, cap: float) -> tuple[np.ndarray, tuple[float, float]]:
     """The compiled judge's verdicts and gaps (self, scene) at one configuration, capped."""
-    row = np.zeros(len(packed[3]), dtype=np.int8)
-    stack = np.empty(max(1, len(packed[9])), dtype=np.int64)
-    gaps = bounds._judge(seg, poses, *packed[2:14], bounds.EPS, bounds.MARGIN, move, cum,
-                         bounds.REFINE, cap, row, np.empty((8, 3)), np.empty(3), stack,
-                         bounds.ball_scratch(packed[2], packed[12], packed[13]))
+    row = np.zeros(len(packed.pairs), dtype=np.int8)
+    stack = np.empty(max(1, len(packed.nodes)), dtype=np.int64)
+    gaps = bounds.judge_pairs(seg, poses, packed, bounds.EPS, bounds.MARGIN, move, cum,
+                              bounds.REFINE, cap, row, np.empty((8, 3)), np.empty(3), stack,
+                              bounds.ball_scratch(packed.links, packed.groups, packed.leaves))
     return row, gaps

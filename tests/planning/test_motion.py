@@ -275,14 +275,21 @@ def test_a_path_never_clips_an_obstacle_between_the_planners_checks(kr60: Robot)
     assert not world.in_collision_many(edge_configurations(a, b, 0.01)).any()  # missed so
     levers = world.lever_arms()
     assert world.in_collision_many(edge_configurations(a, b, 0.01, levers, 0.005)).any()
-    plan = plan_motion(kr60, world, a, goal=b)
+    plan = plan_motion(kr60, world, a, goal=b,
+                       options=MotionOptions(ompl=OmplOptions(planner="RRTConnect")))
     assert len(plan.waypoints) > 2, "the straight segment through the pin was kept"
-    # the planner's own path (the straight segment, free at its 0.01 rad checks) had its
-    # segment replanned densely, not the whole path
+    # OMPL's own path (the straight segment, free at its 0.01 rad checks) had its segment
+    # replanned densely, not the whole path
     assert (plan.details["repaired"], plan.details["dense_replans"]) == (1, 0)
-    for p, q in itertools.pairwise(plan.waypoints):
-        assert not world.in_collision_many(edge_configurations(p, q, 0.01, levers, 0.001)).any()
-    assert_rechecked(kr60, world, plan, start=a)
+    # the compiled planner checks every edge that densely as it searches: nothing to repair
+    compiled = plan_motion(kr60, world, a, goal=b)
+    assert compiled.details["planner"] == "CompiledRRTConnect"
+    assert (compiled.details["repaired"], compiled.details["dense_replans"]) == (0, 0)
+    for found in (plan, compiled):
+        for p, q in itertools.pairwise(found.waypoints):
+            assert not world.in_collision_many(edge_configurations(p, q, 0.01, levers,
+                                                                   0.001)).any()
+        assert_rechecked(kr60, world, found, start=a)
 
 
 def _rims(robot: Robot, q: np.ndarray) -> np.ndarray:

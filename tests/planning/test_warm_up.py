@@ -15,11 +15,12 @@ ROOT = Path(__file__).resolve().parents[2]
 PROBE = """
 import json
 import numpy as np
-from usar_arm.planning import bounds, bounds_walk, ik_kernel, lm_kernel, ur_kernel
+from usar_arm.planning import bounds, bounds_walk, ik_kernel, lm_kernel, plan_kernel, ur_kernel
 from usar_arm.planning.compiled import warm_up
 warm_up()
 kernels = {name: getattr(bounds, name) for name in ("check", "summary")}
 kernels["walk"] = bounds_walk.walk
+kernels.update({f"plan_kernel.{n}": getattr(plan_kernel, n) for n in ("search", "shortcut")})
 for module in (ik_kernel, lm_kernel, ur_kernel):
     kernels.update({f"{module.__name__}.{n}": getattr(module, n) for n in dir(module)
                     if hasattr(getattr(module, n), "signatures")})

@@ -29,15 +29,16 @@ from usar_arm.control.motion import MotionOptions
 from usar_arm.core import inputs
 from usar_arm.core.errors import EXIT_OK, InvalidInputError
 from usar_arm.planning.lin import LinOptions
-from usar_arm.planning.ompl_adapter import PLANNERS, OmplOptions
+from usar_arm.planning.ompl_adapter import CHOICES, COMPILED, OmplOptions
 
 
 def add_motion_args(p: argparse.ArgumentParser) -> None:
     """The motion options shared by plan and demo."""
     p.add_argument("--scene", default=None, metavar="FILE",
                    help="obstacles: a scene YAML file, or one of empty, table, shelf, cage")
-    p.add_argument("--planner", choices=PLANNERS, default="RRTConnect",
-                   help="OMPL geometric planner for PTP (default RRTConnect)")
+    p.add_argument("--planner", choices=CHOICES, default=COMPILED,
+                   help="PTP planner: CompiledRRTConnect (default: compiled, OMPL where it "
+                        "finds nothing) or an OMPL geometric planner")
     p.add_argument("--time-limit", type=float, default=2.0, metavar="S",
                    help="planning budget in seconds (default 2)")
     p.add_argument("--resolution", type=float, default=0.01, metavar="RAD",

@@ -51,6 +51,7 @@ from usar_arm.planning.bounds_arrays import (
     GROUP_RADIUS,
     HALF,
     HULL,
+    JOINT_WIDTH,
     MOVED,
     NEXT,
     O_BOUND,
@@ -62,6 +63,7 @@ from usar_arm.planning.bounds_arrays import (
     SOLID,
     SPHERE,
     IndexArray,
+    Packed,
     link_poses,
     pack,
     poses_into,
@@ -89,8 +91,10 @@ __all__ = [
     "SOLID",
     "SPHERE",
     "UNDECIDED",
+    "axis_segments",
     "check",
     "classify",
+    "judge_pairs",
     "link_poses",
     "pack",
     "segment_distance",
@@ -113,7 +117,7 @@ MARGIN = 1e-4
 
 
 @kernel
-def _segments(world: Array, links: Array, seg: Array) -> None:
+def axis_segments(world: Array, links: Array, seg: Array) -> None:
     """Fill ``seg`` (6, L, 3) from one configuration's link poses ``world`` (L, 3, 4): each
     cylinder's axis segment (start, direction), its inner balls' segment, its axis, its centre."""
     for k in range(world.shape[0]):
@@ -129,12 +133,10 @@ def _segments(world: Array, links: Array, seg: Array) -> None:
 
 
 @inline_kernel
-def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
-           kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
-           order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
-           margin: float, move: Array, cum: Array, refine: float, cap: float, out: VerdictArray,
-           cand: Array, scratch: Array, stack: IndexArray,
-           balls: tuple[Array, Array, np.ndarray]) -> tuple[float, float]:
+def judge_pairs(seg: Array, world: Array, packed: Packed, eps: float, margin: float,
+                move: Array, cum: Array, refine: float, cap: float, out: VerdictArray,
+                cand: Array, scratch: Array, stack: IndexArray,
+                balls: tuple[Array, Array, np.ndarray]) -> tuple[float, float]:
     """Verdicts on every pair of one configuration (into ``out`` (P + Q,)), and, over the
     cleared link-link and link-obstacle pairs, the smallest lower bound of a pair's clearance
     divided by how far the pair can close per unit of motion: how many units of motion cannot
@@ -149,17 +151,19 @@ def _judge(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr: int,
     test itself): :func:`_judge_links` and :func:`.bounds_scene.judge_scene`; both give a pair
     their cylinders leave undecided a second look with the mesh bodies' balls
     (:mod:`.bounds_balls`; ``balls``: their world centres and which bodies are placed, scratch
-    of the caller's, reset here). ``world`` (L, 3, 4): the bodies' poses."""
+    of the caller's, reset here). ``world`` (L, 3, 4): the bodies' poses; ``packed``: the
+    collision world's arrays (:class:`.bounds_arrays.Packed`)."""
     balls[2][:] = 0
-    self_gap = _judge_links(seg, world, links, pairs, n_rr, groups, leaves, eps, margin, cum,
-                            cap, out, scratch, balls)
-    for p in range(n_rr, pairs.shape[0]):
+    self_gap = _judge_links(seg, world, packed.links, packed.pairs, packed.n_rr, packed.groups,
+                            packed.leaves, eps, margin, cum, cap, out, scratch, balls)
+    for p in range(packed.n_rr, packed.pairs.shape[0]):
         out[p] = CLEAR
-    if nodes.shape[0] == 0:
+    if packed.nodes.shape[0] == 0:
         return self_gap, math.inf
-    return self_gap, judge_scene(seg, world, links, kind, obstacles, axes, tree, nodes, order,
-                                  pair_of, groups, leaves, eps, margin, move, refine, cap, out,
-                                  cand, scratch, stack, balls)
+    return self_gap, judge_scene(seg, world, packed.links, packed.kind, packed.obstacles,
+                                  packed.axes, packed.tree, packed.nodes, packed.order,
+                                  packed.pair_of, packed.groups, packed.leaves, eps, margin, move,
+                                  refine, cap, out, cand, scratch, stack, balls)
 
 
 @inline_kernel
@@ -167,7 +171,7 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
                  groups: Array, leaves: Array, eps: float, margin: float, cum: Array,
                  cap: float, out: VerdictArray, scratch: Array,
                  balls: tuple[Array, Array, np.ndarray]) -> float:
-    """:func:`_judge` on the link-link pairs (the first ``n_rr``): their verdicts and the
+    """:func:`judge_pairs` on the link-link pairs (the first ``n_rr``): their verdicts and the
     smallest cleared gap per unit of closing motion (0 when a pair is not cleared; at most
     ``cap``). A pair's gap is the larger of two lower bounds, the spheres about the two bodies
     and the capsules about their cylinders; the spheres alone clear a pair they show apart by
@@ -233,7 +237,7 @@ def _judge_links(seg: Array, world: Array, links: Array, pairs: IndexArray, n_rr
 def _closing(cum: Array, links: Array, i: int, j: int) -> float:
     """How far bodies ``i`` and ``j`` can close per unit of motion: the joints that move both
     move them together (the first ``MOVED`` joints move a body), so only those between them
-    count, by how far they move the farther body's points (``cum`` as :func:`_judge`)."""
+    count, by how far they move the farther body's points (``cum`` as :func:`judge_pairs`)."""
     a, b = int(links[i, MOVED]), int(links[j, MOVED])
     if a <= b:
         return cum[j, b] - cum[j, a]
@@ -242,7 +246,7 @@ def _closing(cum: Array, links: Array, i: int, j: int) -> float:
 
 def ball_scratch(links: Array, groups: Array, leaves: Array
                  ) -> tuple[Array, Array, np.ndarray]:
-    """The scratch of :func:`_judge`'s balls: their world centres (groups, leaves) and the
+    """The scratch of :func:`judge_pairs`'s balls: their world centres (groups, leaves) and the
     flags of what is placed (bodies' groups, then groups' leaves: see :mod:`.bounds_balls`)."""
     return (np.empty((groups.shape[0], 3)), np.empty((leaves.shape[0], 3)),
             np.zeros(links.shape[0] + groups.shape[0], dtype=np.int8))
@@ -253,7 +257,7 @@ ball_scratch_kernel = kernel(ball_scratch)
 
 @kernel
 def _still(links: Array) -> tuple[Array, Array]:
-    """``move`` and ``cum`` of :func:`_judge` for a single configuration: zeros (nothing moves,
+    """``move`` and ``cum`` of :func:`judge_pairs` for a single configuration: zeros (nothing moves,
     so only whether a pair is cleared matters, and the sphere tree prunes every subtree its
     bound clears by ``eps``; the gaps returned are then inf)."""
     depth = 0
@@ -263,28 +267,24 @@ def _still(links: Array) -> tuple[Array, Array]:
 
 
 @kernel
-def _verdicts(world: Array, links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray,
-              obstacles: Array, axes: Array, tree: Array, nodes: IndexArray, order: IndexArray,
-              pair_of: IndexArray, groups: Array, leaves: Array, eps: float, margin: float
+def _verdicts(world: Array, packed: Packed, eps: float, margin: float
               ) -> tuple[VerdictArray, VerdictArray]:
     """Verdicts (N, P + Q) int8 on the pairs (link-link pairs first, then link-obstacle) at the
-    link poses ``world`` (N, L, 3, 4), and each configuration's (N,) (:func:`_row_verdict`);
-    the prepared arrays of :func:`prepare_links`, :func:`prepare_obstacles` and
-    :mod:`.scene_tree`."""
+    link poses ``world`` (N, L, 3, 4), and each configuration's (N,) (:func:`_row_verdict`),
+    over the collision world's arrays ``packed`` (its joints and zero poses unused)."""
     n_cfg, n_link = world.shape[0], world.shape[1]
-    out = np.zeros((n_cfg, pairs.shape[0]), dtype=np.int8)
+    out = np.zeros((n_cfg, packed.pairs.shape[0]), dtype=np.int8)
     overall = np.empty(n_cfg, dtype=np.int8)
     seg = np.empty((6, n_link, 3))
     cand = np.empty((8, 3))
     scratch = np.empty(3)
-    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
-    move, cum = _still(links)
-    balls = ball_scratch_kernel(links, groups, leaves)
+    stack = np.empty(max(1, packed.nodes.shape[0]), dtype=np.int64)
+    move, cum = _still(packed.links)
+    balls = ball_scratch_kernel(packed.links, packed.groups, packed.leaves)
     for c in range(n_cfg):
-        _segments(world[c], links, seg)
-        _judge(seg, world[c], links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order,
-               pair_of, groups, leaves, eps, margin, move, cum, 0.0, math.inf, out[c], cand,
-               scratch, stack, balls)
+        axis_segments(world[c], packed.links, seg)
+        judge_pairs(seg, world[c], packed, eps, margin, move, cum, 0.0, math.inf, out[c], cand,
+                    scratch, stack, balls)
         overall[c] = _row_verdict(out[c])
     return out, overall
 
@@ -322,44 +322,41 @@ def classify(world: Array, radius: Array, half: Array, rr: IndexArray, rs: Index
     tree, nodes, order = scene_tree.build(obstacles[:, O_CENTRE:O_CENTRE + 3],
                                           obstacles[:, O_BOUND])
     pair_of = scene_tree.pair_table(rs, len(rr), len(radius), len(kind))
-    return _verdicts(world, links, pairs, rr.shape[0], kind, obstacles, axes, tree, nodes, order,
-                     pair_of, np.zeros((0, 6)), np.zeros((0, 4)), eps, margin)[0]
+    packed = Packed(np.zeros((0, JOINT_WIDTH)), np.zeros((len(radius), 4, 4)), links, pairs,
+                    int(rr.shape[0]), kind, obstacles, axes, tree, nodes, order, pair_of,
+                    np.zeros((0, 6)), np.zeros((0, 4)))
+    return _verdicts(world, packed, eps, margin)[0]
 
 
 @kernel
-def check(qs: Array, joints: Array, zero: Array, links: Array, pairs: IndexArray, n_rr: int,
-          kind: IndexArray, obstacles: Array, axes: Array, tree: Array, nodes: IndexArray,
-          order: IndexArray, pair_of: IndexArray, groups: Array, leaves: Array, eps: float,
-          margin: float) -> tuple[Array, VerdictArray, VerdictArray]:
+def check(qs: Array, packed: Packed, eps: float, margin: float
+          ) -> tuple[Array, VerdictArray, VerdictArray]:
     """Link cylinder poses (N, L, 3, 4), pair verdicts (N, P + Q) and each configuration's
     verdict (N,) (CLEAR, CONTACT or UNDECIDED, as :func:`summary`) for configurations ``qs``
     (N, n) in one call, from the arrays :func:`pack` prepares once per collision world."""
-    world = link_poses(qs, joints, zero, links)
-    verdicts, overall = _verdicts(world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes,
-                                  order, pair_of, groups, leaves, eps, margin)
+    world = link_poses(qs, packed.joints, packed.zero, packed.links)
+    verdicts, overall = _verdicts(world, packed, eps, margin)
     return world, verdicts, overall
 
 
 @kernel
-def summary(q: Array, world: Array, row: VerdictArray, joints: Array, zero: Array,
-            links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
-            axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-            groups: Array, leaves: Array, eps: float, margin: float) -> int:
+def summary(q: Array, world: Array, row: VerdictArray, packed: Packed, eps: float,
+            margin: float) -> int:
     """One configuration ``q`` (n,) in one call: the link cylinder poses into ``world``
     (L, 3, 4) and the pair verdicts into ``row`` (P + Q,), both the caller's, and one verdict:
     CLEAR when every pair is cleared, CONTACT when one is proven in contact, else UNDECIDED
     (``world`` and ``row`` are then what the exact judge needs)."""
-    n, n_link = q.shape[0], zero.shape[0]
+    links = packed.links
+    n, n_link = q.shape[0], packed.zero.shape[0]
     frames = np.empty((n + 1, 3, 4))
     seg = np.empty((6, n_link, 3))
     row[:] = CLEAR
-    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
-    poses_into(q, joints, zero, links, frames, world)
-    _segments(world, links, seg)
+    stack = np.empty(max(1, packed.nodes.shape[0]), dtype=np.int64)
+    poses_into(q, packed.joints, packed.zero, links, frames, world)
+    axis_segments(world, links, seg)
     move, cum = _still(links)
-    _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes, tree, nodes, order, pair_of,
-           groups, leaves, eps, margin, move, cum, 0.0, math.inf, row, np.empty((8, 3)),
-           np.empty(3), stack, ball_scratch_kernel(links, groups, leaves))
+    judge_pairs(seg, world, packed, eps, margin, move, cum, 0.0, math.inf, row, np.empty((8, 3)),
+                np.empty(3), stack, ball_scratch_kernel(links, packed.groups, packed.leaves))
     return _row_verdict(row)
 
 
@@ -374,5 +371,5 @@ def warm_up() -> None:
                   np.array([0.1]), np.array([0.2]), np.array([1]), np.zeros((0, 2), np.int64),
                   np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
                   np.array([[0.5, 0.5, 0.5]]))
-    check(np.zeros((1, 1)), *packed, EPS, MARGIN)
-    summary(np.zeros(1), np.empty((1, 3, 4)), np.empty(1, np.int8), *packed, EPS, MARGIN)
+    check(np.zeros((1, 1)), packed, EPS, MARGIN)
+    summary(np.zeros(1), np.empty((1, 3, 4)), np.empty(1, np.int8), packed, EPS, MARGIN)

@@ -9,7 +9,7 @@ radians.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -40,6 +40,11 @@ has no ball cover); ``INNER_FROM``, ``INNER_TO``: the range, among the leaves, o
 inside a closed mesh (:mod:`.inner_balls`; equal when it has none); ``SOLID``: 1 when the body
 is its cylinder (not a sphere, capsule, box or mesh inside it), so that balls at its rim prove
 contacts (:func:`.gaps.rim_box_contact`), else 0."""
+
+J_AXIS, J_POINT, J_REVOLUTE = 0, 3, 6
+JOINT_WIDTH = 7
+"""Columns of the per-joint array: the joint's unit axis (3) and a point on it (3) at the zero
+configuration (space frame, m), then 1.0 for a revolute joint, 0.0 for a prismatic one."""
 
 O_SIZE, O_START, O_DIR, O_IN_START, O_IN_DIR, O_RHO, O_BOUND, O_CENTRE, O_BOX = (
     0, 3, 6, 9, 12, 15, 16, 17, 20)
@@ -117,15 +122,15 @@ def poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array
     frames[0] = 0.0
     frames[0, 0, 0] = frames[0, 1, 1] = frames[0, 2, 2] = 1.0
     for i in range(n):
-        w0, w1, w2 = joints[i, 0], joints[i, 1], joints[i, 2]
-        if joints[i, 6] > 0.5:
+        w0, w1, w2 = joints[i, J_AXIS], joints[i, J_AXIS + 1], joints[i, J_AXIS + 2]
+        if joints[i, J_REVOLUTE] > 0.5:
             a = q[i]
             sn, co = math.sin(a), math.cos(a)
             v = 1.0 - co
             e00, e01, e02 = co + w0 * w0 * v, w0 * w1 * v - w2 * sn, w0 * w2 * v + w1 * sn
             e10, e11, e12 = w1 * w0 * v + w2 * sn, co + w1 * w1 * v, w1 * w2 * v - w0 * sn
             e20, e21, e22 = w2 * w0 * v - w1 * sn, w2 * w1 * v + w0 * sn, co + w2 * w2 * v
-            p0, p1, p2 = joints[i, 3], joints[i, 4], joints[i, 5]
+            p0, p1, p2 = joints[i, J_POINT], joints[i, J_POINT + 1], joints[i, J_POINT + 2]
             # t += R p - (R E) p = R (p - E p)
             d0 = p0 - (e00 * p0 + e01 * p1 + e02 * p2)
             d1 = p1 - (e10 * p0 + e11 * p1 + e12 * p2)
@@ -161,9 +166,10 @@ def poses_into(q: Array, joints: Array, zero: Array, links: Array, frames: Array
 def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     """World poses (N, L, 3, 4) of L bodies at N configurations (N, n).
 
-    ``joints`` (n, 7): each joint's axis and a point on it at the zero configuration, then 1
-    for revolute or 0 for prismatic; ``zero`` (L, 4, 4) each body's pose at zero; ``links``
-    (L, LINK_WIDTH) with how many joints (a prefix of the chain) move each body at MOVED.
+    ``joints`` (n, JOINT_WIDTH): each joint's axis and a point on it at the zero configuration,
+    then 1 for revolute or 0 for prismatic (columns ``J_AXIS``, ``J_POINT``, ``J_REVOLUTE``);
+    ``zero`` (L, 4, 4) each body's pose at zero; ``links`` (L, LINK_WIDTH) with how many
+    joints (a prefix of the chain) move each body at MOVED.
     """
     n_cfg, n = qs.shape
     out = np.empty((n_cfg, zero.shape[0], 3, 4))
@@ -173,8 +179,38 @@ def link_poses(qs: Array, joints: Array, zero: Array, links: Array) -> Array:
     return out
 
 
-Packed = tuple[Array, Array, Array, IndexArray, int, IndexArray, Array, Array, Array,
-               IndexArray, IndexArray, IndexArray, Array, Array]
+class Packed(NamedTuple):
+    """The arrays of a collision world as the kernels take them (:func:`pack` prepares them
+    once per world; numba reads a named tuple's fields as cheaply as separate arguments)."""
+
+    joints: Array
+    """(n, JOINT_WIDTH): per joint, its axis, a point on it at zero, whether it is revolute."""
+    zero: Array
+    """(L, 4, 4): each body's pose at the zero configuration."""
+    links: Array
+    """(L, LINK_WIDTH): the per-body rows (columns ``RADIUS`` .. ``SOLID``)."""
+    pairs: IndexArray
+    """(P + Q, 2): the checked pairs, link-link (body, body) then link-obstacle (body, obstacle)."""
+    n_rr: int
+    """P: how many of ``pairs`` are link-link."""
+    kind: IndexArray
+    """(S,): the obstacles' kinds (``BOX``, ``SPHERE``, ``CAPSULE``, ``HULL``)."""
+    obstacles: Array
+    """(S, OBSTACLE_WIDTH): the per-obstacle rows (columns ``O_SIZE`` .. ``O_BOX``)."""
+    axes: Array
+    """(S, 3, 3): each obstacle's axes as rows."""
+    tree: Array
+    """(M, 4): the obstacles' sphere tree's nodes, centre and radius (:func:`.scene_tree.build`)."""
+    nodes: IndexArray
+    """(M, 4): the nodes' children and leaf ranges (:func:`.scene_tree.build`)."""
+    order: IndexArray
+    """(S,): the obstacles in the tree's leaf order."""
+    pair_of: IndexArray
+    """(L, S): the index of the pair of a body and an obstacle, -1 when it is not checked."""
+    groups: Array
+    """(G, 6): the mesh bodies' ball groups (:mod:`.bounds_balls`)."""
+    leaves: Array
+    """(M, 4): their leaves, then the balls inside closed meshes."""
 
 
 Cover = tuple[Array, Array, Array]
@@ -216,7 +252,7 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
          covers: list[Cover | None] | None = None) -> Packed:
     """The arrays :func:`check` takes after ``qs`` (all but the tolerances), prepared once;
     ``covers``: per body, its ball cover or None (see :func:`pack_covers`; default none)."""
-    joints = np.ascontiguousarray(np.hstack([
+    joints = np.ascontiguousarray(np.hstack([  # (columns J_AXIS, J_POINT, J_REVOLUTE)
         axes.reshape(-1, 3), points.reshape(-1, 3), np.asarray(revolute, float).reshape(-1, 1)]))
     links = prepare_links(np.ascontiguousarray(radius, dtype=float),
                           np.ascontiguousarray(half, dtype=float),
@@ -232,5 +268,5 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
     ranges, groups, leaves = pack_covers(covers if covers is not None else [None] * len(radius))
     links[:, COVER_FROM], links[:, COVER_TO] = ranges[:, 0], ranges[:, 1]
     links[:, INNER_FROM], links[:, INNER_TO] = ranges[:, 2], ranges[:, 3]
-    return (joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
-            obstacles, obstacle_axes, tree, nodes, order, pair_of, groups, leaves)
+    return Packed(joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
+                  obstacles, obstacle_axes, tree, nodes, order, pair_of, groups, leaves)

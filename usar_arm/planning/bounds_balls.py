@@ -82,7 +82,7 @@ def _apart(p: Array, i: int, q: Array, j: int) -> float:
 @inline_kernel
 def _to_axis(w: Array, g: int, seg: Array, j: int) -> float:
     """Distance (m) from the point ``w[g]`` to body ``j``'s axis segment (``seg`` as
-    :func:`.bounds._segments`)."""
+    :func:`.bounds.axis_segments`)."""
     return xyz_segment_distance(w[g, 0], w[g, 1], w[g, 2], seg[0, j, 0], seg[0, j, 1],
                                 seg[0, j, 2], seg[1, j, 0], seg[1, j, 1], seg[1, j, 2])
 
@@ -120,7 +120,7 @@ def pair_gap(i: int, j: int, seg: Array, world: Array, links: Array, groups: Arr
              leaves: Array, wg: Array, wl: Array, placed: np.ndarray, eps: float) -> float:
     """A lower bound (m) of the distance between body ``i``'s covered surface and body ``j``
     (its balls when it has some, else the capsule around its cylinder; ``seg`` as
-    :func:`.bounds._segments`), both placed; at most ``eps`` as soon as a pair of balls is."""
+    :func:`.bounds.axis_segments`), both placed; at most ``eps`` as soon as a pair of balls is."""
     best = math.inf
     j_balls = has_balls(links, j)
     r_j = links[j, RADIUS]

@@ -7,7 +7,7 @@ the evaluated ones leave unproven, breadth first (the middle, the quarters...): 
 segment ends at one of its first evaluations, wherever the block lies, and a free one needs
 only the evaluations whose proven runs cover it. At a configuration whose pairs are all
 cleared, each pair's clearance bound divided by how far the pair can close per step
-(:func:`.bounds._judge`) is how many steps, forwards and backwards alike, cannot bring it into
+(:func:`.bounds.judge_pairs`) is how many steps, forwards and backwards alike, cannot bring it into
 contact; the smallest over the pairs is that configuration's proven run.
 
 How far a body's points can move per step is bounded twice, and the smaller bound is taken,
@@ -35,8 +35,23 @@ from collections.abc import Callable
 import numpy as np
 
 from usar_arm.core.spatial import Array
-from usar_arm.planning.bounds import REFINE, VerdictArray, _judge, _segments, ball_scratch_kernel
-from usar_arm.planning.bounds_arrays import BOUND, MOVED, IndexArray, Packed, poses_into
+from usar_arm.planning.bounds import (
+    REFINE,
+    VerdictArray,
+    axis_segments,
+    ball_scratch_kernel,
+    judge_pairs,
+)
+from usar_arm.planning.bounds_arrays import (
+    BOUND,
+    J_AXIS,
+    J_POINT,
+    J_REVOLUTE,
+    MOVED,
+    IndexArray,
+    Packed,
+    poses_into,
+)
 from usar_arm.planning.bounds_scene import CONTACT, UNDECIDED
 from usar_arm.planning.jit import inline_kernel, kernel
 
@@ -84,17 +99,17 @@ def motion_here(seg: Array, frames: Array, joints: Array, links: Array, per_step
                 ) -> None:
     """Per body k, how far joints 0 .. j - 1 can move its points per step within ``horizon``
     steps of this configuration, into ``cum`` (L, n + 1) and ``move`` (L,) (as
-    :func:`.bounds._judge` reads them; m per step): per joint, the smaller of the global bound
+    :func:`.bounds.judge_pairs` reads them; m per step): per joint, the smaller of the global bound
     (``global_cum``'s increments) and the body centre's distance from the joint's axis here
     (``seg[5]``, ``frames`` (n + 1, 3, 4) of :func:`.bounds_arrays.poses_into`) plus the body's
     extent (``BOUND``) plus ``growth[j, k]`` (m per step) times half the horizon, times the
     joint's change per step ``per_step[j]`` (rad). A prismatic joint keeps its global bound."""
     n, n_link = per_step.shape[0], links.shape[0]
     for j in range(n):  # (joint by joint: its axis is placed once for every body)
-        revolute = joints[j, 6] > 0.5
+        revolute = joints[j, J_REVOLUTE] > 0.5
         f = frames[j]
-        w0, w1, w2 = joints[j, 0], joints[j, 1], joints[j, 2]
-        p0, p1, p2 = joints[j, 3], joints[j, 4], joints[j, 5]
+        w0, w1, w2 = joints[j, J_AXIS], joints[j, J_AXIS + 1], joints[j, J_AXIS + 2]
+        p0, p1, p2 = joints[j, J_POINT], joints[j, J_POINT + 1], joints[j, J_POINT + 2]
         u0 = f[0, 0] * w0 + f[0, 1] * w1 + f[0, 2] * w2
         u1 = f[1, 0] * w0 + f[1, 1] * w1 + f[1, 2] * w2
         u2 = f[2, 0] * w0 + f[2, 1] * w1 + f[2, 2] * w2
@@ -117,11 +132,8 @@ def motion_here(seg: Array, frames: Array, joints: Array, links: Array, per_step
 
 @kernel
 def walk(a: Array, b: Array, steps: int, levers: Array, proven: IndexArray, queue: IndexArray,
-         control: IndexArray, batch: int, poses: Array, rows: VerdictArray, joints: Array,
-         zero: Array,
-         links: Array, pairs: IndexArray, n_rr: int, kind: IndexArray, obstacles: Array,
-         axes: Array, tree: Array, nodes: IndexArray, order: IndexArray, pair_of: IndexArray,
-         groups: Array, leaves: Array, eps: float, margin: float) -> tuple[int, int]:
+         control: IndexArray, batch: int, poses: Array, rows: VerdictArray, packed: Packed,
+         eps: float, margin: float) -> tuple[int, int]:
     """Check the configurations of the segment a -> b (n,) coarse to fine until one is proven
     in contact (FOUND), ``batch`` of them are undecided (MORE) or the segment is done (DONE);
     and how many undecided configurations this call found, in order, their link poses in
@@ -132,15 +144,17 @@ def walk(a: Array, b: Array, steps: int, levers: Array, proven: IndexArray, queu
     on each side its clearance proves free (0 when undecided); ``queue`` (2 steps + 4, 2) int64:
     runs to fill, as the evaluated configurations that bound them (-1 and -2: the segment's
     start and end); ``control`` (4,) int64, zeros at first (see ``HEAD`` .. ``STARTED``).
-    ``levers`` (n, L): the global lever arms (m per unit of joint j for body k)."""
+    ``levers`` (n, L): the global lever arms (m per unit of joint j for body k); ``packed``:
+    the collision world's arrays (:class:`.bounds_arrays.Packed`)."""
+    joints, zero, links = packed.joints, packed.zero, packed.links
     n, n_link = a.shape[0], zero.shape[0]
     per_step, global_cum, growth, motion = segment_levers(a, b, steps, levers, links)
     move, cum = np.zeros(n_link), np.zeros((n_link, n + 1))
     q, frames = np.empty(n), np.empty((n + 1, 3, 4))
     seg, cand, scratch = np.empty((6, n_link, 3)), np.empty((8, 3)), np.empty(3)
-    stack = np.empty(max(1, nodes.shape[0]), dtype=np.int64)
-    balls = ball_scratch_kernel(links, groups, leaves)
-    world, row = np.empty((n_link, 3, 4)), np.zeros(pairs.shape[0], dtype=np.int8)
+    stack = np.empty(max(1, packed.nodes.shape[0]), dtype=np.int64)
+    balls = ball_scratch_kernel(links, packed.groups, packed.leaves)
+    world, row = np.empty((n_link, 3, 4)), np.zeros(packed.pairs.shape[0], dtype=np.int8)
     head, tail, count = control[HEAD], control[TAIL], 0
     if control[STARTED] == 0:
         control[STARTED] = 1
@@ -163,13 +177,11 @@ def walk(a: Array, b: Array, steps: int, levers: Array, proven: IndexArray, queu
         for j in range(n):
             q[j] = a[j] + (b[j] - a[j]) * (k / steps)
         poses_into(q, joints, zero, links, frames, world)
-        _segments(world, links, seg)
+        axis_segments(world, links, seg)
         motion_here(seg, frames, joints, links, per_step, growth, float(horizon),
                     global_cum, cum, move)
-        self_gap, scene_gap = _judge(seg, world, links, pairs, n_rr, kind, obstacles, axes,
-                                     tree, nodes, order, pair_of, groups, leaves, eps, margin,
-                                     move, cum, REFINE, horizon + 1.0, row, cand, scratch,
-                                     stack, balls)
+        self_gap, scene_gap = judge_pairs(seg, world, packed, eps, margin, move, cum, REFINE,
+                                          horizon + 1.0, row, cand, scratch, stack, balls)
         control[EVALUATED] += 1
         undecided = False
         for p in range(row.shape[0]):
@@ -208,12 +220,12 @@ def segment_free(a: Array, b: Array, steps: int, levers: Array, packed: Packed,
     proven = np.full(steps + 1, -1, dtype=np.int64)
     queue = np.empty((2 * steps + 4, 2), dtype=np.int64)
     control = np.zeros(4, dtype=np.int64)
-    poses = np.empty((steps + 1, packed[1].shape[0], 3, 4))
-    rows = np.empty((steps + 1, packed[3].shape[0]), dtype=np.int8)
+    poses = np.empty((steps + 1, packed.zero.shape[0], 3, 4))
+    rows = np.empty((steps + 1, packed.pairs.shape[0]), dtype=np.int8)
     batch = 1
     while True:
         code, count = walk(a, b, steps, levers, proven, queue, control, batch, poses, rows,
-                           *packed, eps, margin)
+                           packed, eps, margin)
         if code == FOUND:
             return False, int(control[EVALUATED])
         for u in range(count):

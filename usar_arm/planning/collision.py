@@ -172,6 +172,11 @@ class CollisionWorld:
         other.set_disabled(self.disabled)
         return other
 
+    @property
+    def verdicts(self) -> CompiledVerdicts:
+        """The compiled verdicts of this world (what the compiled planner searches over)."""
+        return self._compiled
+
     def bounded_poses(self, qs: Array) -> tuple[Array, NDArray[np.int8]]:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n), and
         (N, P + Q) verdicts of the compiled tests on the robot-robot then robot-scene pairs:

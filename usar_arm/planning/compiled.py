@@ -8,13 +8,14 @@ it before it starts the embedded simulator (a no-op when the cache is there):
 
 from __future__ import annotations
 
-from usar_arm.planning import bounds, bounds_walk, ik_kernel, lm_kernel, ur_kernel
+from usar_arm.planning import bounds, bounds_walk, ik_kernel, lm_kernel, plan_kernel, ur_kernel
 
 
 def warm_up() -> None:
-    """Compile (or load from the cache) the collision and IK kernels."""
+    """Compile (or load from the cache) the collision, planning and IK kernels."""
     bounds.warm_up()
     bounds_walk.warm_up()
+    plan_kernel.warm_up()
     ik_kernel.warm_up()
     lm_kernel.warm_up()
     ur_kernel.warm_up()

@@ -30,6 +30,14 @@ log = logging.getLogger("usar_arm.planning")
 PLANNERS = ("RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "SORRTstar", "BITstar",
             "AORRTC", "PRM", "PRMstar", "KPIECE1", "BKPIECE1", "LBKPIECE1", "FMT", "BFMT")
 """Geometric planners of the ompl wheel usable by name."""
+COMPILED = "CompiledRRTConnect"
+"""usar-arm's own RRT-Connect and shortcutting in one compiled call over the compiled verdicts
+(:mod:`.compiled_plan`), OMPL's RRTConnect where it finds nothing: the default."""
+FALLBACK = "RRTConnect"
+"""OMPL's planner where the compiled one finds no path, and :func:`plan_path`'s for
+:data:`COMPILED` (it plans with OMPL only)."""
+CHOICES = (COMPILED, *PLANNERS)
+"""Every planner name :class:`OmplOptions` takes: the compiled one, then OMPL's."""
 PROJECTED = frozenset({"KPIECE1", "BKPIECE1", "LBKPIECE1"})
 """Planners that grid a projection of the space: they get the projection the MoveIt package's
 ``ompl_planning.yaml`` names (``joints(a1,a2)``: the first two joints' values, in cells of
@@ -54,7 +62,8 @@ class OmplOptions:
     """Options of a joint-space plan.
 
     Attributes:
-        planner: one of :data:`PLANNERS` (default RRTConnect, as MoveIt).
+        planner: :data:`COMPILED` (the default) or one of OMPL's :data:`PLANNERS`
+            (RRTConnect is MoveIt's default).
         time_limit: planning budget (s).
         resolution: largest joint change (rad or m) between checked configurations on an edge.
         max_step: largest distance (m) any point of the robot moves between checked
@@ -64,7 +73,7 @@ class OmplOptions:
         seed: seed of OMPL's RNG (effective for the first plan of a process).
     """
 
-    planner: str = "RRTConnect"
+    planner: str = COMPILED
     time_limit: float = 2.0
     resolution: float = 0.01
     max_step: float = 0.005
@@ -72,9 +81,9 @@ class OmplOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if self.planner not in PLANNERS:
-            raise InvalidInputError(f"unknown planner '{self.planner}'; the ompl wheel offers: "
-                                    f"{', '.join(PLANNERS)}")
+        if self.planner not in CHOICES:
+            raise InvalidInputError(f"unknown planner '{self.planner}'; planners: "
+                                    f"{', '.join(CHOICES)}")
         if not self.time_limit > 0:
             raise InvalidInputError(f"time limit must be > 0 s, got {self.time_limit}")
         if not self.resolution > 0:
@@ -154,6 +163,15 @@ def reseed(seed: int) -> None:
     finally:
         ou.setLogLevel(level)
     _seeded[:] = [int(seed)]
+
+
+def draw_seed(first: int = 0) -> int:
+    """A seed for a planner of usar-arm's own, drawn from OMPL's process-global generator: a
+    plan seeded so depends on what :func:`reseed` (or, with ``first``, the process's first
+    plan) set, exactly as an OMPL planner's plan does."""
+    if not _seeded:
+        reseed(first)
+    return int(ou.RNG().uniformInt(0, 2**31 - 2))
 
 
 def _project_first_joints(space: ob.RealVectorStateSpace) -> None:
@@ -249,15 +267,15 @@ def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
     for i in range(n):
         s[i], g[i] = float(start[i]), float(goal[i])
     ss.setStartAndGoalStates(s, g)
-    planner = getattr(og, options.planner)(si)
+    name = FALLBACK if options.planner == COMPILED else options.planner
+    planner = getattr(og, name)(si)
     ss.setPlanner(planner)
     begin = time.perf_counter()
     status = _solve(ss, planner, space, counts, options.time_limit)
     planning = time.perf_counter() - begin
     if not ss.haveExactSolutionPath():
-        raise NoPathError(options.planner, options.time_limit,
-                          f"{status}; {counts['states']} states and {counts['edges']} edges "
-                          "checked")
+        raise NoPathError(name, options.time_limit, f"{status}; {counts['states']} states "
+                          f"and {counts['edges']} edges checked")
     simplify = 0.0
     path = ss.getSolutionPath()
     if options.simplify:
@@ -269,5 +287,5 @@ def plan_path(lower: Array, upper: Array, start: Array, goal: Array,
         simplify = time.perf_counter() - begin
     waypoints = np.array([to_array(path.getState(k)) for k in range(path.getStateCount())])
     waypoints[0], waypoints[-1] = start, goal
-    return OmplResult(waypoints, options.planner, planning, simplify, counts["states"],
+    return OmplResult(waypoints, name, planning, simplify, counts["states"],
                       counts["edges"])

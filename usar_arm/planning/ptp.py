@@ -18,8 +18,11 @@ from usar_arm.core.errors import (
 )
 from usar_arm.core.spatial import Array
 from usar_arm.planning.collision import CollisionWorld
+from usar_arm.planning.compiled_plan import MAX_EDGES, plan_compiled
 from usar_arm.planning.ik import IKSolver
 from usar_arm.planning.ompl_adapter import (
+    COMPILED,
+    FALLBACK,
     OmplOptions,
     OmplResult,
     edge_steps,
@@ -63,6 +66,11 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
                    start: Array, goal: Array, options: OmplOptions) -> PtpPlan:
     """A path from ``start`` to the configuration ``goal``.
 
+    With :data:`.ompl_adapter.COMPILED` (the default planner), the compiled planner
+    (:mod:`.compiled_plan`) searches and shortens a path every edge of which the compiled walk
+    proves free at this module's path-check density; the path is checked once more below as
+    any planner's, and OMPL's RRTConnect plans when the compiled search finds nothing.
+
     OMPL explores with edges checked every ``options.resolution`` of joint motion (fast, but a
     point far from the base can move a few centimetres between two checks). The path it returns
     is then checked so that no point of the robot moves more than ``options.max_step`` between
@@ -88,6 +96,23 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
     def state_valid(q: Array) -> bool:
         return not world.in_collision(q)
 
+    if options.planner == COMPILED:
+        found = plan_compiled(world, lower, upper, start, goal, options)
+        spent = time.perf_counter() - begin
+        if spent > options.time_limit:  # (the kernel cannot read the clock: its budget is edges)
+            raise NoPathError(COMPILED, options.time_limit,
+                              f"the compiled search took {spent:.3g} s"
+                              + ("" if found is None else " (a path found too late)"))
+        options = replace(options, planner=FALLBACK)
+        if found is not None:  # (proven free by the compiled walk; checked again exactly)
+            path, repaired = _repaired(world, lower, upper, found.waypoints, state_valid,
+                                       options, levers, begin + options.time_limit)
+            if path is not None:
+                return PtpPlan(path, goal, found, time.perf_counter() - begin,
+                               repaired=repaired)
+        log.info("the compiled planner found no path within %d edges; planning with OMPL's "
+                 "RRTConnect", MAX_EDGES)
+        options = replace(options, time_limit=options.time_limit - spent)
     result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options)
     path, repaired = _repaired(world, lower, upper, result.waypoints, state_valid, options,
                                levers, begin + options.time_limit)

@@ -19,7 +19,7 @@ from usar_arm.core.model import KinematicChain
 from usar_arm.core.spatial import Array
 from usar_arm.planning import bounds, bounds_walk
 from usar_arm.planning.bounds import IndexArray
-from usar_arm.planning.bounds_arrays import Cover
+from usar_arm.planning.bounds_arrays import Cover, Packed
 from usar_arm.planning.poe import PoeModel
 from usar_arm.planning.scene import Box, CylinderShape, Mesh, Scene, Sphere
 
@@ -171,14 +171,21 @@ class CompiledVerdicts:
         self._packed = bounds.pack(self._axes, self._points, self._revolute, self._zero,
                                    self.radius, self.half, self._moved_by, self.rr, self.rs,
                                    self._kind, self._opose, self._osize, self._covers)
-        self._packed[2][:, bounds.OWNER] = self._owner
-        self._packed[2][:, bounds.GROUP] = self._group
-        self._packed[2][:, bounds.GROUP_RADIUS] = self._group_radius
-        self._packed[2][:, bounds.NEXT] = _group_chains(self._group, self.rs)
+        links = self._packed.links
+        links[:, bounds.OWNER] = self._owner
+        links[:, bounds.GROUP] = self._group
+        links[:, bounds.GROUP_RADIUS] = self._group_radius
+        links[:, bounds.NEXT] = _group_chains(self._group, self.rs)
         if not self._exact.all():
-            self._packed[2][~self._exact, bounds.RHO] = NO_PROOF
-            self._packed[2][~self._exact, bounds.REACH] = 0.0
-        self._packed[2][:, bounds.SOLID] = self._solid
+            links[~self._exact, bounds.RHO] = NO_PROOF
+            links[~self._exact, bounds.REACH] = 0.0
+        links[:, bounds.SOLID] = self._solid
+
+    @property
+    def packed(self) -> Packed:
+        """The arrays the kernels take (:class:`.bounds_arrays.Packed`), as :meth:`check_pairs`
+        prepared them: the kernels' own, not a copy (never write to them)."""
+        return self._packed
 
     def check(self, qs: Array) -> tuple[Array, NDArray[np.int8], NDArray[np.int8]]:
         """World poses (N, L, 3, 4) of the link cylinders at configurations ``qs`` (N, n),
@@ -186,7 +193,7 @@ class CompiledVerdicts:
         :data:`~.bounds.CONTACT` or :data:`~.bounds.UNDECIDED`) and one per configuration (N,)
         (CONTACT when a pair is proven in contact, else UNDECIDED when one is undecided)."""
         qs = _plain(np.atleast_2d(qs))
-        return bounds.check(qs, *self._packed, bounds.EPS, bounds.MARGIN)
+        return bounds.check(qs, self._packed, bounds.EPS, bounds.MARGIN)
 
     def summary(self, q: Array) -> tuple[int, Array, NDArray[np.int8]]:
         """One verdict for configuration ``q`` (CLEAR when every pair is, CONTACT when one is,
@@ -194,11 +201,11 @@ class CompiledVerdicts:
         calling thread's arrays, valid until its next call."""
         buffers = getattr(self._scratch, "buffers", None)
         if buffers is None:  # (allocated once per thread: a query that clears costs nothing)
-            zero, pairs = self._packed[1], self._packed[3]
+            zero, pairs = self._packed.zero, self._packed.pairs
             buffers = (np.empty((zero.shape[0], 3, 4)), np.empty(pairs.shape[0], dtype=np.int8))
             self._scratch.buffers = buffers
         world, row = buffers
-        verdict = bounds.summary(_plain(q), world, row, *self._packed, bounds.EPS, bounds.MARGIN)
+        verdict = bounds.summary(_plain(q), world, row, self._packed, bounds.EPS, bounds.MARGIN)
         return int(verdict), world, row
 
     def segment_free(self, a: Array, b: Array, steps: int,
