@@ -12,9 +12,9 @@ Two views, seconds per plan, means over the problems:
 * by kind of work (``stages_s``): state checks (``in_collision``: a state's compiled verdicts and
   python-fcl), the compiled edge walk (``bounds_walk.walk``: forward kinematics,
   bounding-volume verdicts, clearance skipping), python-fcl on the configurations the walk left
-  undecided (``ExactJudge.any_contact``), the compiled planner's search and shortcutting
-  (``plan_kernel.search``/``shortcut``, when it runs), and the rest (OMPL's own search and
-  simplification, the Python glue between them);
+  undecided (``ExactJudge.any_contact``), and the rest (:data:`REST`: the planner's own search
+  and simplification, OMPL's or the compiled planner's, whose walks run inside its kernels and
+  count here, and the Python glue between them);
 * by phase (``phases_s``): the planner's search, its simplification, and the rest of
   ``plan_to_joints`` (the start and goal checks, the straight line, the dense check of the path
   and its repairs).
@@ -44,6 +44,10 @@ from usar_arm.planning.ptp import plan_to_joints
 from usar_arm.planning.robot import RobotOptions, robot_from_files
 
 STAGES = ("state checks", "edge walk (compiled)", "edge exact (python-fcl)")
+REST = "OMPL search, simplification and glue"
+"""The rest of a plan's time (the key the docs' figures read): the planner's own search and
+simplification (OMPL's, or the compiled planner's kernels, their walks included) and the Python
+between."""
 PHASES = ("search", "simplification", "checks, straight line, path check and repair")
 
 
@@ -120,7 +124,7 @@ def profile(spec: dict[str, Any], planner: str | None = None) -> dict[str, Any]:
          exact.ExactJudge.any_contact) = originals  # type: ignore[method-assign]
     n = len(spec["problems"])
     rows = {name: seconds / n for name, seconds in spent.items()}
-    rows["search, simplification and glue"] = max(0.0, total / n - sum(rows.values()))
+    rows[REST] = max(0.0, total / n - sum(rows.values()))
     return {"problems": n, "planner": options.planner, "seconds_per_plan": total / n,
             "seconds": {"median": float(np.median(plain)),
                         "p90": float(np.percentile(plain, 90)), "mean": float(np.mean(plain))},

@@ -188,8 +188,8 @@ def test_batch_answers_in_input_order_with_typed_failures_whatever_the_workers(
     assert [d["line"] for d in docs] == [1, 2, 4, 5, 6, 7, 8, 9, 10, *range(11, 21)]
     by_id = {d["id"]: d for d in docs}
     assert by_id["a"]["ok"] and len(by_id["b"]["solutions"]) >= 1
-    for plan in ("c", "c2"):  # planned by OMPL (the straight segment is blocked)
-        assert by_id[plan]["ok"] and by_id[plan]["planner"] == "RRTConnect"
+    for plan in ("c", "c2"):  # planned by the default planner (the straight segment is blocked)
+        assert by_id[plan]["ok"] and by_id[plan]["planner"] == "CompiledRRTConnect"
         assert len(by_id[plan]["waypoints"]) >= 3
     assert by_id["d"]["ok"] and by_id["d"]["motion"] == "lin"
     assert by_id["e"]["error"]["type"] == "UnreachableError"

@@ -44,8 +44,13 @@ def plan_compiled(world: CollisionWorld, lower: Array, upper: Array, start: Arra
                   goal: Array, options: OmplOptions) -> OmplResult | None:
     """A path from ``start`` to ``goal`` found and shortened (when ``options.simplify``) in the
     compiled kernels, every edge proven free at the path check's density; None when the search
-    ran out of edges. The seed is drawn from OMPL's generator (:func:`.ompl_adapter.draw_seed`),
-    so :func:`.ompl_adapter.reseed` decides this plan as it decides OMPL's."""
+    ran out of edges, or at once when the bounding volumes leave the start or the goal
+    undecided (near an obstacle: the walk cannot clear an edge from it). The seed is drawn
+    from OMPL's generator (:func:`.ompl_adapter.draw_seed`), so :func:`.ompl_adapter.reseed`
+    decides this plan as it decides OMPL's."""
+    for end in (start, goal):  # (every edge from an end the walk cannot clear is blocked)
+        if world.verdicts.summary(end)[0] != bounds.CLEAR:
+            return None
     lower, upper = np.array(lower, float), np.array(upper, float)  # (writeable: as compiled)
     extent = float(np.linalg.norm(upper - lower))
     budget = (float(options.resolution), float(options.max_step), WIDE * extent,

@@ -110,8 +110,8 @@ def plan_to_joints(world: CollisionWorld, names: tuple[str, ...], lower: Array, 
             if path is not None:
                 return PtpPlan(path, goal, found, time.perf_counter() - begin,
                                repaired=repaired)
-        log.info("the compiled planner found no path within %d edges; planning with OMPL's "
-                 "RRTConnect", MAX_EDGES)
+        log.info("the compiled planner found no path (within %d edges, or an end only "
+                 "python-fcl can clear); planning with OMPL's RRTConnect", MAX_EDGES)
         options = replace(options, time_limit=options.time_limit - spent)
     result = plan_path(lower, upper, start, goal, state_valid, world.segment_free, options)
     path, repaired = _repaired(world, lower, upper, result.waypoints, state_valid, options,

@@ -205,7 +205,8 @@ class CompiledVerdicts:
             buffers = (np.empty((zero.shape[0], 3, 4)), np.empty(pairs.shape[0], dtype=np.int8))
             self._scratch.buffers = buffers
         world, row = buffers
-        verdict = bounds.summary(_plain(q), world, row, self._packed, bounds.EPS, bounds.MARGIN)
+        verdict = bounds.summary(_plain(q), world, row, *self._packed, bounds.EPS,
+                                 bounds.MARGIN)  # (positional: see bounds.summary)
         return int(verdict), world, row
 
     def segment_free(self, a: Array, b: Array, steps: int,
