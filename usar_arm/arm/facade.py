@@ -241,7 +241,7 @@ class Arm(Carrier):
         ``start`` defaults to the arm's current joints (live) or home (offline). Keyword
         overrides (``speed_scale=0.3``, ``blend=True``...) change :class:`MotionOptions`. The
         trajectory records a scene given by name or path (``Trajectory.scene``), and what the
-        arm carries (:meth:`attach`) in ``info['attached']``.
+        arm carries (:meth:`~usar_arm.arm.carry.Carrier.attach`) in ``info['attached']``.
         """
         opts = replace(options or MotionOptions(), motion=motion, **overrides)
         start = self._here(start)

@@ -31,6 +31,7 @@ class AttachError(InvalidInputError):
     known: Sequence[str] = ()
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         text = f"cannot attach '{self.body}': {self.problem}"
         if self.known:
             text += f" (known: {names_or_none(self.known)})"
@@ -51,6 +52,7 @@ class AttachedCollisionError(PlanningError):
     contacts: Sequence[tuple[str, str, float]]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         shown = ", ".join(f"{a}–{b} ({d * 1000:.1f} mm deep)" for a, b, d in self.contacts)
         return (f"'{self.body}' is in collision where it would be attached: {shown}; "
                 "name the links it may touch (touch_links) or attach it elsewhere")

@@ -26,6 +26,7 @@ class WorldControllerError(UsarArmError):
     hint: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"`{self.command}` was not carried out: expected {self.expected}, GetSTA "
                 f"shows {self.seen}" + aside(self.hint))
 
@@ -43,6 +44,7 @@ class GripError(UsarArmError):
     seen: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return f"{self.vacuum} after move '{self.move}': expected {self.expected}, but {self.seen}"
 
 

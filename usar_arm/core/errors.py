@@ -105,6 +105,7 @@ class FileFormatError(InvalidInputError):
     field: str | None = None
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         where = self.path if self.line is None else f"{self.path}:{self.line}"
         if self.field:
             where += f" (field '{self.field}')"
@@ -131,6 +132,7 @@ class ProtocolError(UsarArmError):
     reason: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         line, position = self.line, self.position
         start = 0 if position < 150 else position - 100  # show the text around the problem
         shown = line[start:start + 200]
@@ -152,6 +154,7 @@ class ConnectionFailedError(UsarArmError):
     reason: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"cannot connect to a USARSim server at {self.host}:{self.port}: {self.reason}. "
                 f"Is the simulator running? (start one with `usar-arm sim --port {self.port}`, "
                 f"or leave out --host to use the embedded simulator)")
@@ -167,6 +170,7 @@ class ResponseTimeoutError(UsarArmError):
     hint: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         text = f"no {self.waiting_for} within {self.timeout_s:g} s"
         return text + (f": {self.hint}" if self.hint else "")
 
@@ -195,6 +199,7 @@ class ConnectionLostError(UsarArmError):
     detail: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"the USARSim server closed the connection while {self.while_doing}"
                 + aside(self.detail))
 
@@ -212,6 +217,7 @@ class UnknownRobotError(UsarArmError):
     detail: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         text = f"no robot of class '{self.class_name}' appeared" + aside(self.detail)
         if self.known:
             text += f"; robot classes the server offers: {names_or_none(self.known)}"
@@ -227,6 +233,7 @@ class UnknownStartError(UsarArmError):
     known: Sequence[str]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         known = names_or_none(self.known)
         return f"unknown start position '{self.start}'; the server offers: {known}"
 
@@ -245,6 +252,7 @@ class ValidationError(DescriptionError):
     problems: Sequence[str]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         lines = "\n".join(f"  - {p}" for p in self.problems)
         return f"{self.subject} failed {len(self.problems)} check(s):\n{lines}"
 
@@ -259,6 +267,7 @@ class RobotStructureError(DescriptionError):
     expected: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return f"{self.where}: {self.what}; expected {self.expected}"
 
 
@@ -279,6 +288,7 @@ class UnreachableError(IKError):
     detail: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"target pose is unreachable: out of reach by {self.distance_m * 1000:.1f} mm"
                 + aside(self.detail))
 
@@ -298,6 +308,7 @@ class JointLimitError(IKError):
         return self.value - self.upper if self.value > self.upper else self.lower - self.value
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"every solution violates a joint limit; closest: {self.joint} = "
                 f"{self.value:.4f} is {self.excess:.4f} outside [{self.lower:.4f}, "
                 f"{self.upper:.4f}]")
@@ -312,6 +323,7 @@ class AllSolutionsInCollisionError(IKError):
     pairs: Sequence[tuple[str, str]]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs[:6])
         return (f"all {self.n_solutions} IK solution(s) inside the joint limits are in "
                 f"collision (contacts: {shown})")
@@ -336,6 +348,7 @@ class _EndInCollisionError(PlanningError):
     pairs: Sequence[tuple[str, str]]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
         return f"the {self.end} configuration is in collision: {shown}"
 
@@ -364,6 +377,7 @@ class OutOfLimitsError(PlanningError):
     upper: float
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"the {self.what} configuration puts {self.joint} at {self.value:.4f}, "
                 f"outside its limits [{self.lower:.4f}, {self.upper:.4f}]")
 
@@ -377,6 +391,7 @@ class NoPathError(PlanningError):
     detail: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"{self.planner} found no collision-free path within {self.time_limit_s:g} s"
                 + aside(self.detail))
 
@@ -394,6 +409,7 @@ class LinBlockedError(PlanningError):
         super().__post_init__()
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         x, y, z = self.point_m
         return (f"LIN motion blocked at {self.fraction * 100:.1f} % of the line, tool0 at "
                 f"({x:.4f}, {y:.4f}, {z:.4f}) m: {self.reason}")
@@ -417,6 +433,7 @@ class ExecutionAbortedError(UsarArmError):
     at_time_s: float | None = None
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         text = f"execution aborted: {self.reason}"
         if self.joint is not None and self.error_rad is not None:
             text += f" ({self.joint} off by {self.error_rad:.4f})"
@@ -439,6 +456,7 @@ class CalibrationError(UsarArmError):
     needed: int | None = None
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         text = f"calibration failed: {self.problem}"
         if self.readings is not None and self.needed is not None:
             text += f" ({self.readings} readings, at least {self.needed} needed)"

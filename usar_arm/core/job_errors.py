@@ -32,6 +32,7 @@ class ChunkFailedError(UsarArmError):
     reason: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"chunk {self.chunk} failed {self.attempts} times ({self.reason}); the "
                 "finished chunks are kept: run again with --resume to continue")
 
@@ -46,6 +47,7 @@ class ClusterUnavailableError(UsarArmError):
     reason: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return f"cannot use the Ray cluster at '{self.address}': {self.reason}"
 
 
@@ -66,6 +68,7 @@ class ResumeMismatchError(InvalidInputError):
     differences: Sequence[str] = ()
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         what = (f"its {' and '.join(self.differences)} differ" if self.differences
                 else "the robot, scene, input or settings differ")
         return (f"{self.folder} holds finished chunks of another job ({what}; kept key "
@@ -84,6 +87,7 @@ class MapTooLargeError(InvalidInputError):
     resolution_that_fits_m: float
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"a map of {self.voxels:,} voxels needs about {self.need_bytes / 2**30:.1f} "
                 f"GiB, more than half of the {self.available_bytes / 2**30:.1f} GiB "
                 f"available; use a resolution of at least {self.resolution_that_fits_m:g} m "
@@ -100,5 +104,6 @@ class UnreachableTargetError(IKError):
     detail: str = ""
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"target '{self.target}' is reachable collision-free from none of the "
                 f"{self.candidates} candidate base poses" + aside(self.detail))

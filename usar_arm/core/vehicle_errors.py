@@ -32,6 +32,7 @@ class NonFiniteCommandError(InvalidInputError):
     values: dict[str, float]
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         bad = ", ".join(f"{k} = {v}" for k, v in self.values.items() if not math.isfinite(v))
         return f"a drive command needs finite numbers; got {bad}"
 
@@ -48,6 +49,7 @@ class VehicleParameterError(InvalidInputError):
     value: float
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return f"the vehicle's {self.name} must be a positive number, got {self.value}"
 
 
@@ -64,6 +66,7 @@ class NotAVehicleError(InvalidInputError):
     platform_type: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"{self.robot} is a {self.platform_type}, not a ground vehicle: describe an "
                 "arm with usar-arm urdf; usar-arm drives ground vehicles such as "
                 "USARBot.P3AT and USARBot.FrontAckerman")
@@ -83,5 +86,6 @@ class OutsideWorldError(InvalidInputError):
     where: str
 
     def message(self) -> str:
+        """This error's text, from its evidence."""
         return (f"waypoint {self.index} ({self.point[0]:g}, {self.point[1]:g}) m lies "
                 f"{self.where}")
