@@ -15,6 +15,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -85,7 +86,7 @@ class Page:
         process = subprocess.Popen(
             [chromium(), *FLAGS, f"--window-size={width},{height}",
              f"--user-data-dir={profile.name}", "--remote-debugging-port=0", "about:blank"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
         port_file = Path(profile.name) / "DevToolsActivePort"
         deadline = time.monotonic() + 60
         while not port_file.is_file() or len(port_file.read_text().split()) < 2:
@@ -201,8 +202,19 @@ class Page:
         try:
             self.socket.close()
         finally:
-            self.process.kill()
+            # Chromium's helpers (renderer, GPU, crash handler) outlive the browser process a
+            # moment and write into the profile: end the whole session, then remove the folder
+            # ("Directory not empty: 'Default'" was a removal racing a helper's last write).
+            try:
+                os.killpg(self.process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
             self.process.wait(timeout=30)
+            for _ in range(50):
+                shutil.rmtree(self.profile.name, ignore_errors=True)
+                if not Path(self.profile.name).exists():
+                    break
+                time.sleep(0.1)
             self.profile.cleanup()
 
     def __enter__(self) -> Page:
