@@ -31,6 +31,16 @@ def _documented(obj: Any) -> bool:
     return obj.docstring is not None and bool(obj.docstring.value.strip())
 
 
+def _inherits_doc(cls: Any, name: str) -> bool:
+    """A method that overrides a documented one of a base class has that docstring (as
+    ``inspect.getdoc`` reads it): an error's ``message()`` says what its base's says."""
+    for base in cls.mro():
+        found = base.members.get(name)
+        if found is not None and not found.is_alias and _documented(found):
+            return True
+    return False
+
+
 def _members(cls: Any) -> list[Any]:
     """The public methods and properties a class defines itself (inherited ones are checked
     where they are defined)."""
@@ -65,7 +75,8 @@ def missing_docstrings(root: Path = ROOT) -> list[str]:
                 missing.append(f"{where} ({target.path}): no docstring")
             if target.is_class:
                 missing += [f"{where}.{m.name} ({m.path}): no docstring"
-                            for m in _members(target) if not _documented(m)]
+                            for m in _members(target)
+                            if not _documented(m) and not _inherits_doc(target, m.name)]
     return missing
 
 

@@ -105,7 +105,6 @@ class FileFormatError(InvalidInputError):
     field: str | None = None
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         where = self.path if self.line is None else f"{self.path}:{self.line}"
         if self.field:
             where += f" (field '{self.field}')"
@@ -132,7 +131,6 @@ class ProtocolError(UsarArmError):
     reason: str
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         line, position = self.line, self.position
         start = 0 if position < 150 else position - 100  # show the text around the problem
         shown = line[start:start + 200]
@@ -154,7 +152,6 @@ class ConnectionFailedError(UsarArmError):
     reason: str
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"cannot connect to a USARSim server at {self.host}:{self.port}: {self.reason}. "
                 f"Is the simulator running? (start one with `usar-arm sim --port {self.port}`, "
                 f"or leave out --host to use the embedded simulator)")
@@ -170,7 +167,6 @@ class ResponseTimeoutError(UsarArmError):
     hint: str = ""
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         text = f"no {self.waiting_for} within {self.timeout_s:g} s"
         return text + (f": {self.hint}" if self.hint else "")
 
@@ -199,7 +195,6 @@ class ConnectionLostError(UsarArmError):
     detail: str = ""
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"the USARSim server closed the connection while {self.while_doing}"
                 + aside(self.detail))
 
@@ -217,7 +212,6 @@ class UnknownRobotError(UsarArmError):
     detail: str = ""
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         text = f"no robot of class '{self.class_name}' appeared" + aside(self.detail)
         if self.known:
             text += f"; robot classes the server offers: {names_or_none(self.known)}"
@@ -233,7 +227,6 @@ class UnknownStartError(UsarArmError):
     known: Sequence[str]
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         known = names_or_none(self.known)
         return f"unknown start position '{self.start}'; the server offers: {known}"
 
@@ -252,7 +245,6 @@ class ValidationError(DescriptionError):
     problems: Sequence[str]
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         lines = "\n".join(f"  - {p}" for p in self.problems)
         return f"{self.subject} failed {len(self.problems)} check(s):\n{lines}"
 
@@ -267,7 +259,6 @@ class RobotStructureError(DescriptionError):
     expected: str
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return f"{self.where}: {self.what}; expected {self.expected}"
 
 
@@ -288,7 +279,6 @@ class UnreachableError(IKError):
     detail: str = ""
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"target pose is unreachable: out of reach by {self.distance_m * 1000:.1f} mm"
                 + aside(self.detail))
 
@@ -308,7 +298,6 @@ class JointLimitError(IKError):
         return self.value - self.upper if self.value > self.upper else self.lower - self.value
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"every solution violates a joint limit; closest: {self.joint} = "
                 f"{self.value:.4f} is {self.excess:.4f} outside [{self.lower:.4f}, "
                 f"{self.upper:.4f}]")
@@ -323,7 +312,6 @@ class AllSolutionsInCollisionError(IKError):
     pairs: Sequence[tuple[str, str]]
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs[:6])
         return (f"all {self.n_solutions} IK solution(s) inside the joint limits are in "
                 f"collision (contacts: {shown})")
@@ -348,7 +336,6 @@ class _EndInCollisionError(PlanningError):
     pairs: Sequence[tuple[str, str]]
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         shown = ", ".join(f"{a}–{b}" for a, b in self.pairs)
         return f"the {self.end} configuration is in collision: {shown}"
 
@@ -377,7 +364,6 @@ class OutOfLimitsError(PlanningError):
     upper: float
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"the {self.what} configuration puts {self.joint} at {self.value:.4f}, "
                 f"outside its limits [{self.lower:.4f}, {self.upper:.4f}]")
 
@@ -391,7 +377,6 @@ class NoPathError(PlanningError):
     detail: str = ""
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         return (f"{self.planner} found no collision-free path within {self.time_limit_s:g} s"
                 + aside(self.detail))
 
@@ -409,7 +394,6 @@ class LinBlockedError(PlanningError):
         super().__post_init__()
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         x, y, z = self.point_m
         return (f"LIN motion blocked at {self.fraction * 100:.1f} % of the line, tool0 at "
                 f"({x:.4f}, {y:.4f}, {z:.4f}) m: {self.reason}")
@@ -433,7 +417,6 @@ class ExecutionAbortedError(UsarArmError):
     at_time_s: float | None = None
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         text = f"execution aborted: {self.reason}"
         if self.joint is not None and self.error_rad is not None:
             text += f" ({self.joint} off by {self.error_rad:.4f})"
@@ -456,7 +439,6 @@ class CalibrationError(UsarArmError):
     needed: int | None = None
 
     def message(self) -> str:
-        """This error's text, from its evidence."""
         text = f"calibration failed: {self.problem}"
         if self.readings is not None and self.needed is not None:
             text += f" ({self.readings} readings, at least {self.needed} needed)"
