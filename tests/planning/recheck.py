@@ -24,6 +24,7 @@ from usar_arm.control.motion import MotionPlan
 from usar_arm.control.trajectory import LimitReport, check_limits
 from usar_arm.core.spatial import Array, rotation_distance
 from usar_arm.planning.collision import CollisionWorld
+from usar_arm.planning.ompl_adapter import edge_configurations
 from usar_arm.planning.robot import Robot
 
 RATE_HZ = 1000.0
@@ -176,3 +177,18 @@ def assert_rechecked(robot: Robot, world: CollisionWorld, plan: MotionPlan,
     result = recheck(robot, world, plan, start, line_start)
     assert result.ok, "\n".join(result.violations)
     return result
+
+
+def blocked_pairs(world: CollisionWorld, robot: Robot, count: int, seed: int
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Free start/goal pairs whose straight joint-space segment is blocked (a planner needed),
+    drawn uniformly within the limits from ``seed``."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < count:
+        a, b = rng.uniform(robot.chain.lower(), robot.chain.upper(), size=(2, robot.chain.dof))
+        if world.in_collision(a) or world.in_collision(b):
+            continue
+        if world.in_collision_many(edge_configurations(a, b, 0.01)).any():
+            out.append((a, b))
+    return out

@@ -9,26 +9,13 @@ import itertools
 import numpy as np
 import pytest
 
+from tests.planning.recheck import blocked_pairs
 from usar_arm.planning import bounds, compiled_plan, plan_kernel
 from usar_arm.planning.collision import CollisionWorld
 from usar_arm.planning.ompl_adapter import COMPILED, OmplOptions, edge_configurations, reseed
 from usar_arm.planning.ptp import plan_to_joints
 from usar_arm.planning.robot import Robot
 from usar_arm.planning.scene_file import load_scene
-
-
-def _blocked(world: CollisionWorld, robot: Robot, count: int, seed: int
-             ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Free start/goal pairs whose straight joint-space segment is blocked."""
-    rng = np.random.default_rng(seed)
-    out = []
-    while len(out) < count:
-        a, b = rng.uniform(robot.chain.lower(), robot.chain.upper(), size=(2, robot.chain.dof))
-        if world.in_collision(a) or world.in_collision(b):
-            continue
-        if world.in_collision_many(edge_configurations(a, b, 0.01)).any():
-            out.append((a, b))
-    return out
 
 
 def _plan(world: CollisionWorld, robot: Robot, a: np.ndarray, b: np.ndarray,
@@ -43,7 +30,7 @@ def test_every_configuration_of_a_compiled_path_is_free_by_the_exact_judge(
         kr60: Robot, scene: str) -> None:
     world = kr60.collision_world(load_scene(scene))
     levers, options = world.lever_arms(), OmplOptions()
-    for a, b in _blocked(world, kr60, 3, seed=5):
+    for a, b in blocked_pairs(world, kr60, 3, seed=5):
         found = compiled_plan.plan_compiled(world, kr60.chain.lower(), kr60.chain.upper(), a,
                                             b, options)
         assert found is not None and found.planner == COMPILED
@@ -75,10 +62,10 @@ def test_a_compiled_edge_is_taken_only_when_proven_free(kr60: Robot) -> None:
 
 def test_a_plan_depends_on_its_seed_alone(kr60: Robot) -> None:
     world = kr60.collision_world(load_scene("cage"))
-    a, b = _blocked(world, kr60, 1, seed=8)[0]
+    a, b = blocked_pairs(world, kr60, 1, seed=8)[0]
     reseed(4)
     first = _plan(world, kr60, a, b, OmplOptions())
-    for other in _blocked(world, kr60, 2, seed=9):  # (other plans in between)
+    for other in blocked_pairs(world, kr60, 2, seed=9):  # (other plans in between)
         _plan(world, kr60, *other, OmplOptions())
     reseed(4)
     assert np.array_equal(_plan(world, kr60, a, b, OmplOptions()), first)
@@ -87,7 +74,7 @@ def test_a_plan_depends_on_its_seed_alone(kr60: Robot) -> None:
 def test_ompl_plans_where_the_compiled_search_runs_out_of_edges(
         kr60: Robot, monkeypatch: pytest.MonkeyPatch) -> None:
     world = kr60.collision_world(load_scene("cage"))
-    a, b = _blocked(world, kr60, 1, seed=8)[0]
+    a, b = blocked_pairs(world, kr60, 1, seed=8)[0]
     monkeypatch.setattr(compiled_plan, "MAX_EDGES", 1)
     chain = kr60.chain
     plan = plan_to_joints(world, chain.joint_names, chain.lower(), chain.upper(), a, b,

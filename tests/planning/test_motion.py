@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.planning.recheck import assert_rechecked
+from tests.planning.recheck import assert_rechecked, blocked_pairs
 from usar_arm.arm.cycle import tcp_offset
 from usar_arm.control.motion import MotionOptions, plan_motion
 from usar_arm.control.timing import blended, stop_at_waypoints
@@ -38,16 +38,7 @@ DOWN = np.diag([1.0, -1.0, -1.0])  # tool0 pointing down
 
 def _problems(robot: Robot, scene: str, count: int, seed: int) -> list[tuple[np.ndarray, ...]]:
     """Start/goal pairs, free, whose straight joint-space segment is blocked (OMPL needed)."""
-    world = robot.collision_world(load_scene(scene))
-    rng = np.random.default_rng(seed)
-    out = []
-    while len(out) < count:
-        a, b = rng.uniform(robot.chain.lower(), robot.chain.upper(), size=(2, robot.chain.dof))
-        if world.in_collision(a) or world.in_collision(b):
-            continue
-        if world.in_collision_many(edge_configurations(a, b, 0.01)).any():
-            out.append((a, b))
-    return out
+    return blocked_pairs(robot.collision_world(load_scene(scene)), robot, count, seed)
 
 
 @pytest.mark.parametrize("scene", ["table", "shelf", "cage"])

@@ -270,3 +270,17 @@ def pack(axes: Array, points: Array, revolute: IndexArray, zero: Array, radius: 
     links[:, INNER_FROM], links[:, INNER_TO] = ranges[:, 2], ranges[:, 3]
     return Packed(joints, np.ascontiguousarray(zero, dtype=float), links, pairs, len(rr), kind,
                   obstacles, obstacle_axes, tree, nodes, order, pair_of, groups, leaves)
+
+
+def warm_up_world() -> tuple[Packed, Array]:
+    """The smallest world the kernels take (one revolute joint, one body, one box) and its
+    lever arms, read-only as a collision world hands them over: what the kernels' warm-ups
+    compile against (numba keys its cache on the argument types, not the sizes)."""
+    eye = np.eye(4)
+    packed = pack(np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3)), np.array([1]), eye[None],
+                  np.array([0.1]), np.array([0.2]), np.array([1]), np.zeros((0, 2), np.int64),
+                  np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
+                  np.array([[0.5, 0.5, 0.5]]))
+    levers = np.ones((1, 1))
+    levers.setflags(write=False)
+    return packed, levers

@@ -239,13 +239,8 @@ def segment_free(a: Array, b: Array, steps: int, levers: Array, packed: Packed,
 def warm_up() -> None:
     """Compile :func:`walk` for the argument types the collision world passes (numba caches
     the machine code on disk; see :mod:`.compiled`)."""
-    from usar_arm.planning.bounds import BOX, EPS, MARGIN, pack
+    from usar_arm.planning.bounds import EPS, MARGIN
+    from usar_arm.planning.bounds_arrays import warm_up_world
 
-    eye = np.eye(4)
-    packed = pack(np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3)), np.array([1]), eye[None],
-                  np.array([0.1]), np.array([0.2]), np.array([1]), np.zeros((0, 2), np.int64),
-                  np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
-                  np.array([[0.5, 0.5, 0.5]]))
-    levers = np.ones((1, 1))
-    levers.setflags(write=False)  # the collision world hands its cached levers over read-only
+    packed, levers = warm_up_world()
     segment_free(np.zeros(1), np.ones(1), 4, levers, packed, EPS, MARGIN, lambda w, r: True)

@@ -232,15 +232,10 @@ def shortcut(path: Array, arm_levers: Array, link_levers: Array, resolution: flo
 def warm_up() -> None:
     """Compile :func:`search` and :func:`shortcut` for the argument types the planner passes
     (numba caches the machine code on disk; see :mod:`.compiled`)."""
-    from usar_arm.planning.bounds import BOX, EPS, MARGIN, pack
+    from usar_arm.planning.bounds import EPS, MARGIN
+    from usar_arm.planning.bounds_arrays import warm_up_world
 
-    eye = np.eye(4)
-    packed = pack(np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3)), np.array([1]), eye[None],
-                  np.array([0.1]), np.array([0.2]), np.array([1]), np.zeros((0, 2), np.int64),
-                  np.array([[0, 0]], np.int64), np.array([BOX]), eye[None, :3, :],
-                  np.array([[0.5, 0.5, 0.5]]))
-    levers = np.ones((1, 1))
-    levers.setflags(write=False)  # the collision world hands its cached levers over read-only
+    packed, levers = warm_up_world()
     arm = np.ones(1)
     arm.setflags(write=False)
     budget = (0.01, 0.005, 1.0, 0.2, 30, 100)
