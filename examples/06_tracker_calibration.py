@@ -34,11 +34,13 @@ NOISE_M, NOISE_RAD = 5e-5, 5e-5
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("tracker-example")
 rng = np.random.default_rng(7)
 readings = []
+CELL = "table"  # the embedded simulator's world: the demo's work cell, which the arm must avoid
+
 with Arm.connect("KR60", calibrated=False) as arm:
-    world = arm.world(None)
+    world = arm.robot.collision_world(arm.world(CELL).scene, padding=0.05)  # 5 cm clear
     poses = select_poses(arm.urdf, "tool0", POSES, lambda q: not world.in_collision(q), seed=7)
     for k, q in enumerate(poses):
-        arm.execute(arm.plan(joints=q).trajectory)
+        arm.execute(arm.plan(joints=q, scene=CELL).trajectory)
         port = arm.client.local_port if arm.client else None
         truth = arm.server.truth(port) if arm.server and port else None
         assert truth is not None, "the tracker example needs the embedded simulator"

@@ -17,12 +17,18 @@ from _harness import run
 
 with atheris.instrument_imports(include=["usar_arm"]):
     from usar_arm.core.errors import ProtocolError
+    from usar_arm.usarsim import cell_messages as cm
     from usar_arm.usarsim import messages as m
     from usar_arm.usarsim.codec import format_message, parse_line
     from usar_arm.usarsim.numbers import FULL, UDK
 
-TYPES = tuple(t for t in vars(m).values() if isinstance(t, type) and t.__module__ == m.__name__
-              and t not in (m.StartPose, m.LinkConf, m.ConfItem, m.LinkGeo, m.GeoItem))
+PARTS = (m.StartPose, m.LinkConf, m.ConfItem, m.LinkGeo, m.GeoItem, cm.WcObjectStatus,
+         cm.ContactPair)
+"""The messages' components: never what a line parses into."""
+TYPES = tuple(t for mod in (m, cm) for t in vars(mod).values()
+              if isinstance(t, type) and t.__module__ == mod.__name__ and t not in PARTS)
+"""What a line may parse into: the messages of the wire and of a cell (WorldController,
+contacts, grip truth)."""
 
 
 def check(text: str) -> None:

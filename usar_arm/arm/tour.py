@@ -63,12 +63,37 @@ Progress = Callable[[int, int], None]
 """Called with (poses reached, poses planned)."""
 
 
-def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) -> Array:
-    """``count`` collision-free configurations (in ``scene``, 5 cm clear) maximising the
-    identification Jacobian's smallest singular value."""
-    world = arm.robot.collision_world(arm.world(scene).scene, padding=0.05)
+CLEARANCE = 0.05
+"""How far (m) the tour's configurations stay from the scene and from the arm's own links: the
+as-learnt description is a few millimetres off, and the tour runs fast."""
+
+
+def clear_of(arm: Arm, scene: str | None, start: Array,
+             clearance: float = CLEARANCE) -> Callable[[Array], bool]:
+    """Whether a configuration is free in ``scene`` and ``clearance`` (m) clear of everything
+    the arm is not already that close to at ``start`` (where it stands, untouched): a rail's
+    carriage rides a few centimetres over the floor at every configuration, and a pair that
+    close at the start may stay that close, though never touch."""
+    scene_of = arm.world(scene).scene
+    padded = arm.robot.collision_world(scene_of, padding=clearance)
+    exact = arm.robot.collision_world(scene_of)
+    near = set(padded.contacts(np.asarray(start, float)))
+
+    def free(q: Array) -> bool:
+        if not padded.in_collision(q):
+            return True
+        return not exact.in_collision(q) and set(padded.contacts(q)) <= near
+
+    return free
+
+
+def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int,
+                          start: Array | None = None) -> Array:
+    """``count`` configurations :func:`clear_of` ``scene`` (from ``start``, default the
+    arm's joints now) maximising the identification Jacobian's smallest singular value."""
+    free = clear_of(arm, scene, arm.joints() if start is None else start)
     frame = str(arm.robot.tip_sensor)
-    chosen = select_poses(arm.urdf, frame, count, lambda q: not world.in_collision(q), seed)
+    chosen = select_poses(arm.urdf, frame, count, free, seed)
     return np.asarray(chosen, float)
 
 

@@ -57,8 +57,14 @@ from usar_arm.urdf.discovery_file import wire_facts
 log = logging.getLogger(__name__)
 _usarsim_axes, _fold_base = usarsim_axes, fold_base  # the names the tests knew them by
 
-EMBEDDED_SCENE = "table"
-"""The scene a tour on the embedded simulator avoids when none is given: its world's cell."""
+
+def embedded_cell(arm: Arm) -> str | None:
+    """The scene a tour on the embedded simulator avoids when none is given: its world's work
+    cell (``cell:`` of the world file, the one description the planner reads as a scene), or
+    None when its world has none or the arm is on another server (nothing is known of it)."""
+    if arm.server is None:
+        return None
+    return arm.server.world_spec.cell_name or None
 
 
 @dataclass(frozen=True)
@@ -139,10 +145,10 @@ def calibrate_arm(arm: Arm, poses: int = 14, scene: str | None = None,
     start = time.monotonic()
     chain = arm.robot.chain
     mount_joint(arm.urdf, str(arm.robot.tip_sensor))  # a sensor the fit can use, first
-    if scene is None and arm.server is not None:
-        # The embedded simulator's world is the table cell (sim/worlds/default.yaml), and the
-        # arm's links hit its scenery: a tour through the table stops at its first contact.
-        scene = EMBEDDED_SCENE
+    if scene is None:
+        # The embedded simulator's world has a work cell (sim/worlds/default.yaml: the table),
+        # and the arm's links hit its scenery: a tour through it stops at its first contact.
+        scene = embedded_cell(arm)
     configurations = choose_configurations(arm, poses, scene, seed)
     sensor.read()  # the platform's pose, for the base guess
     readings = collect(arm, configurations, scene, progress)
