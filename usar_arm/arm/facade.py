@@ -62,6 +62,10 @@ class EmbeddedServer(Protocol):
     """What an arm needs of the embedded simulator it started (``usar_arm.sim.SimServer``);
     typed structurally so that offline use never imports the simulator."""
 
+    @property
+    def cell(self) -> str:
+        """Its world's work cell (a scene's name or file), or "" when it has none."""
+
     def truth(self, peer_port: int) -> TruthReading | None:
         """The true state of the robot of the client at ``peer_port``, read under a lock."""
 

@@ -64,7 +64,7 @@ def embedded_cell(arm: Arm) -> str | None:
     None when its world has none or the arm is on another server (nothing is known of it)."""
     if arm.server is None:
         return None
-    return arm.server.world_spec.cell_name or None
+    return arm.server.cell or None
 
 
 @dataclass(frozen=True)

@@ -247,6 +247,12 @@ class SimServer:
                                       session.rejections.bytes_in))
             return out
 
+    @property
+    def cell(self) -> str:
+        """Its world's work cell: the ``cell:`` of the world file (a shipped cell's name or a
+        file, the one description the planner reads as a scene), or "" when it has none."""
+        return self.world_spec.cell_name
+
     def truth(self, peer_port: int) -> Truth | None:
         """The true state (joints, tool0 in base_link) of the robot of the client whose
         address ends in ``:peer_port``, from the simulator's spec and physics under the lock
