@@ -104,3 +104,45 @@ def test_random_shortcuts_keep_the_ends_and_shorten_a_free_path(kr60: Robot) -> 
     for p, q in itertools.pairwise(shorter):
         assert plan_kernel.edge_clear(p, q, arm, links, 0.01, 0.005, packed, bounds.EPS,
                                       bounds.MARGIN, evaluated)
+
+
+def _undecided_free(world: CollisionWorld, robot: Robot, count: int, seed: int
+                    ) -> list[np.ndarray]:
+    """Free configurations (by the exact judge) the bounding volumes leave undecided: ends
+    close to an obstacle, as a grasp is."""
+    rng = np.random.default_rng(seed)
+    found: list[np.ndarray] = []
+    while len(found) < count:
+        q = rng.uniform(robot.chain.lower(), robot.chain.upper())
+        if (world.verdicts.summary(q)[0] == bounds.UNDECIDED and not world.in_collision(q)):
+            found.append(q)
+    return found
+
+
+def test_an_undecided_end_is_left_by_an_escape_the_exact_judge_finds_free(
+        kr60: Robot) -> None:
+    world = kr60.collision_world(load_scene("table"))
+    chain, options, levers = kr60.chain, OmplOptions(), world.lever_arms()
+    rng = np.random.default_rng(2)
+    for end in _undecided_free(world, kr60, 4, seed=11):
+        out = compiled_plan.escape(world, end, np.zeros(6), chain.lower(), chain.upper(),
+                                   options, rng)
+        assert out is not None
+        assert world.verdicts.summary(out)[0] == bounds.CLEAR
+        assert np.linalg.norm(out - end) <= max(compiled_plan.ESCAPE_RADII) + 1e-9
+        dense = edge_configurations(end, out, options.resolution, levers, options.max_step / 4)
+        assert not world.in_collision_many(dense).any()
+
+
+def test_the_compiled_planner_plans_from_and_to_undecided_ends(kr60: Robot) -> None:
+    world = kr60.collision_world(load_scene("table"))
+    chain, options, levers = kr60.chain, OmplOptions(), world.lever_arms()
+    a, b = _undecided_free(world, kr60, 2, seed=12)
+    reseed(3)
+    found = compiled_plan.plan_compiled(world, chain.lower(), chain.upper(), a, b, options)
+    assert found is not None and found.planner == COMPILED
+    path = found.waypoints
+    assert np.array_equal(path[0], a) and np.array_equal(path[-1], b) and len(path) >= 4
+    for p, q in itertools.pairwise(path):
+        dense = edge_configurations(p, q, options.resolution, levers, options.max_step / 4)
+        assert not world.in_collision_many(dense).any()
