@@ -9,6 +9,7 @@ one such file), and `usar-arm calibrate --measurements` fits the as-learnt URDF 
 """
 
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,14 @@ def joints(arm: Arm) -> np.ndarray:
     return np.array(truncated_midpoint(tuple(arm.joints()), arm.joint_step()))
 
 
+def tool0_now(arm: Arm, port: int) -> np.ndarray:
+    """tool0's true pose in base_link now (the simulator's own geometry: what a tracker sees)."""
+    assert arm.server is not None
+    truth = arm.server.truth(port)
+    assert truth is not None
+    return truth.tool0[str(arm.robot.actuator)]
+
+
 NOISE_M, NOISE_RAD = 5e-5, 5e-5
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("tracker-example")
 rng = np.random.default_rng(7)
@@ -42,11 +51,20 @@ with Arm.connect("KR60", calibrated=False) as arm:
     for k, q in enumerate(poses):
         arm.execute(arm.plan(joints=q, scene=CELL).trajectory)
         port = arm.client.local_port if arm.client else None
-        truth = arm.server.truth(port) if arm.server and port else None
-        assert truth is not None, "the tracker example needs the embedded simulator"
-        tool0 = truth.tool0[str(arm.robot.actuator)]
+        assert arm.server is not None and port, "the tracker example needs the embedded simulator"
+
+        # A tracker measures the arm at rest: wait until tool0 stays put (0.1 um over 0.2 s)
+        # across a reading of the joints, so both are of the same still arm (a busy machine
+        # lets the drives creep for a while after the motion's end).
+        for _ in range(50):
+            before = tool0_now(arm, port)
+            time.sleep(0.2)
+            q_read = joints(arm)
+            tool0 = tool0_now(arm, port)
+            if np.abs(tool0 - before).max() < 1e-7:
+                break
         noisy_rpy = np.array(matrix_to_rpy(tool0[:3, :3])) + rng.normal(0.0, NOISE_RAD, 3)
-        readings.append(Measurement(q=joints(arm), position=tool0[:3, 3]
+        readings.append(Measurement(q=q_read, position=tool0[:3, 3]
                                     + rng.normal(0.0, NOISE_M, 3), rpy=noisy_rpy,
                                     sigma_m=NOISE_M, sigma_rad=NOISE_RAD, label=f"pose {k}"))
         print(f"pose {k + 1}/{POSES} measured", flush=True)
