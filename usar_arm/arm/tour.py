@@ -87,11 +87,10 @@ def clear_of(arm: Arm, scene: str | None, start: Array,
     return free
 
 
-def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int,
-                          start: Array | None = None) -> Array:
-    """``count`` configurations :func:`clear_of` ``scene`` (from ``start``, default the
-    arm's joints now) maximising the identification Jacobian's smallest singular value."""
-    free = clear_of(arm, scene, arm.joints() if start is None else start)
+def choose_configurations(arm: Arm, count: int, scene: str | None, seed: int) -> Array:
+    """``count`` configurations :func:`clear_of` ``scene`` from where the arm stands now,
+    maximising the identification Jacobian's smallest singular value."""
+    free = clear_of(arm, scene, arm.joints())
     frame = str(arm.robot.tip_sensor)
     chosen = select_poses(arm.urdf, frame, count, free, seed)
     return np.asarray(chosen, float)

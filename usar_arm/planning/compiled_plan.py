@@ -3,9 +3,9 @@
 
 The kernels take an edge only when the compiled walk proves every configuration of it apart at
 the path check's density (a step at most ``options.resolution`` of joint motion and
-``options.max_step`` m of any point's motion), so the path needs no repair; the caller
-(:func:`.ptp.plan_to_joints`) checks it once more with the exact judge all the same, and plans
-with OMPL's RRTConnect when this finds nothing within :data:`MAX_EDGES` edges.
+``options.max_step`` m of any point's motion), so the path needs no repair and the caller
+(:func:`.ptp.plan_to_joints`) does not check it again; it plans with OMPL's RRTConnect when
+this finds nothing within :data:`MAX_EDGES` edges.
 
 An end the bounding volumes leave undecided (a grasp close to an object: no edge from it can be
 proven free by them) is left by an *escape*: a configuration nearby that they clear, reached

@@ -6,10 +6,10 @@ most ``resolution`` of joint motion and ``max_step`` m of any point's motion, as
 :func:`.ompl_adapter.edge_steps`), and an edge is taken only when the walk proves every one of
 its configurations apart (CLEAR): a configuration the bounding volumes leave undecided counts as
 blocked here, never handed to python-fcl. So a path found is free as densely as
-:func:`.ptp.plan_to_joints` checks paths, by proofs about the exact shapes; the caller still
-checks it again with the exact judge (python-fcl on anything undecided), and falls back to
-OMPL's planner when the compiled search finds nothing within its edge budget (a passage only
-python-fcl can clear, or a hard problem).
+:func:`.ptp.plan_to_joints` checks paths, by proofs about the exact shapes, and the caller
+takes it as it is (it does not check it again), falling back to OMPL's planner when the
+compiled search finds nothing within its edge budget (a passage only python-fcl can clear, or
+a hard problem).
 
 RRT-Connect as OMPL's (:class:`ompl.geometric.RRTConnect`): two trees, from the start and the
 goal, a uniform sample, the tree that grew last extended towards it by at most the range, the
