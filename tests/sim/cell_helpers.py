@@ -49,24 +49,41 @@ def ik_down(target: np.ndarray, near: np.ndarray | None = None) -> np.ndarray:
 
 def _solve(target: np.ndarray, x_axis: np.ndarray, start: np.ndarray) -> np.ndarray | None:
     """Damped least squares on the spec's kinematics from ``start``; None when it does not
-    converge or ends outside the joint limits."""
-    q = start.copy()
+    converge or ends outside the joint limits.
+
+    The spherical wrist reaches nearly the same pose turned over, (a4 + pi, -a5, a6 + pi):
+    where the solution found needs a4 at +-pi, just past the +-3.14 limits (rounding decides
+    which side on a given CPU), the descent is run again from that twin, which has a4 near 0
+    (the KR60's wrist axes are a few mm apart, so the twin itself is not a solution)."""
 
     def err(x: np.ndarray) -> np.ndarray:
         pose = changer_pose(x)
         return np.concatenate([pose[:3, 3] - target, pose[:3, 2] - (0.0, 0.0, 1.0),
                                pose[:3, 0] - x_axis])
 
-    for _ in range(200):
-        e = err(q)
-        if np.linalg.norm(e) < 1e-7:
-            break
-        jac = np.column_stack([(err(q + dq) - e) / 1e-6 for dq in np.eye(len(q)) * 1e-6])
-        q = q - np.linalg.solve(jac.T @ jac + 1e-6 * np.eye(len(q)), jac.T @ e)
-        q = (q + np.pi) % (2 * np.pi) - np.pi
+    def descend(q: np.ndarray) -> np.ndarray:
+        for _ in range(200):
+            e = err(q)
+            if np.linalg.norm(e) < 1e-7:
+                break
+            jac = np.column_stack([(err(q + dq) - e) / 1e-6 for dq in np.eye(len(q)) * 1e-6])
+            q = q - np.linalg.solve(jac.T @ jac + 1e-6 * np.eye(len(q)), jac.T @ e)
+            q = (q + np.pi) % (2 * np.pi) - np.pi
+        return q
+
     limits = [(jt.limit_low, jt.limit_high) for jt in ARM.joints]
-    inside = all(lo <= v <= hi for v, (lo, hi) in zip(q, limits, strict=True))
-    return q if inside and np.linalg.norm(err(q)) < 1e-5 else None
+
+    def good(q: np.ndarray) -> bool:
+        inside = all(lo <= v <= hi for v, (lo, hi) in zip(q, limits, strict=True))
+        return inside and bool(np.linalg.norm(err(q)) < 1e-5)
+
+    q = descend(start.copy())
+    if good(q):
+        return q
+    twin = q + np.array([0.0, 0.0, 0.0, np.pi, 0.0, np.pi])
+    twin[4] = -q[4]
+    q = descend((twin + np.pi) % (2 * np.pi) - np.pi)
+    return q if good(q) else None
 
 
 def drive(client: UsarClient, q: np.ndarray, tol: float = 6e-3, timeout: float = 20.0
