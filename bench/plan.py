@@ -242,8 +242,21 @@ def _targets(cases: dict[str, Any]) -> list[dict[str, Any]]:
         common.target("Plan Fanuc_M16iB20 (7 joints, blocked straight line): verified within "
                       "2 s",
                       fa.get("success_rate"), 1.0, ">=", "fraction"),
+        *_speed_targets(ours, fa),
         *_peer_targets(cases),
     ]
+
+
+SPEED_MEDIAN_S = {"KR60": 0.3e-3, "Fanuc_M16iB20": 0.4e-3}
+"""The planning-speed issue's medians (planning + simplification, blocked straight line)."""
+
+
+def _speed_targets(kr60: dict[str, Any], fanuc: dict[str, Any]) -> list[dict[str, Any]]:
+    """The planning-speed issue's targets: each learnt arm's median against its bound."""
+    return [common.target(f"Plan {robot} median (planning-speed target)",
+                          (summary.get("time_all_s") or {}).get("median"),
+                          SPEED_MEDIAN_S[robot], "<=", "s")
+            for robot, summary in (("KR60", kr60), ("Fanuc_M16iB20", fanuc))]
 
 
 def _ratio(a: float | None, b: float | None) -> float | None:

@@ -561,6 +561,7 @@ def _targets(key: str, cases: dict[str, Any]) -> list[dict[str, Any]]:
         out.append(common.target(f"{key}: planning verified successes minus roboplan's",
                                  None if so is None or sp is None else so - sp, 0, ">=",
                                  "problems"))
+        out += _vamp_targets(key, plan)
     ik = cases.get(f"robots_{key}_ik", {})
     if "solvers" in ik:
         method = (ik["solvers"]["usar-arm"].get("settings") or {}).get("method")
@@ -582,6 +583,39 @@ def _targets(key: str, cases: dict[str, Any]) -> list[dict[str, Any]]:
         if key in CLOSED_FORM_EXPECTED and not closed:
             out.append(common.target(f"{key}: IK by a closed form (>= 99.9 %, <= 30 us)", None,
                                      0.999, ">=", "fraction", CLOSED_FORM_EXPECTED[key]))
+    return out
+
+
+PANDA_MEDIAN_S = 1.5e-3
+"""The planning-speed issue's bound on the Panda's median plan (with simplification)."""
+PANDA_P90_OVER_MEDIAN = 3.0
+"""... and on its p90 as a multiple of that median."""
+VAMP_OWN_GOAL = 5.0
+"""The issue's goal for the Panda's median over VAMP's own timer's (reported, not a bound)."""
+
+
+def _vamp_targets(key: str, plan: dict[str, Any]) -> list[dict[str, Any]]:
+    """The planning-speed issue's targets for ``key``'s plans: every path verified on the
+    meshes; the Panda's median and p90 against fixed bounds, with the ratio to VAMP's own timer
+    beside them; the UR5's median against VAMP's Python call in the same run."""
+    ours = _summ(plan, "usar-arm")
+    out = [common.target(f"{key}: planning verified on the meshes (planning-speed target)",
+                         _summ(plan, "usar-arm", "success_rate"), 1.0, ">=", "fraction")]
+    vamp = robots_vamp.row(plan)
+    missing = "" if vamp["measured"] else f"VAMP not measured: {vamp['skipped']}"
+    if key == "panda":
+        out.append(common.target("panda: planning median (planning-speed target)", ours,
+                                 PANDA_MEDIAN_S, "<=", "s"))
+        p90 = _summ(plan, "usar-arm", stat="p90")
+        out.append(common.target("panda: planning p90 / its median (planning-speed target)",
+                                 common.ratio(p90, ours), PANDA_P90_OVER_MEDIAN, "<=", "ratio"))
+        out.append(common.target("panda: planning median / VAMP's own timer's (goal)",
+                                 vamp.get("ratio_usar_to_vamp_own"), VAMP_OWN_GOAL, "<=",
+                                 "ratio", missing))
+    else:
+        out.append(common.target(f"{key}: planning median / VAMP's Python call's "
+                                 "(planning-speed target)", vamp.get("ratio_usar_to_vamp_call"),
+                                 1.0, "<=", "ratio", missing))
     return out
 
 

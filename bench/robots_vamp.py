@@ -69,7 +69,9 @@ def own_time_summary(raw: dict[str, list[Any]]) -> dict[str, Any]:
     return out
 
 
-def _row(plan: dict[str, Any]) -> dict[str, Any]:
+def row(plan: dict[str, Any]) -> dict[str, Any]:
+    """VAMP's measured row for one robot's plan case (its medians both ways, its paths judged on
+    the meshes, usar-arm's median and the ratios), or why it was not measured."""
     s = plan.get("solvers", {}).get("vamp", {})
     if "skipped" in s or not s:
         return {"measured": False, "skipped": s.get("skipped", "not run")}
@@ -100,5 +102,5 @@ def summary(cases: dict[str, Any]) -> dict[str, Any]:
                                            "on the stage's machine"}
     for key in ("ur5", "panda"):
         plan = cases.get(f"robots_{key}_plan", {})
-        out[key] = _row(plan) if plan else {"measured": False, "skipped": "no plan case"}
+        out[key] = row(plan) if plan else {"measured": False, "skipped": "no plan case"}
     return out
