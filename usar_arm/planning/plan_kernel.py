@@ -14,10 +14,10 @@ a hard problem).
 RRT-Connect as OMPL's (:class:`ompl.geometric.RRTConnect`): two trees, from the start and the
 goal, a uniform sample, the tree that grew last extended towards it by at most the range, the
 other tree connected to the new configuration edge by edge; nearest neighbours by the Euclidean
-joint distance (a linear scan: the trees stay small); the range a fifth of the space's extent for
-the first ``wide_edges`` edges, then ``narrow`` of it (as :func:`.ompl_adapter._solve`'s two
-phases). The random numbers are numba's generator seeded with the plan's seed, so a plan depends
-on its seed alone.
+joint distance (a linear scan: the trees stay small); the range ``wide`` for the first
+``wide_edges`` edges, then ``narrow`` (two phases, as :func:`.ompl_adapter._solve`'s; the
+caller's :data:`.compiled_plan.WIDE` and :data:`.compiled_plan.NARROW`). The random numbers are
+numba's generator seeded with the plan's seed, so a plan depends on its seed alone.
 
 Shortcutting (:func:`shortcut`): from each kept waypoint, the farthest later waypoint it sees
 directly (greedy vertex reduction), then random shortcuts between two points on the path.
