@@ -142,12 +142,19 @@ class _Feedback:
                 self.times.append(rec.wall_time)
                 self.sim_times.append(msg.time)
 
-    def sampled_at(self, i: int) -> float:
+    def complete(self) -> int:
+        """How many samples have all three fields in: the reader's thread appends them one
+        after another, and may be doing so while another thread reads."""
+        return min(len(self.values), len(self.times), len(self.sim_times))
+
+    def sampled_at(self, i: int, count: int | None = None) -> float:
         """When (perf_counter s) sample ``i`` was taken: its simulated time plus the smallest
         receipt latency seen (the server's clock runs at wall speed; receipt times alone carry
-        a few ms of jitter, which at 3 rad/s is a 0.01 rad error)."""
+        a few ms of jitter, which at 3 rad/s is a 0.01 rad error). ``count``: read no sample
+        at or past it (default :meth:`complete`)."""
         lo = max(0, i - 20)  # a recent window: the server may re-anchor its clock when busy
-        offset = min(t - s for t, s in zip(self.times[lo:i + 21], self.sim_times[lo:i + 21],
+        hi = min(i + 21, self.complete() if count is None else count)
+        offset = min(t - s for t, s in zip(self.times[lo:hi], self.sim_times[lo:hi],
                                           strict=True))
         return self.sim_times[i] + offset
 
@@ -263,9 +270,9 @@ class Executor:
         feedback = _Feedback(self.actuator, self.links)
         sent = self._stream(commands, feedback)
         self._settle_to(commands[-1], settle_timeout=1.0, feedback=None)
-        sample_times = np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) \
-            - sent[0]
-        samples = np.array(feedback.values)
+        n = feedback.complete()
+        sample_times = np.array([feedback.sampled_at(i, n) for i in range(n)]) - sent[0]
+        samples = np.array(feedback.values[:n])
         usable = sample_times >= 0
         self.drive = fit(sent - sent[0], commands, sample_times[usable], samples[usable])
         log.info("drive lags %s s, inertias %s s^2 (fit rms %s)", np.round(self.drive.lag, 3),
@@ -368,11 +375,12 @@ class Executor:
             unsubscribe()
         final, _ = self.measure(timeout=opts.feedback_timeout + 0.5)
         jitter = np.abs(sends - deadlines) * 1000
-        sample_t = np.array([feedback.sampled_at(i) for i in range(len(feedback.times))]) - t0
+        n = feedback.complete()  # (a sample still arriving after unsubscribe is left out)
+        sample_t = np.array([feedback.sampled_at(i, n) for i in range(n)]) - t0
         after_start = sample_t >= 0  # an ASTA taken just before the first command
         executed = ExecutedSamples(
             sample_t[after_start],
-            np.array(feedback.values).reshape(-1, len(q_now))[after_start])
+            np.array(feedback.values[:n]).reshape(-1, len(q_now))[after_start])
         return ExecutionReport(
             self.names, np.abs(final - goal), float(np.max(worst)), worst.copy(),
             (count - 1) / (sends[-1] - sends[0]) if count > 1 else 0.0,
@@ -384,8 +392,9 @@ class Executor:
         """Check the feedback and the ASTA samples that arrived since ``checked``; abort on a
         bound."""
         self._check_feedback(feedback, t0)
-        for i in range(checked, len(feedback.times)):
-            t = feedback.sampled_at(i) - t0
+        n = feedback.complete()
+        for i in range(checked, n):
+            t = feedback.sampled_at(i, n) - t0
             if t < 0 or t > trajectory.duration:
                 continue
             error = np.abs(feedback.values[i] - trajectory.at(t)[0])
@@ -396,7 +405,7 @@ class Executor:
                 raise ExecutionAbortedError(
                     f"tracking error above the bound {self.options.max_tracking_error}",
                     self.names[j], float(error[j]), t)
-        return len(feedback.times)
+        return n
 
     def _settle_to(self, goal: Array, settle_timeout: float, feedback: _Feedback | None,
                    start: Array | None = None) -> tuple[bool, float]:
