@@ -147,13 +147,13 @@ class _Feedback:
         after another, and may be doing so while another thread reads."""
         return min(len(self.values), len(self.times), len(self.sim_times))
 
-    def sampled_at(self, i: int, count: int | None = None) -> float:
+    def sampled_at(self, i: int, count: int) -> float:
         """When (perf_counter s) sample ``i`` was taken: its simulated time plus the smallest
         receipt latency seen (the server's clock runs at wall speed; receipt times alone carry
-        a few ms of jitter, which at 3 rad/s is a 0.01 rad error). ``count``: read no sample
-        at or past it (default :meth:`complete`)."""
+        a few ms of jitter, which at 3 rad/s is a 0.01 rad error). ``count``: the samples that
+        may be read (:meth:`complete`, taken once by the caller)."""
         lo = max(0, i - 20)  # a recent window: the server may re-anchor its clock when busy
-        hi = min(i + 21, self.complete() if count is None else count)
+        hi = min(i + 21, count)
         offset = min(t - s for t, s in zip(self.times[lo:hi], self.sim_times[lo:hi],
                                           strict=True))
         return self.sim_times[i] + offset

@@ -40,8 +40,8 @@ __all__ = ["ESCAPE_RADII", "ESCAPE_TRIES", "MAX_EDGES", "NARROW", "SHORTCUTS", "
 WIDE = 0.2
 """The range of the wide phase (its first :data:`.ompl_adapter.WIDE_EDGES` edges) as a
 fraction of the space's extent: OMPL's default range. In an A/B on the bench's problems a
-wider one (up to the whole extent) made the KR60's plans faster and the UR5's slower, by about
-a third each way; this one is kept."""
+wider one (up to the whole extent) took about a third off the KR60's median and added about
+two thirds to the UR5's; this one is kept."""
 NARROW = 0.1
 """The range after the wide phase, as a fraction of the space's extent. OMPL's second phase
 takes :data:`.ompl_adapter.NARROW` (0.04); in the same A/B this one shortened every robot's
